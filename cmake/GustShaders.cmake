@@ -1,0 +1,29 @@
+# gust_embed_shaders(TARGET <name> NAMESPACE <ns> SOURCES <files...> [INCLUDE_DIRS <dirs...>])
+# Compiles each GLSL file to SPIR-V with glslangValidator at build time and emits a header
+# <binary>/gust_shaders/<stem>_<stage>.h holding `const uint32_t <stem>_<stage>[]`, so the library
+# ships no loose shader files. The target becomes an INTERFACE library carrying the include path.
+function(gust_embed_shaders)
+  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;DEPENDS" ${ARGN})
+  set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/gust_shaders)
+  file(MAKE_DIRECTORY ${out_dir})
+  set(headers)
+  foreach(src IN LISTS ARG_SOURCES)
+    get_filename_component(stem ${src} NAME_WE)
+    get_filename_component(ext ${src} LAST_EXT)
+    string(SUBSTRING ${ext} 1 -1 stage)
+    set(var ${stem}_${stage})
+    set(header ${out_dir}/${var}.h)
+    add_custom_command(
+      OUTPUT ${header}
+      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 -I${CMAKE_CURRENT_SOURCE_DIR}
+              --vn ${var} -o ${header} ${CMAKE_CURRENT_SOURCE_DIR}/${src}
+      DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${src} ${ARG_DEPENDS}
+      COMMENT "glslang ${src}"
+      VERBATIM)
+    list(APPEND headers ${header})
+  endforeach()
+  add_custom_target(${ARG_TARGET}_spirv DEPENDS ${headers})
+  add_library(${ARG_TARGET} INTERFACE)
+  add_dependencies(${ARG_TARGET} ${ARG_TARGET}_spirv)
+  target_include_directories(${ARG_TARGET} INTERFACE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR})
+endfunction()

@@ -1,0 +1,59 @@
+// Device buffers addressed by pointer (VK_KHR_buffer_device_address, core in 1.2), so shaders take
+// them through push constants and a buffer is not bound by maxStorageBufferRange (128 MiB on lavapipe).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include <gust/gpu/context.hpp>
+
+namespace gust::gpu {
+
+/// Where a buffer's memory should live.
+enum class MemoryUse {
+    Device,  ///< GPU-local; mapped too when the device exposes such memory (lavapipe, ReBAR)
+    Upload,  ///< host-visible, written by the CPU
+    Readback ///< host-visible and cached, read by the CPU
+};
+
+/// A buffer with its own memory allocation. Move-only; destroys itself (the caller keeps the Context
+/// alive longer and makes sure the GPU no longer uses it).
+class Buffer {
+public:
+    Buffer() = default;
+    /// Creates a buffer of `size` bytes (> 0). Storage, transfer and device-address usage are always added.
+    static Result<Buffer> create(Context& ctx, VkDeviceSize size, MemoryUse use, VkBufferUsageFlags extra_usage = 0);
+    ~Buffer();
+    Buffer(Buffer&& other) noexcept;
+    Buffer& operator=(Buffer&& other) noexcept;
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+
+    VkBuffer handle() const { return buffer_; }
+    /// GPU address for shaders (GLSL buffer_reference).
+    VkDeviceAddress address() const { return address_; }
+    VkDeviceSize size() const { return size_; }
+    /// Host pointer when the memory is host-visible (coherent), else null.
+    void* mapped() const { return mapped_; }
+    explicit operator bool() const { return buffer_ != VK_NULL_HANDLE; }
+
+private:
+    Context* ctx_ = nullptr;
+    VkBuffer buffer_ = VK_NULL_HANDLE;
+    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    VkDeviceAddress address_ = 0;
+    VkDeviceSize size_ = 0;
+    void* mapped_ = nullptr;
+    void release();
+};
+
+/// Copies `bytes` from host memory into `dst` at `offset`: a memcpy when mapped, else through a
+/// staging buffer (blocks until the copy is done).
+Status upload(Context& ctx, Buffer& dst, const void* data, std::size_t bytes, std::size_t offset = 0);
+/// Copies `bytes` from `src` at `offset` into host memory (blocks).
+Status download(Context& ctx, const Buffer& src, void* data, std::size_t bytes, std::size_t offset = 0);
+
+/// Full memory barrier between two recorded passes (compute/graphics/transfer/indirect).
+void barrier(const Context& ctx, VkCommandBuffer cmd);
+
+} // namespace gust::gpu

@@ -1,0 +1,51 @@
+// Compute and graphics pipelines from embedded SPIR-V. Shaders take every buffer by device address
+// through push constants, so no pipeline here has descriptor sets.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include <gust/gpu/context.hpp>
+
+namespace gust::gpu {
+
+/// Fixed-function choices for a graphics pipeline that renders without attachments.
+struct GraphicsPipelineDesc {
+    std::span<const std::uint32_t> vertex;   ///< SPIR-V words
+    std::span<const std::uint32_t> geometry; ///< optional (empty: no geometry stage)
+    std::span<const std::uint32_t> fragment; ///< SPIR-V words
+    std::uint32_t push_constant_bytes = 0;
+    /// Request VK_EXT_conservative_rasterization overestimation (ignored when the device lacks it).
+    bool conservative = false;
+};
+
+/// A pipeline and its layout. Move-only.
+class Pipeline {
+public:
+    Pipeline() = default;
+    /// A compute pipeline with `push_constant_bytes` of push constants (entry point "main").
+    static Result<Pipeline> compute(Context& ctx, std::span<const std::uint32_t> spirv,
+                                    std::uint32_t push_constant_bytes);
+    /// A graphics pipeline with no vertex input, no attachments and dynamic viewport and scissor.
+    static Result<Pipeline> graphics(Context& ctx, const GraphicsPipelineDesc& desc);
+    ~Pipeline();
+    Pipeline(Pipeline&& other) noexcept;
+    Pipeline& operator=(Pipeline&& other) noexcept;
+    Pipeline(const Pipeline&) = delete;
+    Pipeline& operator=(const Pipeline&) = delete;
+
+    /// Binds the pipeline and pushes `bytes` of constants (all stages).
+    void bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) const;
+    VkPipeline handle() const { return pipeline_; }
+    VkPipelineLayout layout() const { return layout_; }
+
+private:
+    Context* ctx_ = nullptr;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+    VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    VkPipelineBindPoint bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+    void release();
+    Status create_layout(std::uint32_t push_constant_bytes);
+};
+
+} // namespace gust::gpu

@@ -1,0 +1,395 @@
+#include <gust/gpu/context.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <cstring>
+#include <dlfcn.h>
+
+namespace gust::gpu {
+
+namespace {
+
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return s;
+}
+
+const char* type_name(VkPhysicalDeviceType type) {
+    switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
+    default: return "other";
+    }
+}
+
+int type_rank(VkPhysicalDeviceType type) {
+    switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
+    default: return 0;
+    }
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                              VkDebugUtilsMessageTypeFlagsEXT types,
+                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+    Severity s = Severity::Info;
+    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) s = Severity::Error;
+    else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) s = Severity::Warning;
+    const bool validation = (types & VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT) != 0;
+    static_cast<Context*>(user)->report(s, validation, data->pMessage ? data->pMessage : "");
+    return VK_FALSE;
+}
+
+} // namespace
+
+const char* to_string(VkResult result) {
+    switch (result) {
+    case VK_SUCCESS: return "VK_SUCCESS";
+    case VK_NOT_READY: return "VK_NOT_READY";
+    case VK_TIMEOUT: return "VK_TIMEOUT";
+    case VK_INCOMPLETE: return "VK_INCOMPLETE";
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
+    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER";
+    case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
+    default: return "VkResult error";
+    }
+}
+
+Result<std::unique_ptr<Context>> Context::create(const ContextDesc& desc) {
+    std::unique_ptr<Context> ctx(new Context());
+    if (Status s = ctx->init(desc); !s) return s;
+    return ctx;
+}
+
+void Context::report(Severity severity, bool validation, const std::string& message) {
+    if (validation && severity != Severity::Info) {
+        validation_messages_.fetch_add(1);
+        std::lock_guard lock(message_mutex_);
+        last_message_ = message;
+    }
+    if (on_message_) on_message_(severity, message);
+}
+
+std::string Context::last_validation_message() const {
+    std::lock_guard lock(message_mutex_);
+    return last_message_;
+}
+
+Status Context::init(const ContextDesc& desc) {
+    on_message_ = desc.on_message;
+    loader_ = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
+    if (!loader_) return Status::failure("cannot load the Vulkan loader libvulkan.so.1 (install libvulkan1)");
+    vk_.vkGetInstanceProcAddr = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader_, "vkGetInstanceProcAddr"));
+    if (!vk_.vkGetInstanceProcAddr) return Status::failure("libvulkan.so.1 has no vkGetInstanceProcAddr");
+#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(VK_NULL_HANDLE, #name));
+    GUST_VK_GLOBAL_FUNCTIONS(GUST_LOAD)
+#undef GUST_LOAD
+
+    std::uint32_t version = VK_API_VERSION_1_0;
+    if (vk_.vkEnumerateInstanceVersion) vk_.vkEnumerateInstanceVersion(&version);
+    if (version < VK_API_VERSION_1_3)
+        return Status::failure("the Vulkan loader supports only " + std::to_string(VK_API_VERSION_MAJOR(version)) +
+                               "." + std::to_string(VK_API_VERSION_MINOR(version)) + "; gust needs Vulkan 1.3");
+
+    std::vector<const char*> layers;
+    std::vector<const char*> extensions;
+    std::uint32_t count = 0;
+    vk_.vkEnumerateInstanceExtensionProperties(nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> available(count);
+    vk_.vkEnumerateInstanceExtensionProperties(nullptr, &count, available.data());
+    bool debug_utils = false;
+    for (const auto& e : available)
+        if (std::strcmp(e.extensionName, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) == 0) debug_utils = true;
+    if (desc.validation) {
+        vk_.vkEnumerateInstanceLayerProperties(&count, nullptr);
+        std::vector<VkLayerProperties> props(count);
+        vk_.vkEnumerateInstanceLayerProperties(&count, props.data());
+        const bool found = std::any_of(props.begin(), props.end(), [](const VkLayerProperties& p) {
+            return std::strcmp(p.layerName, kValidationLayer) == 0;
+        });
+        if (!found)
+            return Status::failure(std::string("validation was requested but ") + kValidationLayer +
+                                   " is not installed (Debian: vulkan-validationlayers)");
+        layers.push_back(kValidationLayer);
+    }
+    if (debug_utils) extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "gust";
+    app.pEngineName = "gust";
+    app.apiVersion = VK_API_VERSION_1_3;
+    VkDebugUtilsMessengerCreateInfoEXT messenger_info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messenger_info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+                                     VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    messenger_info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                                 VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                 VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    messenger_info.pfnUserCallback = debug_callback;
+    messenger_info.pUserData = this;
+
+    VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    info.pNext = debug_utils ? &messenger_info : nullptr; // also catches messages from create/destroy
+    info.pApplicationInfo = &app;
+    info.enabledLayerCount = std::uint32_t(layers.size());
+    info.ppEnabledLayerNames = layers.data();
+    info.enabledExtensionCount = std::uint32_t(extensions.size());
+    info.ppEnabledExtensionNames = extensions.data();
+    if (VkResult r = vk_.vkCreateInstance(&info, nullptr, &instance_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateInstance failed: ") + to_string(r));
+
+#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(instance_, #name));
+    GUST_VK_INSTANCE_FUNCTIONS(GUST_LOAD)
+    if (debug_utils) {
+        GUST_VK_DEBUG_FUNCTIONS(GUST_LOAD)
+    }
+#undef GUST_LOAD
+    if (debug_utils && vk_.vkCreateDebugUtilsMessengerEXT)
+        vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger_info, nullptr, &messenger_);
+
+    std::string override_spec = desc.device;
+    if (override_spec.empty())
+        if (const char* env = std::getenv("GUST_DEVICE")) override_spec = env;
+    if (Status s = pick_device(override_spec); !s) return s;
+    return create_device();
+}
+
+Status Context::pick_device(const std::string& override_spec) {
+    std::uint32_t count = 0;
+    vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
+    std::vector<VkPhysicalDevice> devices(count);
+    vk_.vkEnumeratePhysicalDevices(instance_, &count, devices.data());
+    if (devices.empty()) return Status::failure("no Vulkan device found (install mesa-vulkan-drivers for lavapipe)");
+
+    std::string list;
+    int best_rank = -1;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        VkPhysicalDeviceProperties props;
+        vk_.vkGetPhysicalDeviceProperties(devices[i], &props);
+        std::string entry = std::to_string(i) + ": " + props.deviceName + " (" + type_name(props.deviceType) + ")";
+        device_names_.push_back(entry);
+        list += (list.empty() ? "" : ", ") + entry;
+        const bool usable = props.apiVersion >= VK_API_VERSION_1_3;
+        if (!override_spec.empty()) {
+            const bool by_index = override_spec.find_first_not_of("0123456789") == std::string::npos &&
+                                  std::stoul(override_spec) == i;
+            const bool by_name = lower(props.deviceName).find(lower(override_spec)) != std::string::npos;
+            if ((by_index || by_name) && physical_ == VK_NULL_HANDLE) {
+                if (!usable)
+                    return Status::failure("device '" + std::string(props.deviceName) +
+                                           "' selected by GUST_DEVICE/--device supports only Vulkan " +
+                                           std::to_string(VK_API_VERSION_MINOR(props.apiVersion)) +
+                                           ".x; gust needs 1.3");
+                physical_ = devices[i];
+            }
+            continue;
+        }
+        if (usable && type_rank(props.deviceType) > best_rank) {
+            best_rank = type_rank(props.deviceType);
+            physical_ = devices[i];
+        }
+    }
+    if (physical_ == VK_NULL_HANDLE) {
+        if (!override_spec.empty())
+            return Status::failure("no Vulkan device matches '" + override_spec + "'; devices: " + list);
+        return Status::failure("no Vulkan 1.3 device found; devices: " + list);
+    }
+    return {};
+}
+
+Status Context::create_device() {
+    VkPhysicalDeviceProperties props;
+    vk_.vkGetPhysicalDeviceProperties(physical_, &props);
+
+    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    f12.pNext = &f13;
+    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    f2.pNext = &f12;
+    vk_.vkGetPhysicalDeviceFeatures2(physical_, &f2);
+    std::string missing;
+    auto need = [&](VkBool32 have, const char* name) {
+        if (!have) missing += std::string(missing.empty() ? "" : ", ") + name;
+    };
+    need(f2.features.geometryShader, "geometryShader");
+    need(f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
+    need(f2.features.shaderInt64, "shaderInt64");
+    need(f12.bufferDeviceAddress, "bufferDeviceAddress");
+    need(f12.scalarBlockLayout, "scalarBlockLayout");
+    need(f13.synchronization2, "synchronization2");
+    need(f13.dynamicRendering, "dynamicRendering");
+    need(f13.maintenance4, "maintenance4");
+    if (!missing.empty())
+        return Status::failure(std::string("device '") + props.deviceName + "' lacks required features: " + missing);
+
+    std::uint32_t count = 0;
+    vk_.vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vk_.vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, families.data());
+    std::uint32_t family = UINT32_MAX;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const VkQueueFlags want = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+        if ((families[i].queueFlags & want) == want) {
+            family = i;
+            break;
+        }
+    }
+    if (family == UINT32_MAX)
+        return Status::failure(std::string("device '") + props.deviceName + "' has no graphics+compute queue");
+    queue_family_ = family;
+
+    vk_.vkEnumerateDeviceExtensionProperties(physical_, nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> exts(count);
+    vk_.vkEnumerateDeviceExtensionProperties(physical_, nullptr, &count, exts.data());
+    std::vector<const char*> enabled;
+    for (const auto& e : exts)
+        if (std::strcmp(e.extensionName, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) == 0) {
+            enabled.push_back(VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
+            info_.conservative_rasterization = true;
+        }
+
+    VkPhysicalDeviceVulkan13Features e13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    e13.synchronization2 = VK_TRUE;
+    e13.dynamicRendering = VK_TRUE;
+    e13.maintenance4 = VK_TRUE;
+    VkPhysicalDeviceVulkan12Features e12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    e12.pNext = &e13;
+    e12.bufferDeviceAddress = VK_TRUE;
+    e12.scalarBlockLayout = VK_TRUE;
+    e12.hostQueryReset = f12.hostQueryReset;
+    VkPhysicalDeviceFeatures2 e2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    e2.pNext = &e12;
+    e2.features.geometryShader = VK_TRUE;
+    e2.features.fragmentStoresAndAtomics = VK_TRUE;
+    e2.features.vertexPipelineStoresAndAtomics = f2.features.vertexPipelineStoresAndAtomics;
+    e2.features.shaderInt64 = VK_TRUE;
+
+    const float priority = 1.0f;
+    VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    queue_info.queueFamilyIndex = family;
+    queue_info.queueCount = 1;
+    queue_info.pQueuePriorities = &priority;
+    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    info.pNext = &e2;
+    info.queueCreateInfoCount = 1;
+    info.pQueueCreateInfos = &queue_info;
+    info.enabledExtensionCount = std::uint32_t(enabled.size());
+    info.ppEnabledExtensionNames = enabled.data();
+    if (VkResult r = vk_.vkCreateDevice(physical_, &info, nullptr, &device_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName + "': " + to_string(r));
+
+#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetDeviceProcAddr(device_, #name));
+    GUST_VK_DEVICE_FUNCTIONS(GUST_LOAD)
+#undef GUST_LOAD
+    vk_.vkGetDeviceQueue(device_, family, 0, &queue_);
+    vk_.vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
+
+    VkPhysicalDeviceVulkan11Properties p11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
+    VkPhysicalDeviceVulkan12Properties p12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_PROPERTIES};
+    p11.pNext = &p12;
+    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    p2.pNext = &p11;
+    vk_.vkGetPhysicalDeviceProperties2(physical_, &p2);
+    VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    p2.pNext = &m3;
+    vk_.vkGetPhysicalDeviceProperties2(physical_, &p2);
+
+    info_.name = props.deviceName;
+    info_.type = type_name(props.deviceType);
+    info_.api_version = props.apiVersion;
+    info_.vendor_id = props.vendorID;
+    info_.driver = std::string(p12.driverName) + " " + p12.driverInfo;
+    info_.timestamp_period_ns =
+        (families[family].timestampValidBits > 0 && props.limits.timestampComputeAndGraphics)
+            ? props.limits.timestampPeriod
+            : 0.0f;
+    info_.max_storage_buffer_range = props.limits.maxStorageBufferRange;
+    info_.max_allocation_size = m3.maxMemoryAllocationSize;
+    info_.subgroup_size = p11.subgroupSize;
+
+    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pool_info.queueFamilyIndex = family;
+    if (VkResult r = vk_.vkCreateCommandPool(device_, &pool_info, nullptr, &pool_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateCommandPool failed: ") + to_string(r));
+    VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    if (VkResult r = vk_.vkCreateFence(device_, &fence_info, nullptr, &fence_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateFence failed: ") + to_string(r));
+    return {};
+}
+
+Context::~Context() {
+    if (device_) {
+        vk_.vkDeviceWaitIdle(device_);
+        if (fence_) vk_.vkDestroyFence(device_, fence_, nullptr);
+        if (pool_) vk_.vkDestroyCommandPool(device_, pool_, nullptr);
+        vk_.vkDestroyDevice(device_, nullptr);
+    }
+    if (messenger_) vk_.vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
+    if (instance_) vk_.vkDestroyInstance(instance_, nullptr);
+    if (loader_) dlclose(loader_);
+}
+
+Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = pool_;
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    if (VkResult r = vk_.vkAllocateCommandBuffers(device_, &alloc, &cmd); r != VK_SUCCESS)
+        return Status::failure(std::string("vkAllocateCommandBuffers failed: ") + to_string(r));
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    vk_.vkBeginCommandBuffer(cmd, &begin);
+    record(cmd);
+    vk_.vkEndCommandBuffer(cmd);
+
+    VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
+    cmd_info.commandBuffer = cmd;
+    VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
+    submit.commandBufferInfoCount = 1;
+    submit.pCommandBufferInfos = &cmd_info;
+    Status status;
+    vk_.vkResetFences(device_, 1, &fence_);
+    if (VkResult r = vk_.vkQueueSubmit2(queue_, 1, &submit, fence_); r != VK_SUCCESS)
+        status = Status::failure(std::string("vkQueueSubmit2 failed: ") + to_string(r));
+    else if (VkResult w = vk_.vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX); w != VK_SUCCESS)
+        status = Status::failure(std::string("waiting for the GPU failed: ") + to_string(w));
+    vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
+    return status;
+}
+
+std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags required,
+                                        VkMemoryPropertyFlags preferred) const {
+    std::uint32_t best = UINT32_MAX;
+    int best_score = -1;
+    for (std::uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+        const VkMemoryPropertyFlags flags = memory_.memoryTypes[i].propertyFlags;
+        if (!(type_bits & (1u << i)) || (flags & required) != required) continue;
+        const int score = __builtin_popcount(flags & preferred);
+        if (score > best_score) {
+            best_score = score;
+            best = i;
+        }
+    }
+    return best;
+}
+
+VkMemoryPropertyFlags Context::memory_flags(std::uint32_t type_index) const {
+    return memory_.memoryTypes[type_index].propertyFlags;
+}
+
+} // namespace gust::gpu

@@ -1,0 +1,149 @@
+#include <gust/gpu/pipeline.hpp>
+
+#include <utility>
+#include <vector>
+
+namespace gust::gpu {
+
+namespace {
+
+Result<VkShaderModule> make_module(Context& ctx, std::span<const std::uint32_t> spirv) {
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = spirv.size_bytes();
+    info.pCode = spirv.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    if (VkResult r = ctx.vk().vkCreateShaderModule(ctx.device(), &info, nullptr, &module); r != VK_SUCCESS)
+        return Result<VkShaderModule>::failure(std::string("vkCreateShaderModule failed: ") + to_string(r));
+    return module;
+}
+
+} // namespace
+
+Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
+    VkPushConstantRange range{VK_SHADER_STAGE_ALL, 0, push_constant_bytes};
+    VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    info.pushConstantRangeCount = push_constant_bytes ? 1 : 0;
+    info.pPushConstantRanges = &range;
+    if (VkResult r = ctx_->vk().vkCreatePipelineLayout(ctx_->device(), &info, nullptr, &layout_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreatePipelineLayout failed: ") + to_string(r));
+    return {};
+}
+
+Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> spirv,
+                                   std::uint32_t push_constant_bytes) {
+    Pipeline p;
+    p.ctx_ = &ctx;
+    p.bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+    if (Status s = p.create_layout(push_constant_bytes); !s) return s;
+    auto module = make_module(ctx, spirv);
+    if (!module) return module.status();
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = *module;
+    info.stage.pName = "main";
+    info.layout = p.layout_;
+    VkResult r = ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
+    ctx.vk().vkDestroyShaderModule(ctx.device(), *module, nullptr);
+    if (r != VK_SUCCESS) return Result<Pipeline>::failure(std::string("vkCreateComputePipelines failed: ") + to_string(r));
+    return p;
+}
+
+Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& desc) {
+    Pipeline p;
+    p.ctx_ = &ctx;
+    p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    if (Status s = p.create_layout(desc.push_constant_bytes); !s) return s;
+
+    std::vector<VkPipelineShaderStageCreateInfo> stages;
+    std::vector<VkShaderModule> modules;
+    auto add = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) -> Status {
+        if (code.empty()) return {};
+        auto m = make_module(ctx, code);
+        if (!m) return m.status();
+        modules.push_back(*m);
+        VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+        s.stage = stage;
+        s.module = *m;
+        s.pName = "main";
+        stages.push_back(s);
+        return {};
+    };
+    Status status = add(desc.vertex, VK_SHADER_STAGE_VERTEX_BIT);
+    if (status) status = add(desc.geometry, VK_SHADER_STAGE_GEOMETRY_BIT);
+    if (status) status = add(desc.fragment, VK_SHADER_STAGE_FRAGMENT_BIT);
+
+    VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    viewport.viewportCount = 1;
+    viewport.scissorCount = 1;
+    VkPipelineRasterizationConservativeStateCreateInfoEXT conservative{
+        VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_CONSERVATIVE_STATE_CREATE_INFO_EXT};
+    conservative.conservativeRasterizationMode = VK_CONSERVATIVE_RASTERIZATION_MODE_OVERESTIMATE_EXT;
+    VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    raster.pNext = (desc.conservative && ctx.info().conservative_rasterization) ? &conservative : nullptr;
+    raster.polygonMode = VK_POLYGON_MODE_FILL;
+    raster.cullMode = VK_CULL_MODE_NONE;
+    raster.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+    VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    const VkDynamicState dynamic_states[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+    dynamic.dynamicStateCount = 2;
+    dynamic.pDynamicStates = dynamic_states;
+    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+
+    VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    info.pNext = &rendering;
+    info.stageCount = std::uint32_t(stages.size());
+    info.pStages = stages.data();
+    info.pVertexInputState = &vertex_input;
+    info.pInputAssemblyState = &assembly;
+    info.pViewportState = &viewport;
+    info.pRasterizationState = &raster;
+    info.pMultisampleState = &multisample;
+    info.pColorBlendState = &blend;
+    info.pDynamicState = &dynamic;
+    info.layout = p.layout_;
+    if (status) {
+        VkResult r =
+            ctx.vk().vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
+        if (r != VK_SUCCESS) status = Status::failure(std::string("vkCreateGraphicsPipelines failed: ") + to_string(r));
+    }
+    for (VkShaderModule m : modules) ctx.vk().vkDestroyShaderModule(ctx.device(), m, nullptr);
+    if (!status) return status;
+    return p;
+}
+
+void Pipeline::bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) const {
+    ctx_->vk().vkCmdBindPipeline(cmd, bind_point_, pipeline_);
+    if (bytes) ctx_->vk().vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_ALL, 0, bytes, push);
+}
+
+void Pipeline::release() {
+    if (!ctx_) return;
+    if (pipeline_) ctx_->vk().vkDestroyPipeline(ctx_->device(), pipeline_, nullptr);
+    if (layout_) ctx_->vk().vkDestroyPipelineLayout(ctx_->device(), layout_, nullptr);
+    pipeline_ = VK_NULL_HANDLE;
+    layout_ = VK_NULL_HANDLE;
+}
+
+Pipeline::~Pipeline() { release(); }
+
+Pipeline::Pipeline(Pipeline&& other) noexcept { *this = std::move(other); }
+
+Pipeline& Pipeline::operator=(Pipeline&& other) noexcept {
+    if (this != &other) {
+        release();
+        ctx_ = std::exchange(other.ctx_, nullptr);
+        pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
+        layout_ = std::exchange(other.layout_, VK_NULL_HANDLE);
+        bind_point_ = other.bind_point_;
+    }
+    return *this;
+}
+
+} // namespace gust::gpu

@@ -1,0 +1,71 @@
+// Buffers, triangle setup and the per-column exact test shared by the raster and compute paths.
+#include "tri_box.h"
+#include "voxelize_io.h"
+
+layout(buffer_reference, scalar) readonly buffer Positions { float v[]; };
+layout(buffer_reference, scalar) readonly buffer Indices { uint v[]; };
+layout(buffer_reference, scalar) writeonly buffer Fragments { uint v[]; };
+layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
+layout(buffer_reference, scalar) buffer LargeList { uint v[]; };
+
+layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
+
+/// Vertex `corner` of triangle `tri` in grid space (voxel units, grid min corner at 0).
+vec3 load_grid_vertex(uint tri, uint corner) {
+    uint index = Indices(pc.indices).v[3u * tri + corner];
+    Positions p = Positions(pc.positions);
+    vec3 pos = vec3(p.v[3u * index], p.v[3u * index + 1u], p.v[3u * index + 2u]);
+    return (pc.to_grid * vec4(pos, 1.0)).xyz;
+}
+
+bool is_finite(vec3 p) { return !any(isnan(p)) && !any(isinf(p)); }
+
+/// Appends one voxel to the fragment list; past the capacity only the counter moves, which tells the
+/// host to redo the pass with a larger list.
+void emit_voxel(uvec3 ijk) {
+    uint slot = atomicAdd(Counters(pc.counters).c.fragments, 1u);
+    if (slot < pc.capacity) Fragments(pc.fragments).v[slot] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
+}
+
+/// A triangle in projection space (w along its dominant axis).
+struct Setup {
+    vec3 a, b, c, n;
+    float w_min, w_max;
+    uint axis;
+    ivec2 col_lo, col_hi; ///< inclusive range of pixel columns, clipped to the grid
+};
+
+/// Projects grid-space vertices; false when the triangle has zero area or lies outside the grid.
+bool setup_triangle(vec3 g0, vec3 g1, vec3 g2, out Setup s) {
+    vec3 n = cross(g1 - g0, g2 - g0);
+    if (n == vec3(0.0)) return false;
+    s.axis = dominant_axis(n);
+    s.a = swizzle_to_projection(g0, s.axis);
+    s.b = swizzle_to_projection(g1, s.axis);
+    s.c = swizzle_to_projection(g2, s.axis);
+    s.n = swizzle_to_projection(n, s.axis);
+    vec3 lo = min(s.a, min(s.b, s.c));
+    vec3 hi = max(s.a, max(s.b, s.c));
+    float res = float(pc.res);
+    if (any(greaterThan(lo, vec3(res))) || any(lessThan(hi, vec3(0.0)))) return false;
+    s.w_min = lo.z;
+    s.w_max = hi.z;
+    // Column x meets [lo, hi] when x <= hi and x + 1 >= lo.
+    vec2 clo = clamp(ceil(lo.xy) - 1.0, vec2(0.0), vec2(res - 1.0));
+    vec2 chi = clamp(floor(hi.xy), vec2(0.0), vec2(res - 1.0));
+    s.col_lo = ivec2(clo);
+    s.col_hi = ivec2(chi);
+    return true;
+}
+
+/// Emits every voxel of column (x, y) that the triangle meets, each confirmed by the exact test.
+void voxelize_column(Setup s, int x, int y) {
+    ivec2 layers = column_layers(s.n, s.a, s.w_min, s.w_max, float(x), float(y));
+    int k0 = max(layers.x, 0);
+    int k1 = min(layers.y, int(pc.res) - 1);
+    for (int k = k0; k <= k1; ++k) {
+        vec3 centre = vec3(float(x) + 0.5, float(y) + 0.5, float(k) + 0.5);
+        if (tri_box_overlap(centre, vec3(0.5), s.a, s.b, s.c))
+            emit_voxel(uvec3(swizzle_from_projection(vec3(x, y, k), s.axis)));
+    }
+}

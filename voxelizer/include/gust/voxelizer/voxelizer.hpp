@@ -1,0 +1,122 @@
+// GPU conservative surface voxelization of triangle meshes into a fragment list (DESIGN.md "Voxelizer").
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/pipeline.hpp>
+#include <gust/gpu/profiler.hpp>
+#include <gust/voxelizer/grid.hpp>
+
+namespace gust {
+
+/// Which path turns triangles into voxels.
+enum class VoxelizeMethod {
+    Raster,  ///< hardware rasterizer: dominant-axis projection, dilation, exact per-voxel test
+    Compute, ///< a thread per triangle (a workgroup per large triangle), exact per-voxel test
+    Auto     ///< per mesh, whichever measured faster on this device and resolution (measured once)
+};
+
+/// "raster", "compute" or "auto".
+const char* to_string(VoxelizeMethod method);
+/// Parses "raster", "compute" or "auto"; false for anything else.
+bool parse_method(const std::string& text, VoxelizeMethod& out);
+
+/// A mesh uploaded to the device, validated once. Owned by the caller; outlives its use in calls.
+class GpuMesh {
+public:
+    std::uint32_t triangle_count() const { return triangles_; }
+    std::uint32_t vertex_count() const { return vertices_; }
+
+private:
+    friend class Voxelizer;
+    gpu::Buffer positions_; ///< float[3 * vertices]
+    gpu::Buffer indices_;   ///< uint[3 * triangles]
+    std::uint32_t triangles_ = 0;
+    std::uint32_t vertices_ = 0;
+    std::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
+};
+
+/// One placement of an uploaded mesh.
+struct GpuInstance {
+    const GpuMesh* mesh = nullptr;
+    glm::mat4 model{1.0f}; ///< mesh space -> world space
+};
+
+/// Options for a Voxelizer.
+struct VoxelizerDesc {
+    /// Fragment slots allocated up front; the list grows (and the pass is redone) when a call needs more.
+    std::uint32_t initial_capacity = 1u << 20;
+};
+
+/// What one voxelize() call did.
+struct VoxelizeStats {
+    std::uint64_t triangles = 0;  ///< triangles submitted
+    std::uint64_t rejected = 0;   ///< triangles with a non-finite vertex after the model transform
+    std::uint64_t fragments = 0;  ///< entries in the fragment list (a voxel appears once per triangle touching it)
+    std::uint32_t retries = 0;    ///< passes redone because the fragment list was too small
+    std::uint64_t capacity = 0;   ///< fragment slots after the call
+    VoxelizeMethod method = VoxelizeMethod::Raster; ///< path used (Auto reports the last mesh's choice)
+    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
+};
+
+/// Owns the pipelines and the fragment list. One call at a time (thread-compatible).
+class Voxelizer {
+public:
+    /// Builds the pipelines on `ctx` (which must outlive the Voxelizer).
+    static Result<std::unique_ptr<Voxelizer>> create(gpu::Context& ctx, const VoxelizerDesc& desc = {});
+
+    /// Validates `mesh` (index count a multiple of 3, every index < vertex_count, stride >= 12) and
+    /// copies it to the device. Non-finite positions are accepted: those triangles are counted as rejected.
+    Result<GpuMesh> upload(const MeshView& mesh);
+
+    /// Voxelizes every instance into the fragment list, blocking until done. The list holds each
+    /// voxel once per triangle that touches it; it is never truncated: when it overflows it is grown
+    /// and the pass redone (counted in `retries`).
+    Result<VoxelizeStats> voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                   VoxelizeMethod method);
+
+    /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
+    Result<std::vector<std::uint32_t>> read_fragments() const;
+
+    /// The device fragment list of the last call and its length, for passes that consume it on the GPU.
+    const gpu::Buffer& fragment_buffer() const { return fragments_; }
+    std::uint64_t fragment_count() const { return fragment_count_; }
+
+private:
+    explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
+    Status ensure_capacity(std::uint64_t fragments);
+    Status ensure_large_list(std::uint32_t triangles);
+    Result<VoxelizeStats> run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
+                              const GridDesc& grid);
+    Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
+
+    gpu::Context& ctx_;
+    gpu::Pipeline raster_;
+    gpu::Pipeline compute_small_;
+    gpu::Pipeline compute_large_;
+    gpu::Profiler profiler_;
+    gpu::Buffer fragments_;
+    gpu::Buffer counters_;
+    gpu::Buffer large_list_;
+    std::uint64_t capacity_ = 0;
+    std::uint64_t fragment_count_ = 0;
+};
+
+/// Checks a grid: res in [kMinRes, kMaxRes], finite origin, finite voxel size > 0.
+Status validate_grid(const GridDesc& grid);
+
+/// The grid DESIGN.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
+/// by one voxel on every side (an empty or flat box gets a 1-unit edge).
+GridDesc grid_around(glm::vec3 lo, glm::vec3 hi, std::uint32_t res);
+
+/// Bounding box of the finite vertices that triangles of `mesh` reference; lo > hi when there are none.
+std::pair<glm::vec3, glm::vec3> mesh_bounds(const MeshView& mesh);
+
+} // namespace gust

@@ -1,0 +1,318 @@
+#include <gust/voxelizer/voxelizer.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+
+#include "voxelizer/voxelize_io.h"
+
+namespace gust {
+
+namespace {
+#include "gust_shaders/voxelize_frag.h"
+#include "gust_shaders/voxelize_geom.h"
+#include "gust_shaders/voxelize_large_comp.h"
+#include "gust_shaders/voxelize_tri_comp.h"
+#include "gust_shaders/voxelize_vert.h"
+
+using shaderio::kLargeGroups;
+using shaderio::kVoxelizeGroupSize;
+using shaderio::VoxelizeCounters;
+using shaderio::VoxelizePush;
+
+/// Largest compute dispatch along x in workgroups that every Vulkan device accepts.
+constexpr std::uint32_t kMaxGroupsX = 65535;
+
+template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) { return {a, N}; }
+
+glm::mat4 world_to_grid(const GridDesc& grid) {
+    const float inv_h = 1.0f / grid.voxel_size;
+    glm::mat4 m(inv_h);
+    m[3] = glm::vec4(-grid.origin * inv_h, 1.0f);
+    return m;
+}
+
+} // namespace
+
+const char* to_string(VoxelizeMethod method) {
+    switch (method) {
+    case VoxelizeMethod::Raster: return "raster";
+    case VoxelizeMethod::Compute: return "compute";
+    case VoxelizeMethod::Auto: return "auto";
+    }
+    return "unknown";
+}
+
+bool parse_method(const std::string& text, VoxelizeMethod& out) {
+    for (VoxelizeMethod m : {VoxelizeMethod::Raster, VoxelizeMethod::Compute, VoxelizeMethod::Auto})
+        if (text == to_string(m)) {
+            out = m;
+            return true;
+        }
+    return false;
+}
+
+Status validate_grid(const GridDesc& grid) {
+    if (grid.res < kMinRes || grid.res > kMaxRes)
+        return Status::failure("grid resolution " + std::to_string(grid.res) + " is outside [" +
+                               std::to_string(kMinRes) + ", " + std::to_string(kMaxRes) + "]");
+    if (!std::isfinite(grid.voxel_size) || grid.voxel_size <= 0.0f)
+        return Status::failure("voxel size must be finite and > 0, got " + std::to_string(grid.voxel_size));
+    if (!std::isfinite(grid.origin.x) || !std::isfinite(grid.origin.y) || !std::isfinite(grid.origin.z))
+        return Status::failure("grid origin must be finite");
+    if (!std::isfinite(grid.voxel_size * float(grid.res)))
+        return Status::failure("grid extent overflows a float");
+    return {};
+}
+
+GridDesc grid_around(glm::vec3 lo, glm::vec3 hi, std::uint32_t res) {
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) lo = hi = glm::vec3(0.0f);
+    const glm::vec3 extent = hi - lo;
+    float edge = std::max({extent.x, extent.y, extent.z});
+    if (!(edge > 0.0f)) edge = 1.0f;
+    GridDesc grid;
+    grid.res = res;
+    grid.voxel_size = edge / float(std::max<std::uint32_t>(res, 3) - 2);
+    grid.origin = 0.5f * (lo + hi) - 0.5f * float(res) * grid.voxel_size;
+    return grid;
+}
+
+std::pair<glm::vec3, glm::vec3> mesh_bounds(const MeshView& mesh) {
+    glm::vec3 lo(std::numeric_limits<float>::max());
+    glm::vec3 hi(std::numeric_limits<float>::lowest());
+    for (std::size_t i = 0; i < mesh.index_count; ++i) {
+        if (mesh.indices[i] >= mesh.vertex_count) continue;
+        const glm::vec3 p = mesh.position(mesh.indices[i]);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    return {lo, hi};
+}
+
+Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const VoxelizerDesc& desc) {
+    std::unique_ptr<Voxelizer> v(new Voxelizer(ctx));
+    gpu::GraphicsPipelineDesc raster;
+    raster.vertex = words(voxelize_vert);
+    raster.geometry = words(voxelize_geom);
+    raster.fragment = words(voxelize_frag);
+    raster.push_constant_bytes = sizeof(VoxelizePush);
+    auto r = gpu::Pipeline::graphics(ctx, raster);
+    if (!r) return r.status();
+    v->raster_ = std::move(*r);
+    auto small = gpu::Pipeline::compute(ctx, words(voxelize_tri_comp), sizeof(VoxelizePush));
+    if (!small) return small.status();
+    v->compute_small_ = std::move(*small);
+    auto large = gpu::Pipeline::compute(ctx, words(voxelize_large_comp), sizeof(VoxelizePush));
+    if (!large) return large.status();
+    v->compute_large_ = std::move(*large);
+    auto profiler = gpu::Profiler::create(ctx);
+    if (!profiler) return profiler.status();
+    v->profiler_ = std::move(*profiler);
+    auto counters = gpu::Buffer::create(ctx, sizeof(VoxelizeCounters), gpu::MemoryUse::Readback);
+    if (!counters) return counters.status();
+    v->counters_ = std::move(*counters);
+    if (Status s = v->ensure_capacity(std::max<std::uint32_t>(desc.initial_capacity, 1)); !s) return s;
+    return v;
+}
+
+Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
+    if (fragments <= capacity_) return {};
+    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
+    if (fragments > limit || fragments > UINT32_MAX)
+        return Status::failure("the fragment list needs " + std::to_string(fragments) +
+                               " entries, more than one device allocation holds (" + std::to_string(limit) +
+                               "); lower the resolution or split the scene");
+    auto buffer = gpu::Buffer::create(ctx_, fragments * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    if (!buffer) return buffer.status();
+    fragments_ = std::move(*buffer);
+    capacity_ = fragments;
+    return {};
+}
+
+Status Voxelizer::ensure_large_list(std::uint32_t triangles) {
+    const VkDeviceSize bytes = VkDeviceSize(std::max<std::uint32_t>(triangles, 1)) * sizeof(std::uint32_t);
+    if (large_list_ && large_list_.size() >= bytes) return {};
+    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Device);
+    if (!buffer) return buffer.status();
+    large_list_ = std::move(*buffer);
+    return {};
+}
+
+Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
+    if (mesh.index_count % 3 != 0)
+        return Result<GpuMesh>::failure("index count " + std::to_string(mesh.index_count) +
+                                        " is not a multiple of 3");
+    if (mesh.index_count && (!mesh.indices || !mesh.positions))
+        return Result<GpuMesh>::failure("mesh has indices but a null index or position pointer");
+    if (mesh.position_stride < 3 * sizeof(float))
+        return Result<GpuMesh>::failure("position stride " + std::to_string(mesh.position_stride) +
+                                        " is below 12 bytes");
+    if (mesh.vertex_count > UINT32_MAX || mesh.index_count / 3 > UINT32_MAX / 3)
+        return Result<GpuMesh>::failure("mesh is too large (more than 2^32 vertices or indices)");
+    for (std::size_t i = 0; i < mesh.index_count; ++i)
+        if (mesh.indices[i] >= mesh.vertex_count)
+            return Result<GpuMesh>::failure("index " + std::to_string(mesh.indices[i]) + " at position " +
+                                            std::to_string(i) + " is out of range (" +
+                                            std::to_string(mesh.vertex_count) + " vertices)");
+    GpuMesh out;
+    out.triangles_ = std::uint32_t(mesh.index_count / 3);
+    out.vertices_ = std::uint32_t(mesh.vertex_count);
+    if (out.triangles_ == 0) return out;
+
+    std::vector<float> packed(3 * mesh.vertex_count);
+    for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
+        const glm::vec3 p = mesh.position(v);
+        std::memcpy(&packed[3 * v], &p, sizeof(p));
+    }
+    auto positions = gpu::Buffer::create(ctx_, packed.size() * sizeof(float), gpu::MemoryUse::Device);
+    if (!positions) return positions.status();
+    if (Status s = gpu::upload(ctx_, *positions, packed.data(), packed.size() * sizeof(float)); !s) return s;
+    auto indices = gpu::Buffer::create(ctx_, mesh.index_count * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    if (!indices) return indices.status();
+    if (Status s = gpu::upload(ctx_, *indices, mesh.indices, mesh.index_count * sizeof(std::uint32_t)); !s)
+        return s;
+    out.positions_ = std::move(*positions);
+    out.indices_ = std::move(*indices);
+    return out;
+}
+
+Result<VoxelizeStats> Voxelizer::voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                          VoxelizeMethod method) {
+    if (Status s = validate_grid(grid); !s) return s;
+    for (const GpuInstance& inst : instances)
+        if (!inst.mesh) return Result<VoxelizeStats>::failure("an instance has no mesh");
+    if (method == VoxelizeMethod::Auto)
+        if (Status s = choose_methods(instances, grid); !s) return s;
+    std::vector<VoxelizeMethod> methods;
+    for (const GpuInstance& inst : instances)
+        methods.push_back(method == VoxelizeMethod::Auto ? inst.mesh->measured_.at(grid.res) : method);
+    auto stats = run(instances, methods, grid);
+    if (stats && !methods.empty()) stats->method = methods.back();
+    return stats;
+}
+
+Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid) {
+    for (const GpuInstance& inst : instances) {
+        if (inst.mesh->measured_.count(grid.res)) continue;
+        double best_ms = 0.0;
+        VoxelizeMethod best = VoxelizeMethod::Raster;
+        for (VoxelizeMethod m : {VoxelizeMethod::Raster, VoxelizeMethod::Compute}) {
+            const VoxelizeMethod one[] = {m};
+            const auto start = std::chrono::steady_clock::now();
+            auto stats = run({&inst, 1}, one, grid);
+            if (!stats) return stats.status();
+            double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            if (!stats->ms.empty()) {
+                ms = 0.0;
+                for (const auto& pass : stats->ms) ms += pass.second;
+            }
+            if (m == VoxelizeMethod::Raster || ms < best_ms) {
+                best_ms = ms;
+                best = m;
+            }
+        }
+        const_cast<GpuMesh*>(inst.mesh)->measured_[grid.res] = best;
+    }
+    return {};
+}
+
+Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
+                                     const GridDesc& grid) {
+    VoxelizeStats stats;
+    std::uint32_t max_triangles = 0;
+    for (const GpuInstance& inst : instances) {
+        stats.triangles += inst.mesh->triangles_;
+        max_triangles = std::max(max_triangles, inst.mesh->triangles_);
+    }
+    if (Status s = ensure_large_list(max_triangles); !s) return s;
+    const glm::mat4 to_grid = world_to_grid(grid);
+    const auto& vk = ctx_.vk();
+
+    for (;;) {
+        VoxelizePush push{};
+        push.fragments = fragments_.address();
+        push.counters = counters_.address();
+        push.large_list = large_list_.address();
+        push.res = grid.res;
+        push.capacity = std::uint32_t(capacity_);
+        Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+            profiler_.reset(cmd);
+            vk.vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
+            gpu::barrier(ctx_, cmd);
+            const bool any_raster = std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
+            if (any_raster) {
+                profiler_.begin(cmd, "raster");
+                VkRenderingInfo rendering{VK_STRUCTURE_TYPE_RENDERING_INFO};
+                rendering.renderArea = {{0, 0}, {grid.res, grid.res}};
+                rendering.layerCount = 1;
+                vk.vkCmdBeginRendering(cmd, &rendering);
+                const VkViewport viewport{0.0f, 0.0f, float(grid.res), float(grid.res), 0.0f, 1.0f};
+                const VkRect2D scissor{{0, 0}, {grid.res, grid.res}};
+                vk.vkCmdSetViewport(cmd, 0, 1, &viewport);
+                vk.vkCmdSetScissor(cmd, 0, 1, &scissor);
+                for (std::size_t i = 0; i < instances.size(); ++i) {
+                    const GpuMesh& mesh = *instances[i].mesh;
+                    if (methods[i] != VoxelizeMethod::Raster || mesh.triangles_ == 0) continue;
+                    push.to_grid = to_grid * instances[i].model;
+                    push.positions = mesh.positions_.address();
+                    push.indices = mesh.indices_.address();
+                    push.triangle_count = mesh.triangles_;
+                    raster_.bind(cmd, &push, sizeof(push));
+                    vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
+                }
+                vk.vkCmdEndRendering(cmd);
+                profiler_.end(cmd);
+            }
+            bool first_compute = true;
+            for (std::size_t i = 0; i < instances.size(); ++i) {
+                const GpuMesh& mesh = *instances[i].mesh;
+                if (methods[i] != VoxelizeMethod::Compute || mesh.triangles_ == 0) continue;
+                if (first_compute) profiler_.begin(cmd, "compute");
+                first_compute = false;
+                push.to_grid = to_grid * instances[i].model;
+                push.positions = mesh.positions_.address();
+                push.indices = mesh.indices_.address();
+                // The large-triangle queue is per instance: empty it before each one.
+                vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_triangles), 4, 0);
+                gpu::barrier(ctx_, cmd);
+                const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
+                for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
+                    push.first_triangle = first;
+                    push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
+                    compute_small_.bind(cmd, &push, sizeof(push));
+                    vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
+                }
+                gpu::barrier(ctx_, cmd);
+                compute_large_.bind(cmd, &push, sizeof(push));
+                vk.vkCmdDispatch(cmd, kLargeGroups, 1, 1);
+                gpu::barrier(ctx_, cmd);
+            }
+            if (!first_compute) profiler_.end(cmd);
+        });
+        if (!recorded) return recorded;
+        VoxelizeCounters counters{};
+        if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
+        stats.rejected = counters.rejected;
+        stats.fragments = counters.fragments;
+        stats.ms = profiler_.read();
+        if (counters.fragments <= capacity_) break;
+        // Grow with headroom so that a scene growing slowly does not redo every frame.
+        if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s) return s;
+        ++stats.retries;
+    }
+    stats.capacity = capacity_;
+    fragment_count_ = stats.fragments;
+    return stats;
+}
+
+Result<std::vector<std::uint32_t>> Voxelizer::read_fragments() const {
+    std::vector<std::uint32_t> out(fragment_count_);
+    if (Status s = gpu::download(ctx_, fragments_, out.data(), out.size() * sizeof(std::uint32_t)); !s) return s;
+    return out;
+}
+
+} // namespace gust
