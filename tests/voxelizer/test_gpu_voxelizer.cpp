@@ -1,0 +1,295 @@
+// The GPU paths against the CPU reference: equal sets, except voxels the surface touches within 1e-3 voxel.
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+
+#include <limits>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include <gust/scene/import.hpp>
+#include <gust/voxelizer/cpu_reference.hpp>
+#include <gust/voxelizer/voxelizer.hpp>
+
+#include "support/gpu_env.hpp"
+#include "support/mesh_gen.hpp"
+
+namespace gust::test {
+namespace {
+
+/// A test input: a mesh in world space and the grid it is voxelized on.
+struct Case {
+    TestMesh mesh;
+    GridDesc grid;
+};
+
+TestMesh from_file(const std::string& relative) {
+    auto mesh = load_mesh(std::string(GUST_ASSETS_DIR) + "/" + relative);
+    EXPECT_TRUE(mesh) << mesh.message();
+    TestMesh out;
+    if (mesh) {
+        out.positions = mesh->positions;
+        out.indices = mesh->indices;
+    }
+    return out;
+}
+
+GridDesc fitted(const TestMesh& mesh, std::uint32_t res) {
+    const auto [lo, hi] = mesh_bounds(mesh.view());
+    return grid_around(lo, hi, res);
+}
+
+/// A grid whose voxel planes are exactly representable (power-of-two h, origin a multiple of h).
+GridDesc exact_grid(std::uint32_t res) {
+    GridDesc g;
+    g.res = res;
+    g.voxel_size = 0.0625f;
+    g.origin = glm::vec3(-2.0f, -1.0f, -0.5f);
+    return g;
+}
+
+Case make_case(const std::string& name, std::uint32_t res) {
+    if (name == "bunny") {
+        TestMesh m = from_file("scans/bunny.ply");
+        return {m, fitted(m, res)};
+    }
+    if (name == "dragon_res3") {
+        TestMesh m = from_file("scans/dragon_res3.ply");
+        return {m, fitted(m, res)};
+    }
+    if (name == "fox") {
+        TestMesh m = from_file("characters/Fox.glb");
+        return {m, fitted(m, res)};
+    }
+    const GridDesc g = exact_grid(res);
+    if (name == "soup") return {random_soup(res, 3000, g), g};
+    if (name == "boxes") return {grid_aligned_boxes(g, 12, res), g};
+    if (name == "huge") return {huge_triangles(g), g};
+    return {partly_outside(g, res, 400), g};
+}
+
+/// CPU reference results are shared between the two methods.
+const CpuVoxelization& reference(const std::string& name, std::uint32_t res, const Case& c) {
+    static std::map<std::pair<std::string, std::uint32_t>, CpuVoxelization> cache;
+    auto key = std::make_pair(name, res);
+    auto it = cache.find(key);
+    if (it == cache.end()) {
+        const InstanceDesc inst{c.mesh.view(), glm::mat4(1.0f)};
+        it = cache.emplace(key, voxelize_reference({&inst, 1}, c.grid)).first;
+    }
+    return it->second;
+}
+
+std::vector<std::uint32_t> sorted_unique(std::vector<std::uint32_t> v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    return v;
+}
+
+using Param = std::tuple<std::string, std::uint32_t, VoxelizeMethod>;
+
+class MatchesReference : public GpuTestWithParam<Param> {};
+
+TEST_P(MatchesReference, exceptWithinToleranceOfTouching) {
+    const auto& [name, res, method] = GetParam();
+    const Case c = make_case(name, res);
+    ASSERT_FALSE(c.mesh.indices.empty());
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer) << voxelizer.message();
+    auto mesh = (*voxelizer)->upload(c.mesh.view());
+    ASSERT_TRUE(mesh) << mesh.message();
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    auto stats = (*voxelizer)->voxelize({&inst, 1}, c.grid, method);
+    ASSERT_TRUE(stats) << stats.message();
+    auto fragments = (*voxelizer)->read_fragments();
+    ASSERT_TRUE(fragments);
+    EXPECT_EQ(fragments->size(), stats->fragments);
+    const std::vector<std::uint32_t> gpu = sorted_unique(*fragments);
+
+    const CpuVoxelization& ref = reference(name, res, c);
+    ASSERT_FALSE(ref.voxels.empty());
+    EXPECT_EQ(stats->rejected, ref.rejected);
+    const VoxelDiff diff = diff_voxels(gpu, ref.voxels);
+    const InstanceDesc cpu_inst{c.mesh.view(), glm::mat4(1.0f)};
+    const auto bad = unexplained_differences(diff, {&cpu_inst, 1}, c.grid);
+    EXPECT_TRUE(bad.empty()) << bad.size() << " voxels differ by more than 1e-3 voxel (" << diff.missing.size()
+                             << " missing, " << diff.extra.size() << " extra, " << ref.voxels.size()
+                             << " in the reference)";
+}
+
+std::string param_name(const ::testing::TestParamInfo<Param>& info) {
+    return std::get<0>(info.param) + "_res" + std::to_string(std::get<1>(info.param)) + "_" +
+           to_string(std::get<2>(info.param));
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, MatchesReference,
+                         ::testing::Combine(::testing::Values("bunny", "dragon_res3", "fox", "soup", "boxes",
+                                                              "huge", "outside"),
+                                            ::testing::Values(8u, 37u, 64u, 128u),
+                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+                         param_name);
+
+using VoxelizerTest = GpuTest;
+
+TEST_F(VoxelizerTest, tinyInitialCapacityStillYieldsTheFullSet) {
+    const GridDesc g = exact_grid(64);
+    const TestMesh soup = random_soup(7, 2000, g);
+    for (VoxelizeMethod method : {VoxelizeMethod::Raster, VoxelizeMethod::Compute}) {
+        std::vector<std::uint32_t> sets[2];
+        for (std::uint32_t capacity : {1u << 20, 1u}) {
+            VoxelizerDesc desc;
+            desc.initial_capacity = capacity;
+            auto voxelizer = Voxelizer::create(ctx(), desc);
+            ASSERT_TRUE(voxelizer) << voxelizer.message();
+            auto mesh = (*voxelizer)->upload(soup.view());
+            ASSERT_TRUE(mesh);
+            const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+            auto stats = (*voxelizer)->voxelize({&inst, 1}, g, method);
+            ASSERT_TRUE(stats) << stats.message();
+            EXPECT_EQ(stats->retries, capacity == 1u ? 1u : 0u) << to_string(method);
+            EXPECT_GE(stats->capacity, stats->fragments);
+            sets[capacity == 1u] = sorted_unique(*(*voxelizer)->read_fragments());
+        }
+        EXPECT_FALSE(sets[0].empty());
+        EXPECT_EQ(sets[0], sets[1]) << to_string(method);
+    }
+}
+
+TEST_F(VoxelizerTest, severalInstancesWithOwnTransformsMatchTheReference) {
+    const GridDesc g = exact_grid(64);
+    const TestMesh sphere = icosphere(2, glm::vec3(0.0f), 0.5f);
+    const glm::mat4 models[3] = {
+        glm::translate(glm::mat4(1.0f), glm::vec3(-1.0f, 0.5f, 0.5f)),
+        glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.8f, 1.0f, 1.2f)), glm::vec3(1.5f, 0.7f, 1.0f)),
+        glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 2.0f, 2.5f)), 0.7f, glm::vec3(1, 1, 0))};
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(sphere.view());
+    ASSERT_TRUE(mesh);
+    std::vector<GpuInstance> gpu_instances;
+    std::vector<InstanceDesc> cpu_instances;
+    for (const glm::mat4& m : models) {
+        gpu_instances.push_back({&*mesh, m});
+        cpu_instances.push_back({sphere.view(), m});
+    }
+    const CpuVoxelization ref = voxelize_reference(cpu_instances, g);
+    for (VoxelizeMethod method : {VoxelizeMethod::Raster, VoxelizeMethod::Compute, VoxelizeMethod::Auto}) {
+        auto stats = (*voxelizer)->voxelize(gpu_instances, g, method);
+        ASSERT_TRUE(stats) << stats.message();
+        EXPECT_EQ(stats->triangles, 3 * sphere.indices.size() / 3);
+        const VoxelDiff diff = diff_voxels(sorted_unique(*(*voxelizer)->read_fragments()), ref.voxels);
+        EXPECT_TRUE(unexplained_differences(diff, cpu_instances, g).empty()) << to_string(method);
+    }
+}
+
+TEST_F(VoxelizerTest, countsNonFiniteTrianglesAndSkipsZeroArea) {
+    const BadTriangles bad = bad_triangles();
+    GridDesc g;
+    g.res = 16;
+    g.voxel_size = 1.0f / 16.0f;
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(bad.mesh.view());
+    ASSERT_TRUE(mesh) << mesh.message();
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    const InstanceDesc cpu{bad.mesh.view(), glm::mat4(1.0f)};
+    const CpuVoxelization ref = voxelize_reference({&cpu, 1}, g);
+    for (VoxelizeMethod method : {VoxelizeMethod::Raster, VoxelizeMethod::Compute}) {
+        auto stats = (*voxelizer)->voxelize({&inst, 1}, g, method);
+        ASSERT_TRUE(stats) << stats.message();
+        EXPECT_EQ(stats->rejected, bad.expected_rejected);
+        const VoxelDiff diff = diff_voxels(sorted_unique(*(*voxelizer)->read_fragments()), ref.voxels);
+        EXPECT_TRUE(unexplained_differences(diff, {&cpu, 1}, g).empty()) << to_string(method);
+    }
+}
+
+TEST_F(VoxelizerTest, nonFiniteModelMatrixRejectsEveryTriangle) {
+    const TestMesh sphere = icosphere(1, glm::vec3(0.5f), 0.3f);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(sphere.view());
+    ASSERT_TRUE(mesh);
+    glm::mat4 model(1.0f);
+    model[3][0] = std::numeric_limits<float>::quiet_NaN();
+    const GpuInstance inst{&*mesh, model};
+    auto stats = (*voxelizer)->voxelize({&inst, 1}, exact_grid(16), VoxelizeMethod::Raster);
+    ASSERT_TRUE(stats);
+    EXPECT_EQ(stats->rejected, mesh->triangle_count());
+    EXPECT_EQ(stats->fragments, 0u);
+}
+
+TEST_F(VoxelizerTest, rejectsIndexOutOfRange) {
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::uint32_t indices[3] = {0, 1, 3};
+    MeshView view;
+    view.positions = positions;
+    view.vertex_count = 3;
+    view.indices = indices;
+    view.index_count = 3;
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(view);
+    ASSERT_FALSE(mesh);
+    EXPECT_NE(mesh.message().find("out of range"), std::string::npos);
+    view.index_count = 2;
+    EXPECT_FALSE((*voxelizer)->upload(view));
+}
+
+TEST_F(VoxelizerTest, emptyMeshGivesNoFragments) {
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(MeshView{});
+    ASSERT_TRUE(mesh) << mesh.message();
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    for (VoxelizeMethod method : {VoxelizeMethod::Raster, VoxelizeMethod::Compute, VoxelizeMethod::Auto}) {
+        auto stats = (*voxelizer)->voxelize({&inst, 1}, exact_grid(8), method);
+        ASSERT_TRUE(stats) << stats.message();
+        EXPECT_EQ(stats->fragments, 0u);
+        EXPECT_TRUE((*voxelizer)->read_fragments()->empty());
+    }
+}
+
+TEST_F(VoxelizerTest, rejectsBadGrids) {
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    GridDesc g = exact_grid(7);
+    EXPECT_FALSE((*voxelizer)->voxelize({}, g, VoxelizeMethod::Raster));
+    g = exact_grid(1025);
+    EXPECT_FALSE((*voxelizer)->voxelize({}, g, VoxelizeMethod::Raster));
+    g = exact_grid(64);
+    g.voxel_size = 0.0f;
+    EXPECT_FALSE((*voxelizer)->voxelize({}, g, VoxelizeMethod::Raster));
+    g.voxel_size = std::numeric_limits<float>::infinity();
+    EXPECT_FALSE((*voxelizer)->voxelize({}, g, VoxelizeMethod::Raster));
+    g = exact_grid(64);
+    g.origin.y = std::numeric_limits<float>::quiet_NaN();
+    auto r = (*voxelizer)->voxelize({}, g, VoxelizeMethod::Raster);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.message().find("origin"), std::string::npos);
+}
+
+TEST_F(VoxelizerTest, autoPicksAMeasuredMethodAndMatches) {
+    const GridDesc g = exact_grid(64);
+    const TestMesh soup = random_soup(3, 1000, g);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(soup.view());
+    ASSERT_TRUE(mesh);
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    auto stats = (*voxelizer)->voxelize({&inst, 1}, g, VoxelizeMethod::Auto);
+    ASSERT_TRUE(stats) << stats.message();
+    EXPECT_NE(stats->method, VoxelizeMethod::Auto);
+    auto again = (*voxelizer)->voxelize({&inst, 1}, g, VoxelizeMethod::Auto);
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->method, stats->method) << "the choice is measured once per mesh and resolution";
+    const InstanceDesc cpu{soup.view(), glm::mat4(1.0f)};
+    const VoxelDiff diff =
+        diff_voxels(sorted_unique(*(*voxelizer)->read_fragments()), voxelize_reference({&cpu, 1}, g).voxels);
+    EXPECT_TRUE(unexplained_differences(diff, {&cpu, 1}, g).empty());
+}
+
+} // namespace
+} // namespace gust::test
