@@ -2,14 +2,13 @@
 // OpenVDB's distance fields.
 #include "gust/voxelizer/cpu_reference.hpp"
 #include "support/mesh_gen.hpp"
+#include "support/vdb_check.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <gtest/gtest.h>
 #include <limits>
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/MeshToVolume.h>
 #include <random>
 #include <string>
 #include <vector>
@@ -449,10 +448,7 @@ struct VdbCase {
     std::uint32_t res;
 };
 
-class CpuReferenceVsOpenVdb : public testing::TestWithParam<VdbCase> {
-  protected:
-    static void SetUpTestSuite() { openvdb::initialize(); }
-};
+class CpuReferenceVsOpenVdb : public testing::TestWithParam<VdbCase> {};
 
 // Occupied means the voxel box meets the surface, so the centre is within half a diagonal of it; and a
 // surface point within half a voxel of the centre lies inside the box.
@@ -464,42 +460,11 @@ TEST_P(CpuReferenceVsOpenVdb, referenceAgreesWithDistanceToSurface) {
     const std::vector<std::uint32_t> voxels = voxelize_reference(instances_of(mesh), grid).voxels;
     ASSERT_FALSE(voxels.empty());
 
-    const double h = grid.voxel_size;
-    auto transform = openvdb::math::Transform::createLinearTransform(h);
-    transform->postTranslate(openvdb::Vec3d(grid.origin.x, grid.origin.y, grid.origin.z) + 0.5 * h);
-    std::vector<openvdb::Vec3s> points;
-    for (const glm::vec3& p : mesh.positions)
-        points.emplace_back(p.x, p.y, p.z);
-    std::vector<openvdb::Vec3I> triangles;
-    for (std::size_t t = 0; t < mesh.indices.size(); t += 3) {
-        triangles.emplace_back(mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]);
-    }
-    const auto distance = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(
-        *transform, points, triangles, std::vector<openvdb::Vec4I>(), 1.0f);
-    const auto accessor = distance->getConstAccessor();
-
-    std::size_t near_surface = 0;
-    std::size_t uncovered = 0;
-    std::size_t too_far = 0;
-    for (std::uint32_t k = 0; k < grid.res; ++k) {
-        for (std::uint32_t j = 0; j < grid.res; ++j) {
-            for (std::uint32_t i = 0; i < grid.res; ++i) {
-                const double d = accessor.getValue(openvdb::Coord(int(i), int(j), int(k))) / h;
-                const bool occupied = std::binary_search(voxels.begin(), voxels.end(), pack_voxel(i, j, k));
-                // 1e-4 voxel of slack for OpenVDB's single-precision distances.
-                const bool near = d < 0.5 - 1e-4;
-                const bool far = d > std::sqrt(3.0) / 2 + 1e-3;
-                near_surface += near;
-                if ((near && !occupied && ++uncovered <= 5) || (occupied && far && ++too_far <= 5)) {
-                    ADD_FAILURE() << "voxel " << i << "," << j << "," << k << " occupied " << occupied
-                                  << ", centre " << d << " voxels from the surface";
-                }
-            }
-        }
-    }
-    EXPECT_EQ(uncovered, 0u);
-    EXPECT_EQ(too_far, 0u);
-    EXPECT_GT(near_surface, voxels.size() / 10);
+    const test::DistanceCheck check = test::check_against_distance_field(mesh, grid, voxels);
+    for (const std::string& example : check.examples) ADD_FAILURE() << example;
+    EXPECT_EQ(check.uncovered, 0u);
+    EXPECT_EQ(check.too_far, 0u);
+    EXPECT_GT(check.near_surface, voxels.size() / 10);
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, CpuReferenceVsOpenVdb,

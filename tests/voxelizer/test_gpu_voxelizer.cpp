@@ -16,6 +16,7 @@
 
 #include "support/gpu_env.hpp"
 #include "support/mesh_gen.hpp"
+#include "support/vdb_check.hpp"
 
 namespace gust::test {
 namespace {
@@ -131,6 +132,34 @@ INSTANTIATE_TEST_SUITE_P(Meshes, MatchesReference,
                                             ::testing::Values(8u, 37u, 64u, 128u),
                                             ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
                          param_name);
+
+using DistanceParam = std::tuple<std::string, VoxelizeMethod>;
+
+class AgreesWithOpenVdb : public GpuTestWithParam<DistanceParam> {};
+
+TEST_P(AgreesWithOpenVdb, occupiesEveryVoxelNearTheSurfaceAndNoneFarFromIt) {
+    const auto& [name, method] = GetParam();
+    const Case c = make_case(name, 64);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer) << voxelizer.message();
+    auto mesh = (*voxelizer)->upload(c.mesh.view());
+    ASSERT_TRUE(mesh) << mesh.message();
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    ASSERT_TRUE((*voxelizer)->voxelize({&inst, 1}, c.grid, method));
+    const std::vector<std::uint32_t> voxels = sorted_unique(*(*voxelizer)->read_fragments());
+    const DistanceCheck check = check_against_distance_field(c.mesh, c.grid, voxels);
+    for (const std::string& example : check.examples) ADD_FAILURE() << example;
+    EXPECT_EQ(check.uncovered, 0u);
+    EXPECT_EQ(check.too_far, 0u);
+    EXPECT_GT(check.near_surface, voxels.size() / 10);
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, AgreesWithOpenVdb,
+                         ::testing::Combine(::testing::Values("bunny", "dragon_res3", "soup"),
+                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+                         [](const ::testing::TestParamInfo<DistanceParam>& p) {
+                             return std::get<0>(p.param) + "_" + to_string(std::get<1>(p.param));
+                         });
 
 using VoxelizerTest = GpuTest;
 

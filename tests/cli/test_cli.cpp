@@ -1,0 +1,191 @@
+// `gust voxelize` and `gust info` through the installed binary, as other tools use them.
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <openvdb/openvdb.h>
+
+#include <gust/scene/import.hpp>
+#include <gust/voxelizer/cpu_reference.hpp>
+#include <gust/voxelizer/voxelizer.hpp>
+
+namespace gust::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+    int code = -1;
+    std::string out; ///< stdout
+    std::string err; ///< stderr
+};
+
+/// Runs the gust binary with `args` (already shell-quoted), capturing stdout and stderr.
+CliRun gust(const std::string& args) {
+    const fs::path err_file = fs::temp_directory_path() / ("gust_cli_err_" + std::to_string(::getpid()));
+    const std::string command = std::string(GUST_CLI_PATH) + " " + args + " 2>" + err_file.string();
+    CliRun run;
+    FILE* pipe = popen(command.c_str(), "r");
+    if (!pipe) return run;
+    std::array<char, 4096> buffer;
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+    const int status = pclose(pipe);
+    run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (FILE* f = std::fopen(err_file.c_str(), "r")) {
+        while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), f)) run.err.append(buffer.data(), n);
+        std::fclose(f);
+    }
+    fs::remove(err_file);
+    return run;
+}
+
+std::string asset(const std::string& relative) { return std::string(GUST_ASSETS_DIR) + "/" + relative; }
+
+fs::path temp_vdb(const std::string& name) { return fs::temp_directory_path() / ("gust_cli_" + name + ".vdb"); }
+
+/// Reads the "occupancy" grid back; null when absent or of another type.
+openvdb::BoolGrid::Ptr read_occupancy(const fs::path& path) {
+    openvdb::initialize();
+    openvdb::io::File file(path.string());
+    file.open();
+    auto base = file.readGrid("occupancy");
+    file.close();
+    return openvdb::gridPtrCast<openvdb::BoolGrid>(base);
+}
+
+/// The voxels of the reference voxelizer for `mesh_path` on `grid`.
+std::vector<std::uint32_t> reference_voxels(const std::string& mesh_path, const GridDesc& grid) {
+    auto mesh = load_mesh(mesh_path);
+    EXPECT_TRUE(mesh) << mesh.message();
+    MeshView view;
+    view.positions = reinterpret_cast<const float*>(mesh->positions.data());
+    view.vertex_count = mesh->positions.size();
+    view.indices = mesh->indices.data();
+    view.index_count = mesh->indices.size();
+    const InstanceDesc inst{view, glm::mat4(1.0f)};
+    return voxelize_reference({&inst, 1}, grid).voxels;
+}
+
+std::vector<std::uint32_t> active_voxels(const openvdb::BoolGrid& grid) {
+    std::vector<std::uint32_t> out;
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        out.push_back(pack_voxel(std::uint32_t(c.x()), std::uint32_t(c.y()), std::uint32_t(c.z())));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+TEST(CliVoxelize, writesOccupancyGridWithCentredTransformAndStatsLine) {
+    const fs::path out = temp_vdb("bunny");
+    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 40 --method raster --validation --out " +
+                         out.string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    const auto stats = nlohmann::json::parse(run.out);
+    for (const char* key : {"triangles", "rejected", "fragments", "voxels", "ms", "device"})
+        EXPECT_TRUE(stats.contains(key)) << key;
+    EXPECT_EQ(stats["triangles"], 3674);
+    EXPECT_EQ(stats["rejected"], 0);
+    EXPECT_TRUE(stats["ms"].is_object());
+
+    auto grid = read_occupancy(out);
+    ASSERT_TRUE(grid);
+    // Default grid: the bounding box made cubic and padded by one voxel.
+    auto mesh = load_mesh(asset("scans/bunny.ply"));
+    ASSERT_TRUE(mesh);
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (const glm::vec3& p : mesh->positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const float edge = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const double h = double(edge) / 38.0;
+    EXPECT_NEAR(grid->voxelSize().x(), h, 1e-6 * h);
+    EXPECT_NEAR(grid->voxelSize().z(), h, 1e-6 * h);
+    const glm::dvec3 origin = 0.5 * (glm::dvec3(lo) + glm::dvec3(hi)) - 20.0 * h;
+    const openvdb::Vec3d centre0 = grid->indexToWorld(openvdb::Coord(0, 0, 0));
+    EXPECT_NEAR(centre0.x(), origin.x + 0.5 * h, 1e-4 * h);
+    EXPECT_NEAR(centre0.y(), origin.y + 0.5 * h, 1e-4 * h);
+    const openvdb::Vec3d centre = grid->indexToWorld(openvdb::Coord(3, 7, 11));
+    EXPECT_NEAR(centre.z(), origin.z + 11.5 * h, 1e-4 * h);
+
+    GridDesc desc;
+    desc.res = 40;
+    desc.voxel_size = float(h);
+    desc.origin = glm::vec3(origin);
+    const auto expected = reference_voxels(asset("scans/bunny.ply"), desc);
+    const auto got = active_voxels(*grid);
+    EXPECT_EQ(stats["voxels"], got.size());
+    const VoxelDiff diff = diff_voxels(got, expected);
+    EXPECT_LE(diff.missing.size() + diff.extra.size(), expected.size() / 1000) << "beyond touching cases";
+    fs::remove(out);
+}
+
+TEST(CliVoxelize, originAndSizeDefineTheGridExactly) {
+    const fs::path out = temp_vdb("fox");
+    const CliRun run = gust("voxelize " + asset("characters/Fox.glb") +
+                         " --res 32 --origin -64,-16,-96 --size 192 --method compute --out " + out.string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    auto grid = read_occupancy(out);
+    ASSERT_TRUE(grid);
+    EXPECT_DOUBLE_EQ(grid->voxelSize().x(), 6.0);
+    const openvdb::Vec3d c = grid->indexToWorld(openvdb::Coord(1, 2, 3));
+    EXPECT_DOUBLE_EQ(c.x(), -64.0 + 1.5 * 6.0);
+    EXPECT_DOUBLE_EQ(c.y(), -16.0 + 2.5 * 6.0);
+    EXPECT_DOUBLE_EQ(c.z(), -96.0 + 3.5 * 6.0);
+    GridDesc desc;
+    desc.res = 32;
+    desc.voxel_size = 6.0f;
+    desc.origin = glm::vec3(-64.0f, -16.0f, -96.0f);
+    const auto expected = reference_voxels(asset("characters/Fox.glb"), desc);
+    const VoxelDiff diff = diff_voxels(active_voxels(*grid), expected);
+    EXPECT_LE(diff.missing.size() + diff.extra.size(), expected.size() / 1000 + 1);
+    fs::remove(out);
+}
+
+TEST(CliVoxelize, missingFileFailsNamingIt) {
+    const CliRun run = gust("voxelize /nonexistent/dir/thing.ply --res 16 --out /tmp/x.vdb");
+    EXPECT_NE(run.code, 0);
+    EXPECT_NE(run.err.find("/nonexistent/dir/thing.ply"), std::string::npos) << run.err;
+    EXPECT_TRUE(run.out.empty());
+}
+
+TEST(CliVoxelize, rejectsBadArguments) {
+    const std::string bunny = asset("scans/bunny.ply");
+    for (const std::string& args :
+         {"voxelize " + bunny + " --res 4 --out /tmp/x.vdb", "voxelize " + bunny + " --res 2000 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --method magic --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --origin 0,0,0 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --origin 0,0 --size 1 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --origin 0,0,0 --size -1 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --origin nan,0,0 --size 1 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16"}) {
+        const CliRun run = gust(args);
+        EXPECT_NE(run.code, 0) << args;
+        EXPECT_FALSE(run.err.empty()) << args;
+    }
+}
+
+TEST(CliVoxelize, unwritableOutputFailsNamingIt) {
+    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 16 --out /nonexistent/dir/out.vdb");
+    EXPECT_NE(run.code, 0);
+    EXPECT_NE(run.err.find("/nonexistent/dir/out.vdb"), std::string::npos) << run.err;
+}
+
+TEST(CliInfo, printsTheDeviceAndAMeshsCounts) {
+    const CliRun run = gust("info " + asset("scans/bunny.ply"));
+    ASSERT_EQ(run.code, 0) << run.err;
+    const auto info = nlohmann::json::parse(run.out);
+    EXPECT_FALSE(info["device"].get<std::string>().empty());
+    EXPECT_EQ(info["mesh"]["triangles"], 3674);
+    EXPECT_EQ(info["mesh"]["vertices"], 1839);
+}
+
+} // namespace
+} // namespace gust::test
