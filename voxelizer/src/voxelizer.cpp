@@ -23,6 +23,9 @@ using shaderio::kVoxelizeGroupSize;
 using shaderio::VoxelizeCounters;
 using shaderio::VoxelizePush;
 
+/// Fragments per triangle assumed when sizing the list before the first pass.
+constexpr std::uint64_t kFragmentsPerTriangleGuess = 6;
+
 /// Largest compute dispatch along x in workgroups that every Vulkan device accepts.
 constexpr std::uint32_t kMaxGroupsX = 65535;
 
@@ -229,6 +232,11 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
         max_triangles = std::max(max_triangles, inst.mesh->triangles_);
     }
     if (Status s = ensure_large_list(max_triangles); !s) return s;
+    // First guess so a one-shot call rarely redoes its pass: small triangles emit a few voxels each
+    // (4.2 per triangle for the full dragon at 512^3). Big triangles still grow the list below.
+    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
+    if (Status s = ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * stats.triangles)); !s)
+        return s;
     const glm::mat4 to_grid = world_to_grid(grid);
     const auto& vk = ctx_.vk();
 
