@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <gust/gpu/buffer.hpp>
+#include <gust/gpu/image.hpp>
 #include <gust/gpu/profiler.hpp>
 
 #include "support/gpu_env.hpp"
@@ -102,6 +103,39 @@ TEST_F(BufferTest, fillRecordedOnTheGpuIsVisibleAfterSubmit) {
         EXPECT_EQ(passes[0].first, "fill");
         EXPECT_GE(passes[0].second, 0.0);
     }
+}
+
+using ImageTest = GpuTest;
+
+TEST_F(ImageTest, volumeRoundTripsThroughBufferCopies) {
+    gpu::ImageDesc desc;
+    desc.extent = {5, 4, 3};
+    auto image = gpu::Image::create(ctx(), desc);
+    ASSERT_TRUE(image) << image.message();
+    EXPECT_NE(image->view(), VK_NULL_HANDLE);
+    std::vector<float> texels(5 * 4 * 3 * 4);
+    std::iota(texels.begin(), texels.end(), -10.0f);
+    const VkDeviceSize bytes = texels.size() * sizeof(float);
+    auto src = gpu::Buffer::create(ctx(), bytes, gpu::MemoryUse::Upload);
+    auto dst = gpu::Buffer::create(ctx(), bytes, gpu::MemoryUse::Readback);
+    ASSERT_TRUE(src && dst);
+    ASSERT_TRUE(gpu::upload(ctx(), *src, texels.data(), bytes));
+    ASSERT_TRUE(ctx().submit_and_wait([&](VkCommandBuffer cmd) {
+        image->transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+        image->copy_from(cmd, *src);
+        image->transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+        image->copy_to(cmd, *dst);
+    }));
+    std::vector<float> back(texels.size());
+    ASSERT_TRUE(gpu::download(ctx(), *dst, back.data(), bytes));
+    EXPECT_EQ(back, texels);
+    EXPECT_EQ(image->layout(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+}
+
+TEST_F(ImageTest, rejectsZeroExtent) {
+    gpu::ImageDesc desc;
+    desc.extent = {4, 0, 1};
+    EXPECT_FALSE(gpu::Image::create(ctx(), desc));
 }
 
 } // namespace

@@ -48,6 +48,14 @@ namespace gust::gpu {
     X(vkFreeMemory)                                                                                        \
     X(vkMapMemory)                                                                                         \
     X(vkUnmapMemory)                                                                                       \
+    X(vkCreateImage)                                                                                       \
+    X(vkDestroyImage)                                                                                      \
+    X(vkGetImageMemoryRequirements)                                                                        \
+    X(vkBindImageMemory)                                                                                   \
+    X(vkCreateImageView)                                                                                   \
+    X(vkDestroyImageView)                                                                                  \
+    X(vkCmdCopyBufferToImage)                                                                              \
+    X(vkCmdCopyImageToBuffer)                                                                              \
     X(vkCreateShaderModule)                                                                                \
     X(vkDestroyShaderModule)                                                                               \
     X(vkCreatePipelineLayout)                                                                              \
