@@ -22,4 +22,5 @@ void main() {
     s.w_max = max(in_a.z, max(in_b.z, in_c.z));
     s.axis = in_axis;
     voxelize_column(s, int(floor(centre.x)), int(floor(centre.y)));
+    flush_voxels();
 }

@@ -6,7 +6,7 @@ layout(buffer_reference, scalar) readonly buffer Positions { float v[]; };
 layout(buffer_reference, scalar) readonly buffer Indices { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Fragments { uint v[]; };
 layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
-layout(buffer_reference, scalar) buffer LargeList { uint v[]; };
+layout(buffer_reference, scalar) buffer LargeList { uvec2 v[]; };
 
 layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
 
@@ -20,11 +20,26 @@ vec3 load_grid_vertex(uint tri, uint corner) {
 
 bool is_finite(vec3 p) { return !any(isnan(p)) && !any(isinf(p)); }
 
-/// Appends one voxel to the fragment list; past the capacity only the counter moves, which tells the
-/// host to redo the pass with a larger list.
+// Voxels found by this invocation and not yet appended: one atomic per batch instead of per voxel,
+// since every invocation contends for the same counter.
+const uint kPendingCapacity = 8u;
+uint pending[kPendingCapacity];
+uint pending_count = 0u;
+
+/// Appends the pending voxels to the fragment list; past the capacity only the counter moves, which
+/// tells the host to redo the pass with a larger list.
+void flush_voxels() {
+    if (pending_count == 0u) return;
+    uint slot = atomicAdd(Counters(pc.counters).c.fragments, pending_count);
+    for (uint i = 0u; i < pending_count; ++i)
+        if (slot + i < pc.capacity) Fragments(pc.fragments).v[slot + i] = pending[i];
+    pending_count = 0u;
+}
+
+/// Queues one voxel for the fragment list (call flush_voxels() before the invocation ends).
 void emit_voxel(uvec3 ijk) {
-    uint slot = atomicAdd(Counters(pc.counters).c.fragments, 1u);
-    if (slot < pc.capacity) Fragments(pc.fragments).v[slot] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
+    pending[pending_count++] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
+    if (pending_count == kPendingCapacity) flush_voxels();
 }
 
 /// A triangle in projection space (w along its dominant axis).

@@ -8,18 +8,28 @@ GUST_NAMESPACE_BEGIN
 
 /// Threads per workgroup of the compute paths.
 GUST_CONST uint kVoxelizeGroupSize = 64;
-/// Workgroups of the large-triangle pass; each loops over the large list (persistent threads), so the
-/// CPU never needs the list's length.
-GUST_CONST uint kLargeGroups = 256;
 /// A triangle whose projected footprint has more columns than this goes to the large-triangle pass,
-/// where a whole workgroup shares it instead of one thread walking it alone.
+/// where workgroups share it instead of one thread walking it alone.
 GUST_CONST uint kLargeTriangleColumns = 64;
+/// Columns of a large triangle's footprint per work item (one workgroup each): 64 per thread, which
+/// also keeps every shader loop far below llvmpipe's limit of 65,535 iterations per loop.
+GUST_CONST uint kTileColumns = 4096;
+/// Workgroups per row of the indirect large-triangle dispatch (the guaranteed x limit).
+GUST_CONST uint kMaxGroupsX = 65535;
 
-/// Counters written by the voxelizer passes (one per call, zeroed before it).
+/// VkDispatchIndirectCommand for the large-triangle pass, written on the GPU.
+struct DispatchArgs {
+    uint x, y, z;
+};
+
+/// Counters written by the voxelizer passes (one per call, zeroed before it). The buffer is also the
+/// indirect-dispatch buffer of the large pass.
 struct VoxelizeCounters {
     uint fragments;       ///< fragments appended; may exceed the capacity, which means "redo larger"
     uint rejected;        ///< triangles with a non-finite vertex
-    uint large_triangles; ///< triangles queued for the large-triangle pass (compute path)
+    uint large_items;     ///< (triangle, tile) items queued for the current instance; may exceed the capacity
+    uint large_peak;      ///< the most items any instance queued, which tells the host to grow the list
+    DispatchArgs large_dispatch; ///< workgroups of the large pass, written by voxelize_args.comp
     uint pad;
 };
 
@@ -30,20 +40,24 @@ struct VoxelizePush {
     GUST_ADDRESS indices;     ///< uint[3 * triangle_count]
     GUST_ADDRESS fragments;   ///< uint[capacity] packed voxel keys (pack_voxel)
     GUST_ADDRESS counters;    ///< VoxelizeCounters
-    GUST_ADDRESS large_list;  ///< uint[triangle_count] triangle ids for the large pass
+    GUST_ADDRESS large_list;  ///< uvec2[large_capacity] (triangle, tile) items for the large pass
     uint res;                 ///< voxels per axis
     uint capacity;            ///< fragment slots
     uint triangle_count;      ///< triangles in this draw or dispatch
     uint first_triangle;      ///< compute path: offset of this dispatch's first triangle
+    uint large_capacity;      ///< items the large list holds
+    uint pad;
 };
 
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gust::shaderio::VoxelizePush) == 120, "push constants must match the GLSL layout");
+static_assert(sizeof(gust::shaderio::VoxelizePush) == 128, "push constants must match the GLSL layout");
 static_assert(offsetof(gust::shaderio::VoxelizePush, positions) == 64);
 static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 104);
-static_assert(sizeof(gust::shaderio::VoxelizeCounters) == 16);
+static_assert(sizeof(gust::shaderio::VoxelizeCounters) == 32);
+static_assert(offsetof(gust::shaderio::VoxelizeCounters, large_dispatch) == 16);
+static_assert(offsetof(gust::shaderio::VoxelizePush, large_capacity) == 120);
 #endif
 
 #endif

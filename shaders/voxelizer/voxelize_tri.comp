@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Compute path, pass 1: one thread per triangle walks its projected footprint column by column
-// (Schwarz & Seidel 2010). Triangles with large footprints are queued for voxelize_large.comp.
+// (Schwarz & Seidel 2010). Triangles with large footprints are queued tile by tile for
+// voxelize_large.comp instead.
 #include "voxelize_common.glsl"
 
 layout(local_size_x = kVoxelizeGroupSize) in;
@@ -17,11 +18,15 @@ void main() {
     Setup s;
     if (!setup_triangle(g0, g1, g2, s)) return;
     ivec2 extent = s.col_hi - s.col_lo + 1;
-    if (uint(extent.x) * uint(extent.y) > kLargeTriangleColumns) {
-        uint slot = atomicAdd(Counters(pc.counters).c.large_triangles, 1u);
-        LargeList(pc.large_list).v[slot] = t;
+    uint columns = uint(extent.x) * uint(extent.y);
+    if (columns > kLargeTriangleColumns) {
+        uint tiles = (columns + kTileColumns - 1u) / kTileColumns;
+        uint slot = atomicAdd(Counters(pc.counters).c.large_items, tiles);
+        for (uint i = 0u; i < tiles && slot + i < pc.large_capacity; ++i)
+            LargeList(pc.large_list).v[slot + i] = uvec2(t, i);
         return;
     }
     for (int y = s.col_lo.y; y <= s.col_hi.y; ++y)
         for (int x = s.col_lo.x; x <= s.col_hi.x; ++x) voxelize_column(s, x, y);
+    flush_voxels();
 }

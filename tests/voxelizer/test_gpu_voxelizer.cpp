@@ -133,6 +133,12 @@ INSTANTIATE_TEST_SUITE_P(Meshes, MatchesReference,
                                             ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
                          param_name);
 
+// The largest grid: grid-aligned boxes and plane sections spanning all 1024^2 columns.
+INSTANTIATE_TEST_SUITE_P(LargestGrid, MatchesReference,
+                         ::testing::Combine(::testing::Values("boxes", "huge"), ::testing::Values(1024u),
+                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+                         param_name);
+
 using DistanceParam = std::tuple<std::string, VoxelizeMethod>;
 
 class AgreesWithOpenVdb : public GpuTestWithParam<DistanceParam> {};

@@ -14,11 +14,12 @@ namespace gust {
 namespace {
 #include "gust_shaders/voxelize_frag.h"
 #include "gust_shaders/voxelize_geom.h"
+#include "gust_shaders/voxelize_args_comp.h"
 #include "gust_shaders/voxelize_large_comp.h"
 #include "gust_shaders/voxelize_tri_comp.h"
 #include "gust_shaders/voxelize_vert.h"
 
-using shaderio::kLargeGroups;
+using shaderio::kMaxGroupsX;
 using shaderio::kVoxelizeGroupSize;
 using shaderio::VoxelizeCounters;
 using shaderio::VoxelizePush;
@@ -26,8 +27,8 @@ using shaderio::VoxelizePush;
 /// Fragments per triangle assumed when sizing the list before the first pass.
 constexpr std::uint64_t kFragmentsPerTriangleGuess = 6;
 
-/// Largest compute dispatch along x in workgroups that every Vulkan device accepts.
-constexpr std::uint32_t kMaxGroupsX = 65535;
+/// Large-triangle work items allocated before the first pass (each is one tile of a large triangle).
+constexpr std::uint64_t kInitialLargeItems = 4096;
 
 template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) { return {a, N}; }
 
@@ -109,15 +110,20 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
     auto small = gpu::Pipeline::compute(ctx, words(voxelize_tri_comp), sizeof(VoxelizePush));
     if (!small) return small.status();
     v->compute_small_ = std::move(*small);
+    auto args = gpu::Pipeline::compute(ctx, words(voxelize_args_comp), sizeof(VoxelizePush));
+    if (!args) return args.status();
+    v->compute_args_ = std::move(*args);
     auto large = gpu::Pipeline::compute(ctx, words(voxelize_large_comp), sizeof(VoxelizePush));
     if (!large) return large.status();
     v->compute_large_ = std::move(*large);
     auto profiler = gpu::Profiler::create(ctx);
     if (!profiler) return profiler.status();
     v->profiler_ = std::move(*profiler);
-    auto counters = gpu::Buffer::create(ctx, sizeof(VoxelizeCounters), gpu::MemoryUse::Readback);
+    auto counters = gpu::Buffer::create(ctx, sizeof(VoxelizeCounters), gpu::MemoryUse::Readback,
+                                        VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
     if (!counters) return counters.status();
     v->counters_ = std::move(*counters);
+    if (Status s = v->ensure_large_list(kInitialLargeItems); !s) return s;
     if (Status s = v->ensure_capacity(std::max<std::uint32_t>(desc.initial_capacity, 1)); !s) return s;
     return v;
 }
@@ -136,12 +142,15 @@ Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
     return {};
 }
 
-Status Voxelizer::ensure_large_list(std::uint32_t triangles) {
-    const VkDeviceSize bytes = VkDeviceSize(std::max<std::uint32_t>(triangles, 1)) * sizeof(std::uint32_t);
-    if (large_list_ && large_list_.size() >= bytes) return {};
-    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Device);
+Status Voxelizer::ensure_large_list(std::uint64_t items) {
+    if (items <= large_capacity_) return {};
+    if (items > UINT32_MAX || items * sizeof(glm::uvec2) > ctx_.info().max_allocation_size)
+        return Status::failure("the large-triangle queue needs " + std::to_string(items) +
+                               " items, more than one device allocation holds");
+    auto buffer = gpu::Buffer::create(ctx_, items * sizeof(glm::uvec2), gpu::MemoryUse::Device);
     if (!buffer) return buffer.status();
     large_list_ = std::move(*buffer);
+    large_capacity_ = items;
     return {};
 }
 
@@ -226,12 +235,7 @@ Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const G
 Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
                                      const GridDesc& grid) {
     VoxelizeStats stats;
-    std::uint32_t max_triangles = 0;
-    for (const GpuInstance& inst : instances) {
-        stats.triangles += inst.mesh->triangles_;
-        max_triangles = std::max(max_triangles, inst.mesh->triangles_);
-    }
-    if (Status s = ensure_large_list(max_triangles); !s) return s;
+    for (const GpuInstance& inst : instances) stats.triangles += inst.mesh->triangles_;
     // First guess so a one-shot call rarely redoes its pass: small triangles emit a few voxels each
     // (4.2 per triangle for the full dragon at 512^3). Big triangles still grow the list below.
     const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
@@ -245,6 +249,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
         push.fragments = fragments_.address();
         push.counters = counters_.address();
         push.large_list = large_list_.address();
+        push.large_capacity = std::uint32_t(large_capacity_);
         push.res = grid.res;
         push.capacity = std::uint32_t(capacity_);
         Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
@@ -285,7 +290,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
                 push.positions = mesh.positions_.address();
                 push.indices = mesh.indices_.address();
                 // The large-triangle queue is per instance: empty it before each one.
-                vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_triangles), 4, 0);
+                vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_items), 4, 0);
                 gpu::barrier(ctx_, cmd);
                 const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
                 for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
@@ -295,8 +300,11 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
                     vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
                 }
                 gpu::barrier(ctx_, cmd);
+                compute_args_.bind(cmd, &push, sizeof(push));
+                vk.vkCmdDispatch(cmd, 1, 1, 1);
+                gpu::barrier(ctx_, cmd);
                 compute_large_.bind(cmd, &push, sizeof(push));
-                vk.vkCmdDispatch(cmd, kLargeGroups, 1, 1);
+                vk.vkCmdDispatchIndirect(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_dispatch));
                 gpu::barrier(ctx_, cmd);
             }
             if (!first_compute) profiler_.end(cmd);
@@ -307,9 +315,14 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
         stats.rejected = counters.rejected;
         stats.fragments = counters.fragments;
         stats.ms = profiler_.read();
-        if (counters.fragments <= capacity_) break;
+        const bool large_overflow = counters.large_peak > large_capacity_;
+        if (counters.fragments <= capacity_ && !large_overflow) break;
         // Grow with headroom so that a scene growing slowly does not redo every frame.
-        if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s) return s;
+        if (counters.fragments > capacity_)
+            if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s) return s;
+        if (large_overflow)
+            if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4); !s)
+                return s;
         ++stats.retries;
     }
     stats.capacity = capacity_;

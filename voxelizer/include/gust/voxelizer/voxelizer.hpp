@@ -92,7 +92,7 @@ public:
 private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
     Status ensure_capacity(std::uint64_t fragments);
-    Status ensure_large_list(std::uint32_t triangles);
+    Status ensure_large_list(std::uint64_t items);
     Result<VoxelizeStats> run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
                               const GridDesc& grid);
     Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
@@ -100,11 +100,13 @@ private:
     gpu::Context& ctx_;
     gpu::Pipeline raster_;
     gpu::Pipeline compute_small_;
+    gpu::Pipeline compute_args_;
     gpu::Pipeline compute_large_;
     gpu::Profiler profiler_;
     gpu::Buffer fragments_;
     gpu::Buffer counters_;
     gpu::Buffer large_list_;
+    std::uint64_t large_capacity_ = 0;
     std::uint64_t capacity_ = 0;
     std::uint64_t fragment_count_ = 0;
 };
