@@ -1,0 +1,831 @@
+// glTF 2.0 (.gltf and .glb) through tinygltf. tinygltf parses leniently: a property of the wrong JSON
+// type is dropped without a word, a required extension it cannot decode surfaces as an unrelated
+// error, and accessor ranges are not checked against their buffers. So the JSON is checked against
+// the core schema's property types first, and every accessor read is bounds-checked here.
+#include "import_detail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <dlfcn.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <tiny_gltf.h>
+#include <vector>
+
+namespace gust::detail {
+namespace {
+
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------------
+// Property types of the glTF 2.0 core schema
+
+enum class Type { any, string, number, index, boolean, object, array };
+
+struct ObjectSchema;
+
+struct Field {
+    std::string_view name;
+    Type type;
+    const ObjectSchema* object = nullptr; ///< schema of the object, or of each object in the array
+    Type item = Type::any;                ///< type of each array item
+    std::size_t length = 0;               ///< required array length; 0 for any
+};
+
+struct ObjectSchema {
+    std::span<const Field> fields;
+    Type values = Type::any; ///< for maps (attributes): the type of every member
+};
+
+constexpr Field kTextureInfoFields[] = {{"index", Type::index}, {"texCoord", Type::index}};
+constexpr ObjectSchema kTextureInfo{kTextureInfoFields};
+constexpr Field kNormalTextureFields[] = {
+    {"index", Type::index}, {"texCoord", Type::index}, {"scale", Type::number}};
+constexpr ObjectSchema kNormalTexture{kNormalTextureFields};
+constexpr Field kOcclusionTextureFields[] = {
+    {"index", Type::index}, {"texCoord", Type::index}, {"strength", Type::number}};
+constexpr ObjectSchema kOcclusionTexture{kOcclusionTextureFields};
+constexpr Field kPbrFields[] = {
+    {"baseColorFactor", Type::array, nullptr, Type::number, 4},
+    {"baseColorTexture", Type::object, &kTextureInfo},
+    {"metallicFactor", Type::number},
+    {"roughnessFactor", Type::number},
+    {"metallicRoughnessTexture", Type::object, &kTextureInfo},
+};
+constexpr ObjectSchema kPbr{kPbrFields};
+constexpr Field kMaterialFields[] = {
+    {"pbrMetallicRoughness", Type::object, &kPbr},
+    {"normalTexture", Type::object, &kNormalTexture},
+    {"occlusionTexture", Type::object, &kOcclusionTexture},
+    {"emissiveTexture", Type::object, &kTextureInfo},
+    {"emissiveFactor", Type::array, nullptr, Type::number, 3},
+    {"alphaMode", Type::string},
+    {"alphaCutoff", Type::number},
+    {"doubleSided", Type::boolean},
+};
+constexpr ObjectSchema kMaterial{kMaterialFields};
+constexpr Field kAssetFields[] = {{"copyright", Type::string},
+                                  {"generator", Type::string},
+                                  {"version", Type::string},
+                                  {"minVersion", Type::string}};
+constexpr ObjectSchema kAsset{kAssetFields};
+constexpr Field kSceneFields[] = {{"nodes", Type::array, nullptr, Type::index}};
+constexpr ObjectSchema kScene{kSceneFields};
+constexpr Field kNodeFields[] = {
+    {"camera", Type::index},
+    {"children", Type::array, nullptr, Type::index},
+    {"skin", Type::index},
+    {"matrix", Type::array, nullptr, Type::number, 16},
+    {"mesh", Type::index},
+    {"rotation", Type::array, nullptr, Type::number, 4},
+    {"scale", Type::array, nullptr, Type::number, 3},
+    {"translation", Type::array, nullptr, Type::number, 3},
+    {"weights", Type::array, nullptr, Type::number},
+};
+constexpr ObjectSchema kNode{kNodeFields};
+constexpr ObjectSchema kAttributes{{}, Type::index};
+constexpr Field kPrimitiveFields[] = {
+    {"attributes", Type::object, &kAttributes},
+    {"indices", Type::index},
+    {"material", Type::index},
+    {"mode", Type::index},
+    {"targets", Type::array, &kAttributes, Type::object},
+};
+constexpr ObjectSchema kPrimitive{kPrimitiveFields};
+constexpr Field kMeshFields[] = {
+    {"primitives", Type::array, &kPrimitive, Type::object},
+    {"weights", Type::array, nullptr, Type::number},
+};
+constexpr ObjectSchema kMesh{kMeshFields};
+constexpr Field kSparseIndicesFields[] = {
+    {"bufferView", Type::index}, {"byteOffset", Type::index}, {"componentType", Type::index}};
+constexpr ObjectSchema kSparseIndices{kSparseIndicesFields};
+constexpr Field kSparseValuesFields[] = {{"bufferView", Type::index}, {"byteOffset", Type::index}};
+constexpr ObjectSchema kSparseValues{kSparseValuesFields};
+constexpr Field kSparseFields[] = {
+    {"count", Type::index},
+    {"indices", Type::object, &kSparseIndices},
+    {"values", Type::object, &kSparseValues},
+};
+constexpr ObjectSchema kSparse{kSparseFields};
+constexpr Field kAccessorFields[] = {
+    {"bufferView", Type::index},
+    {"byteOffset", Type::index},
+    {"componentType", Type::index},
+    {"normalized", Type::boolean},
+    {"count", Type::index},
+    {"type", Type::string},
+    {"max", Type::array, nullptr, Type::number},
+    {"min", Type::array, nullptr, Type::number},
+    {"sparse", Type::object, &kSparse},
+};
+constexpr ObjectSchema kAccessor{kAccessorFields};
+constexpr Field kBufferViewFields[] = {
+    {"buffer", Type::index},     {"byteOffset", Type::index}, {"byteLength", Type::index},
+    {"byteStride", Type::index}, {"target", Type::index},
+};
+constexpr ObjectSchema kBufferView{kBufferViewFields};
+constexpr Field kBufferFields[] = {{"uri", Type::string}, {"byteLength", Type::index}};
+constexpr ObjectSchema kBuffer{kBufferFields};
+constexpr Field kTextureFields[] = {{"sampler", Type::index}, {"source", Type::index}};
+constexpr ObjectSchema kTexture{kTextureFields};
+constexpr Field kImageFields[] = {
+    {"uri", Type::string}, {"mimeType", Type::string}, {"bufferView", Type::index}};
+constexpr ObjectSchema kImage{kImageFields};
+constexpr Field kSamplerFields[] = {
+    {"magFilter", Type::index}, {"minFilter", Type::index}, {"wrapS", Type::index}, {"wrapT", Type::index}};
+constexpr ObjectSchema kSampler{kSamplerFields};
+constexpr Field kSkinFields[] = {
+    {"inverseBindMatrices", Type::index},
+    {"skeleton", Type::index},
+    {"joints", Type::array, nullptr, Type::index},
+};
+constexpr ObjectSchema kSkin{kSkinFields};
+constexpr Field kChannelTargetFields[] = {{"node", Type::index}, {"path", Type::string}};
+constexpr ObjectSchema kChannelTarget{kChannelTargetFields};
+constexpr Field kChannelFields[] = {{"sampler", Type::index}, {"target", Type::object, &kChannelTarget}};
+constexpr ObjectSchema kChannel{kChannelFields};
+constexpr Field kAnimationSamplerFields[] = {
+    {"input", Type::index}, {"interpolation", Type::string}, {"output", Type::index}};
+constexpr ObjectSchema kAnimationSampler{kAnimationSamplerFields};
+constexpr Field kAnimationFields[] = {
+    {"channels", Type::array, &kChannel, Type::object},
+    {"samplers", Type::array, &kAnimationSampler, Type::object},
+};
+constexpr ObjectSchema kAnimation{kAnimationFields};
+constexpr Field kOrthographicFields[] = {
+    {"xmag", Type::number}, {"ymag", Type::number}, {"zfar", Type::number}, {"znear", Type::number}};
+constexpr ObjectSchema kOrthographic{kOrthographicFields};
+constexpr Field kPerspectiveFields[] = {
+    {"aspectRatio", Type::number}, {"yfov", Type::number}, {"zfar", Type::number}, {"znear", Type::number}};
+constexpr ObjectSchema kPerspective{kPerspectiveFields};
+constexpr Field kCameraFields[] = {
+    {"orthographic", Type::object, &kOrthographic},
+    {"perspective", Type::object, &kPerspective},
+    {"type", Type::string},
+};
+constexpr ObjectSchema kCamera{kCameraFields};
+constexpr Field kRootFields[] = {
+    {"asset", Type::object, &kAsset},
+    {"scene", Type::index},
+    {"scenes", Type::array, &kScene, Type::object},
+    {"nodes", Type::array, &kNode, Type::object},
+    {"meshes", Type::array, &kMesh, Type::object},
+    {"accessors", Type::array, &kAccessor, Type::object},
+    {"bufferViews", Type::array, &kBufferView, Type::object},
+    {"buffers", Type::array, &kBuffer, Type::object},
+    {"materials", Type::array, &kMaterial, Type::object},
+    {"textures", Type::array, &kTexture, Type::object},
+    {"images", Type::array, &kImage, Type::object},
+    {"samplers", Type::array, &kSampler, Type::object},
+    {"skins", Type::array, &kSkin, Type::object},
+    {"animations", Type::array, &kAnimation, Type::object},
+    {"cameras", Type::array, &kCamera, Type::object},
+    {"extensionsUsed", Type::array, nullptr, Type::string},
+    {"extensionsRequired", Type::array, nullptr, Type::string},
+};
+constexpr ObjectSchema kRoot{kRootFields};
+
+bool matches(const json& value, Type type) {
+    switch (type) {
+    case Type::any:
+        return true;
+    case Type::string:
+        return value.is_string();
+    case Type::number:
+        return value.is_number();
+    case Type::index:
+        if (value.is_number_unsigned()) return true;
+        if (value.is_number_integer()) return value.get<std::int64_t>() >= 0;
+        if (value.is_number_float()) {
+            const double v = value.get<double>();
+            return v >= 0 && std::floor(v) == v;
+        }
+        return false;
+    case Type::boolean:
+        return value.is_boolean();
+    case Type::object:
+        return value.is_object();
+    case Type::array:
+        return value.is_array();
+    }
+    return false;
+}
+
+std::string_view describe(Type type) {
+    switch (type) {
+    case Type::any:
+        return "any value";
+    case Type::string:
+        return "a string";
+    case Type::number:
+        return "a number";
+    case Type::index:
+        return "a non-negative integer";
+    case Type::boolean:
+        return "a boolean";
+    case Type::object:
+        return "an object";
+    case Type::array:
+        return "an array";
+    }
+    return "?";
+}
+
+Status type_error(const std::string& pointer, Type expected, const json& value) {
+    return Status::failure("invalid glTF: " + pointer + " must be " + std::string(describe(expected)) +
+                           " (found " + value.type_name() + ")");
+}
+
+Status check_object(const json& object, const ObjectSchema& schema, const std::string& pointer);
+
+Status check_field(const json& value, const Field& field, const std::string& pointer) {
+    if (!matches(value, field.type)) return type_error(pointer, field.type, value);
+    if (field.type == Type::object) return check_object(value, *field.object, pointer);
+    if (field.type != Type::array) return {};
+    if (field.length != 0 && value.size() != field.length) {
+        return Status::failure("invalid glTF: " + pointer + " must have " + std::to_string(field.length) +
+                               " items (found " + std::to_string(value.size()) + ")");
+    }
+    for (std::size_t i = 0; i < value.size(); ++i) {
+        const std::string at = pointer + "/" + std::to_string(i);
+        if (!matches(value[i], field.item)) return type_error(at, field.item, value[i]);
+        if (field.object) {
+            if (Status status = check_object(value[i], *field.object, at); !status) return status;
+        }
+    }
+    return {};
+}
+
+Status check_object(const json& object, const ObjectSchema& schema, const std::string& pointer) {
+    for (const auto& [key, value] : object.items()) {
+        const std::string at = pointer + "/" + key;
+        if (schema.values != Type::any) {
+            if (!matches(value, schema.values)) return type_error(at, schema.values, value);
+        } else if (key == "name") {
+            if (!value.is_string()) return type_error(at, Type::string, value);
+        } else if (key == "extensions") {
+            if (!value.is_object()) return type_error(at, Type::object, value);
+            for (const auto& [extension, body] : value.items()) {
+                if (!body.is_object()) return type_error(at + "/" + extension, Type::object, body);
+            }
+        } else {
+            const std::string_view name = key;
+            const auto field = std::find_if(schema.fields.begin(), schema.fields.end(),
+                                            [name](const Field& f) { return f.name == name; });
+            if (field == schema.fields.end()) continue; // extras and unknown properties are free-form
+            if (Status status = check_field(value, *field, at); !status) return status;
+        }
+    }
+    return {};
+}
+
+// Required extensions that change nothing about geometry; any other required extension (mesh
+// compression, quantization, instancing) would change what the positions and indices mean.
+bool geometry_neutral(std::string_view extension) {
+    constexpr std::string_view kNeutral[] = {"KHR_texture_transform", "KHR_texture_basisu",
+                                             "EXT_texture_webp",      "EXT_texture_avif",
+                                             "KHR_lights_punctual",   "KHR_xmp_json_ld"};
+    return extension.starts_with("KHR_materials_") ||
+           std::find(std::begin(kNeutral), std::end(kNeutral), extension) != std::end(kNeutral);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Container
+
+std::uint32_t read_u32(const unsigned char* p) {
+    return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
+           std::uint32_t{p[3]} << 24;
+}
+
+bool is_glb(const std::vector<unsigned char>& bytes) {
+    return bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+}
+
+// The JSON text of a .gltf file or of a GLB's first chunk, after checking the GLB framing.
+Result<std::string_view> json_text(const std::vector<unsigned char>& bytes) {
+    using R = Result<std::string_view>;
+    const auto* chars = reinterpret_cast<const char*>(bytes.data());
+    if (!is_glb(bytes)) return std::string_view(chars, bytes.size());
+    constexpr std::size_t kHeader = 20; // 12-byte file header + 8-byte chunk header
+    if (bytes.size() < kHeader) return R::failure("file truncated: GLB header needs 20 bytes");
+    const std::uint32_t version = read_u32(bytes.data() + 4);
+    const std::uint32_t length = read_u32(bytes.data() + 8);
+    const std::uint32_t chunk_length = read_u32(bytes.data() + 12);
+    const std::uint32_t chunk_type = read_u32(bytes.data() + 16);
+    if (version != 2) {
+        return R::failure("unsupported GLB version " + std::to_string(version) + " (expected 2)");
+    }
+    if (length < kHeader)
+        return R::failure("GLB header declares a length of " + std::to_string(length) + " bytes");
+    if (length > bytes.size()) {
+        return R::failure("file truncated: GLB header declares " + std::to_string(length) +
+                          " bytes but the file has " + std::to_string(bytes.size()));
+    }
+    if (chunk_type != 0x4E4F534Au) return R::failure("first GLB chunk is not JSON");
+    if (chunk_length > length - kHeader) return R::failure("GLB JSON chunk runs past the end of the file");
+    return std::string_view(chars + kHeader, chunk_length);
+}
+
+Status check_json(std::string_view text) {
+    json root;
+    try {
+        root = json::parse(text.begin(), text.end());
+    } catch (const json::exception& e) {
+        return Status::failure("invalid JSON: " + clean_message(e.what()));
+    }
+    if (!root.is_object()) return Status::failure("invalid glTF: the JSON root is not an object");
+    if (Status status = check_object(root, kRoot, ""); !status) return status;
+    if (const auto required = root.find("extensionsRequired"); required != root.end()) {
+        for (const json& name : *required) {
+            const auto& extension = name.get_ref<const std::string&>();
+            if (!geometry_neutral(extension)) {
+                return Status::failure("required extension " + extension + " is not supported");
+            }
+        }
+    }
+    return {};
+}
+
+// Images are irrelevant to geometry; skipping their decoding saves time and a failure mode.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                void*) {
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Accessors
+
+/// Where one primitive is, for messages: "mesh 'Cube' primitive 0".
+std::string where(const tinygltf::Model& model, std::size_t mesh, std::size_t primitive) {
+    const std::string& name = model.meshes[mesh].name;
+    return (name.empty() ? "mesh " + std::to_string(mesh) : "mesh '" + name + "'") + " primitive " +
+           std::to_string(primitive);
+}
+
+/// `size` bytes at `offset` inside buffer view `view`, or a failure naming `what`.
+Result<const unsigned char*> view_bytes(const tinygltf::Model& model, int view, std::uint64_t offset,
+                                        std::uint64_t size, const std::string& what) {
+    using R = Result<const unsigned char*>;
+    if (view < 0 || static_cast<std::size_t>(view) >= model.bufferViews.size()) {
+        return R::failure(what + " refers to missing buffer view " + std::to_string(view));
+    }
+    const tinygltf::BufferView& bv = model.bufferViews[static_cast<std::size_t>(view)];
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model.buffers.size()) {
+        return R::failure("buffer view " + std::to_string(view) + " refers to missing buffer " +
+                          std::to_string(bv.buffer));
+    }
+    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(bv.buffer)].data;
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) {
+        return R::failure("buffer view " + std::to_string(view) + " lies outside its buffer (" +
+                          std::to_string(data.size()) + " bytes)");
+    }
+    if (offset > bv.byteLength || size > bv.byteLength - offset) {
+        return R::failure(what + " reads past the end of buffer view " + std::to_string(view));
+    }
+    return data.data() + bv.byteOffset + offset;
+}
+
+/// Reads every element of accessor `index` with `decode(bytes)`, sparse substitutions applied.
+/// Accessors without a buffer view are zero-filled; their count is limited to the file size so that a
+/// bare count cannot demand unbounded memory.
+template <class T, class Decode>
+Result<std::vector<T>> read_accessor(const tinygltf::Model& model, int index, std::size_t file_size,
+                                     Decode decode) {
+    using R = Result<std::vector<T>>;
+    const std::string what = "accessor " + std::to_string(index);
+    if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
+        return R::failure(what + " does not exist");
+    }
+    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
+    const int component =
+        tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(accessor.componentType));
+    const int components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(accessor.type));
+    if (component <= 0 || components <= 0) return R::failure(what + " has an invalid type");
+    const auto element = static_cast<std::uint64_t>(component) * static_cast<std::uint64_t>(components);
+    const std::uint64_t count = accessor.count;
+
+    std::vector<T> out;
+    if (accessor.bufferView >= 0) {
+        if (static_cast<std::size_t>(accessor.bufferView) >= model.bufferViews.size()) {
+            return R::failure(what + " refers to missing buffer view " + std::to_string(accessor.bufferView));
+        }
+        const tinygltf::BufferView& bv = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
+        const std::uint64_t stride = bv.byteStride != 0 ? bv.byteStride : element;
+        if (stride < element) return R::failure(what + " has a byte stride smaller than its elements");
+        if (count > 0) {
+            // Compared before multiplying so that a huge count cannot overflow the byte span.
+            if (count - 1 > bv.byteLength / stride) {
+                return R::failure(what + " reads past the end of buffer view " +
+                                  std::to_string(accessor.bufferView));
+            }
+            Result<const unsigned char*> bytes = view_bytes(model, accessor.bufferView, accessor.byteOffset,
+                                                            (count - 1) * stride + element, what);
+            if (!bytes) return bytes.status();
+            out.reserve(static_cast<std::size_t>(count));
+            for (std::uint64_t i = 0; i < count; ++i) {
+                out.push_back(decode(*bytes + i * stride));
+            }
+        }
+    } else if (count > file_size) {
+        return R::failure(what + " has no buffer view and " + std::to_string(count) +
+                          " elements, more than the file could describe");
+    } else {
+        out.assign(static_cast<std::size_t>(count), T{});
+    }
+
+    if (!accessor.sparse.isSparse) return out;
+    const auto& sparse = accessor.sparse;
+    const auto sparse_count = static_cast<std::uint64_t>(sparse.count);
+    if (sparse.count < 0 || sparse_count > count) return R::failure(what + " has an invalid sparse count");
+    const int sparse_type = sparse.indices.componentType;
+    if (sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) {
+        return R::failure(what + " has an invalid sparse index type");
+    }
+    const auto index_size =
+        static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(sparse_type)));
+    Result<const unsigned char*> indices =
+        view_bytes(model, sparse.indices.bufferView, static_cast<std::uint64_t>(sparse.indices.byteOffset),
+                   sparse_count * index_size, what + " sparse indices");
+    if (!indices) return indices.status();
+    Result<const unsigned char*> values =
+        view_bytes(model, sparse.values.bufferView, static_cast<std::uint64_t>(sparse.values.byteOffset),
+                   sparse_count * element, what + " sparse values");
+    if (!values) return values.status();
+    for (std::uint64_t i = 0; i < sparse_count; ++i) {
+        std::uint64_t target = 0;
+        for (std::size_t b = index_size; b-- > 0;) { // little-endian
+            target = (target << 8) | (*indices)[i * index_size + b];
+        }
+        if (target >= count) return R::failure(what + " has a sparse index out of range");
+        out[static_cast<std::size_t>(target)] = decode(*values + i * element);
+    }
+    return out;
+}
+
+glm::vec3 decode_vec3(const unsigned char* p) {
+    glm::vec3 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+Result<std::vector<glm::vec3>> read_positions(const tinygltf::Model& model, int index,
+                                              std::size_t file_size) {
+    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
+    if (accessor.type != TINYGLTF_TYPE_VEC3 || accessor.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+        return Result<std::vector<glm::vec3>>::failure("POSITION accessor " + std::to_string(index) +
+                                                       " is not float VEC3");
+    }
+    return read_accessor<glm::vec3>(model, index, file_size, decode_vec3);
+}
+
+Result<std::vector<std::uint32_t>> read_indices(const tinygltf::Model& model, int index,
+                                                std::size_t file_size) {
+    using R = Result<std::vector<std::uint32_t>>;
+    if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
+        return R::failure("indices accessor " + std::to_string(index) + " does not exist");
+    }
+    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
+    if (accessor.type != TINYGLTF_TYPE_SCALAR) {
+        return R::failure("indices accessor " + std::to_string(index) + " is not SCALAR");
+    }
+    switch (accessor.componentType) {
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return read_accessor<std::uint32_t>(model, index, file_size,
+                                            [](const unsigned char* p) { return std::uint32_t{*p}; });
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return read_accessor<std::uint32_t>(model, index, file_size, [](const unsigned char* p) {
+            std::uint16_t v;
+            std::memcpy(&v, p, sizeof v);
+            return std::uint32_t{v};
+        });
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        return read_accessor<std::uint32_t>(model, index, file_size, [](const unsigned char* p) {
+            std::uint32_t v;
+            std::memcpy(&v, p, sizeof v);
+            return v;
+        });
+    default:
+        return R::failure("indices accessor " + std::to_string(index) +
+                          " is not unsigned byte, short or int");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Scene
+
+glm::dmat4 local_transform(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data());
+    glm::dmat4 m(1.0);
+    if (node.translation.size() == 3) m = glm::translate(m, glm::make_vec3(node.translation.data()));
+    if (node.rotation.size() == 4) {
+        const std::vector<double>& q = node.rotation; // glTF order: x, y, z, w
+        glm::dquat rotation(q[3], q[0], q[1], q[2]);
+        const double length = glm::length(rotation);
+        if (length > 0) rotation /= length;
+        m *= glm::mat4_cast(rotation);
+    }
+    if (node.scale.size() == 3) m = glm::scale(m, glm::make_vec3(node.scale.data()));
+    return m;
+}
+
+class Builder {
+  public:
+    Builder(const tinygltf::Model& model, std::size_t file_size) : model_(model), file_size_(file_size) {}
+
+    Status add_mesh(std::size_t mesh_index, const glm::dmat4& transform) {
+        const tinygltf::Mesh& mesh = model_.meshes[mesh_index];
+        // Primitives often share one POSITION accessor (one primitive per material).
+        std::map<int, std::uint32_t> bases;
+        for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+            const tinygltf::Primitive& primitive = mesh.primitives[p];
+            const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+            if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE ||
+                mode == TINYGLTF_MODE_LINE_LOOP || mode == TINYGLTF_MODE_LINE_STRIP) {
+                saw_points_or_lines_ = true;
+                continue;
+            }
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+                mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+                return fail("unknown primitive mode " + std::to_string(mode), mesh_index, p);
+            }
+            if (Status status = add_primitive(primitive, mode, transform, bases, mesh_index, p); !status) {
+                return status;
+            }
+        }
+        return {};
+    }
+
+    bool saw_points_or_lines() const { return saw_points_or_lines_; }
+    Mesh& mesh() { return out_; }
+
+  private:
+    Status fail(const std::string& reason, std::size_t mesh, std::size_t primitive) const {
+        return Status::failure(reason + " in " + where(model_, mesh, primitive));
+    }
+
+    Status add_primitive(const tinygltf::Primitive& primitive, int mode, const glm::dmat4& transform,
+                         std::map<int, std::uint32_t>& bases, std::size_t mesh, std::size_t p) {
+        const auto position = primitive.attributes.find("POSITION");
+        if (position == primitive.attributes.end()) return fail("no POSITION attribute", mesh, p);
+        for (const auto& [name, accessor] : primitive.attributes) {
+            if (accessor < 0 || static_cast<std::size_t>(accessor) >= model_.accessors.size()) {
+                return fail(name + " accessor " + std::to_string(accessor) + " does not exist", mesh, p);
+            }
+        }
+        const std::size_t vertices = model_.accessors[static_cast<std::size_t>(position->second)].count;
+        for (const auto& [name, accessor] : primitive.attributes) {
+            const std::size_t count = model_.accessors[static_cast<std::size_t>(accessor)].count;
+            if (count != vertices) {
+                return fail("accessor count mismatch: POSITION has " + std::to_string(vertices) +
+                                " elements, " + name + " has " + std::to_string(count),
+                            mesh, p);
+            }
+        }
+
+        // Positions first: reading them checks the vertex count against the data actually present.
+        auto base = bases.find(position->second);
+        if (base == bases.end()) {
+            Result<std::vector<glm::vec3>> positions = read_positions(model_, position->second, file_size_);
+            if (!positions) return fail(positions.message(), mesh, p);
+            if (out_.positions.size() + positions->size() > std::numeric_limits<std::uint32_t>::max()) {
+                return Status::failure("too many vertices for 32-bit indices");
+            }
+            base = bases.emplace(position->second, static_cast<std::uint32_t>(out_.positions.size())).first;
+            for (const glm::vec3& v : *positions) {
+                out_.positions.emplace_back(transform * glm::dvec4(v, 1.0));
+            }
+        }
+
+        std::vector<std::uint32_t> sequence;
+        if (primitive.indices >= 0) {
+            Result<std::vector<std::uint32_t>> indices = read_indices(model_, primitive.indices, file_size_);
+            if (!indices) return fail(indices.message(), mesh, p);
+            sequence = std::move(*indices);
+            for (std::uint32_t index : sequence) {
+                if (index >= vertices) {
+                    return fail("index " + std::to_string(index) + " out of range (" +
+                                    std::to_string(vertices) + " vertices)",
+                                mesh, p);
+                }
+            }
+        } else {
+            sequence.resize(vertices);
+            for (std::size_t i = 0; i < vertices; ++i) {
+                sequence[i] = static_cast<std::uint32_t>(i);
+            }
+        }
+        if (mode == TINYGLTF_MODE_TRIANGLES && sequence.size() % 3 != 0) {
+            return fail(std::string(primitive.indices >= 0 ? "index" : "vertex") + " count " +
+                            std::to_string(sequence.size()) + " is not a multiple of 3",
+                        mesh, p);
+        }
+        append(sequence, mode, base->second);
+        return {};
+    }
+
+    // Expands strips and fans to a triangle list with the winding the glTF specification gives.
+    void append(const std::vector<std::uint32_t>& v, int mode, std::uint32_t base) {
+        auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+            out_.indices.insert(out_.indices.end(), {base + a, base + b, base + c});
+        };
+        if (mode == TINYGLTF_MODE_TRIANGLES) {
+            for (std::size_t i = 0; i + 2 < v.size(); i += 3)
+                emit(v[i], v[i + 1], v[i + 2]);
+        } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            for (std::size_t i = 0; i + 2 < v.size(); ++i) {
+                if (i % 2 == 0) {
+                    emit(v[i], v[i + 1], v[i + 2]);
+                } else {
+                    emit(v[i], v[i + 2], v[i + 1]);
+                }
+            }
+        } else {
+            for (std::size_t i = 1; i + 1 < v.size(); ++i)
+                emit(v[i], v[i + 1], v[0]);
+        }
+    }
+
+    const tinygltf::Model& model_;
+    std::size_t file_size_;
+    Mesh out_;
+    bool saw_points_or_lines_ = false;
+};
+
+// Each node has at most one parent and the hierarchy has no cycle (both required by glTF); checked
+// up front so that a cycle is reported as such rather than silently cut by the walk below.
+Result<std::vector<int>> parents(const tinygltf::Model& model) {
+    using R = Result<std::vector<int>>;
+    const std::size_t n = model.nodes.size();
+    std::vector<int> parent(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int child : model.nodes[i].children) {
+            if (child < 0 || static_cast<std::size_t>(child) >= n) {
+                return R::failure("node " + std::to_string(i) + " has missing child " +
+                                  std::to_string(child));
+            }
+            int& slot = parent[static_cast<std::size_t>(child)];
+            if (slot != -1) {
+                return R::failure("node " + std::to_string(child) + " has two parents (nodes " +
+                                  std::to_string(slot) + " and " + std::to_string(i) + ")");
+            }
+            slot = static_cast<int>(i);
+        }
+    }
+    enum : std::uint8_t { unseen, on_chain, done };
+    std::vector<std::uint8_t> state(n, unseen);
+    std::vector<int> chain;
+    for (std::size_t start = 0; start < n; ++start) {
+        chain.clear();
+        int node = static_cast<int>(start);
+        while (node != -1 && state[static_cast<std::size_t>(node)] == unseen) {
+            state[static_cast<std::size_t>(node)] = on_chain;
+            chain.push_back(node);
+            node = parent[static_cast<std::size_t>(node)];
+        }
+        if (node != -1 && state[static_cast<std::size_t>(node)] == on_chain) {
+            return R::failure("node cycle at node " + std::to_string(node));
+        }
+        for (int c : chain)
+            state[static_cast<std::size_t>(c)] = done;
+    }
+    return parent;
+}
+
+Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::vector<int>& parent) {
+    using R = Result<std::vector<int>>;
+    std::vector<int> roots;
+    if (model.defaultScene < 0 && model.scenes.empty()) {
+        for (std::size_t i = 0; i < parent.size(); ++i) {
+            if (parent[i] == -1) roots.push_back(static_cast<int>(i));
+        }
+        return roots;
+    }
+    const std::size_t scene = model.defaultScene >= 0 ? static_cast<std::size_t>(model.defaultScene) : 0;
+    if (scene >= model.scenes.size()) {
+        return R::failure("scene " + std::to_string(scene) + " does not exist (the file has " +
+                          std::to_string(model.scenes.size()) + " scenes)");
+    }
+    roots = model.scenes[scene].nodes;
+    for (int root : roots) {
+        if (root < 0 || static_cast<std::size_t>(root) >= parent.size()) {
+            return R::failure("scene " + std::to_string(scene) + " lists missing node " +
+                              std::to_string(root));
+        }
+    }
+    return roots;
+}
+
+Result<Mesh> build(const tinygltf::Model& model, std::size_t file_size) {
+    Result<std::vector<int>> parent = parents(model);
+    if (!parent) return parent.status();
+    Result<std::vector<int>> roots = scene_roots(model, *parent);
+    if (!roots) return roots.status();
+
+    Builder builder(model, file_size);
+    // Depth-first with an explicit stack: node chains can be as deep as the file is long.
+    struct Visit {
+        int node;
+        glm::dmat4 parent_world;
+    };
+    std::vector<Visit> stack;
+    for (auto it = roots->rbegin(); it != roots->rend(); ++it)
+        stack.push_back({*it, glm::dmat4(1.0)});
+    // Exporters do list non-root nodes as scene roots (Kenney's UniGLTF files list the child of a
+    // "tmpParent" node), so such a node starts from the identity, and a node already reached through
+    // another root is not instanced twice.
+    std::vector<bool> visited(model.nodes.size(), false);
+    while (!stack.empty()) {
+        const Visit visit = stack.back();
+        stack.pop_back();
+        if (visited[static_cast<std::size_t>(visit.node)]) continue;
+        visited[static_cast<std::size_t>(visit.node)] = true;
+        const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(visit.node)];
+        const glm::dmat4 world = visit.parent_world * local_transform(node);
+        if (node.mesh >= 0) {
+            if (static_cast<std::size_t>(node.mesh) >= model.meshes.size()) {
+                return Result<Mesh>::failure("node " + std::to_string(visit.node) +
+                                             " refers to missing mesh " + std::to_string(node.mesh));
+            }
+            // glTF ignores the node transform of a skinned mesh (the joints place it); with the
+            // joints in their bind pose that leaves the raw POSITION data.
+            const glm::dmat4 transform = node.skin >= 0 ? glm::dmat4(1.0) : world;
+            if (Status status = builder.add_mesh(static_cast<std::size_t>(node.mesh), transform); !status) {
+                return status;
+            }
+        }
+        for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
+            stack.push_back({*it, world});
+    }
+    if (builder.mesh().indices.empty())
+        return Result<Mesh>::failure(no_triangles_reason(builder.saw_points_or_lines()));
+    return std::move(builder.mesh());
+}
+
+// libdraco, which Assimp links, exports its own tinygltf build under the same symbol names, and its
+// types do not match this header. Calls go to whichever of the two the dynamic linker met first, so a
+// link order with draco first would corrupt memory; refuse instead. tinygltf compiled into the same
+// object as this code is fine too.
+Status check_tinygltf_binding() {
+    static const Status status = [] {
+        Dl_info tinygltf_info{};
+        Dl_info own_info{};
+        if (dladdr(reinterpret_cast<void*>(&tinygltf::FileExists), &tinygltf_info) == 0 ||
+            dladdr(reinterpret_cast<void*>(&check_tinygltf_binding), &own_info) == 0 ||
+            tinygltf_info.dli_fname == nullptr || own_info.dli_fname == nullptr) {
+            return Status{};
+        }
+        const std::string_view library = tinygltf_info.dli_fname;
+        if (library.find("tinygltf") != std::string_view::npos || library == own_info.dli_fname)
+            return Status{};
+        return Status::failure("tinygltf calls resolve to " + std::string(library) +
+                               " instead of libtinygltf; link TinyGLTF::TinyGLTF before assimp::assimp");
+    }();
+    return status;
+}
+
+} // namespace
+
+Result<Mesh> load_gltf(const std::vector<unsigned char>& bytes, const std::filesystem::path& path) {
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
+        return Result<Mesh>::failure("file too large for tinygltf (over 4 GiB)");
+    }
+    if (Status status = check_tinygltf_binding(); !status) return status;
+    Result<std::string_view> text = json_text(bytes);
+    if (!text) return text.status();
+    if (Status status = check_json(*text); !status) return status;
+
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    tinygltf::Model model;
+    std::string error;
+    std::string warning;
+    const std::string base_dir = path.parent_path().string();
+    const auto size = static_cast<unsigned int>(bytes.size());
+    bool loaded = false;
+    try {
+        loaded =
+            is_glb(bytes)
+                ? loader.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(), size, base_dir)
+                : loader.LoadASCIIFromString(&model, &error, &warning,
+                                             reinterpret_cast<const char*>(bytes.data()), size, base_dir);
+    } catch (const std::exception& e) {
+        // tinygltf indexes some arrays with vector::at on values it has not checked.
+        return Result<Mesh>::failure("malformed glTF (tinygltf: " + clean_message(e.what()) + ")");
+    }
+    if (!loaded) return Result<Mesh>::failure(error.empty() ? "tinygltf failed" : clean_message(error));
+    return build(model, bytes.size());
+}
+
+} // namespace gust::detail
