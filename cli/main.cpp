@@ -1,21 +1,19 @@
 // The `gust` command line: voxelize, info.
+#include "vdb_writer.hpp"
+
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
-#include <limits>
-#include <optional>
-#include <sstream>
-
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <gust/gpu/context.hpp>
 #include <gust/scene/import.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
-
-#include "vdb_writer.hpp"
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
 
 namespace {
 
@@ -48,7 +46,8 @@ gust::MeshView view_of(const gust::Mesh& mesh) {
     return view;
 }
 
-std::unique_ptr<gust::gpu::Context> make_context(const std::string& device, bool validation, std::string& error) {
+std::unique_ptr<gust::gpu::Context> make_context(const std::string& device, bool validation,
+                                                 std::string& error) {
     gust::gpu::ContextDesc desc;
     desc.device = device;
     desc.validation = validation;
@@ -81,7 +80,8 @@ int run_voxelize(const VoxelizeArgs& args) {
     if (!gust::parse_method(args.method, method))
         return fail("--method must be raster, compute or auto, got '" + args.method + "'");
     if (args.res < gust::kMinRes || args.res > gust::kMaxRes)
-        return fail("--res must be in [" + std::to_string(gust::kMinRes) + ", " + std::to_string(gust::kMaxRes) + "]");
+        return fail("--res must be in [" + std::to_string(gust::kMinRes) + ", " +
+                    std::to_string(gust::kMaxRes) + "]");
     if (args.origin.empty() != !args.size.has_value())
         return fail("--origin and --size go together (give both or neither)");
 
@@ -122,7 +122,8 @@ int run_voxelize(const VoxelizeArgs& args) {
     if (!stats) return fail(stats.message());
     ms["voxelize"] = ms_since(start);
     nlohmann::ordered_json gpu_ms;
-    for (const auto& [pass, t] : stats->ms) gpu_ms[pass] = t;
+    for (const auto& [pass, t] : stats->ms)
+        gpu_ms[pass] = t;
 
     start = Clock::now();
     auto fragments = (*voxelizer)->read_fragments();
@@ -138,8 +139,8 @@ int run_voxelize(const VoxelizeArgs& args) {
     if (gust::Status s = gust::cli::write_occupancy_vdb(args.out, keys, grid); !s) return fail(s.message());
     ms["write"] = ms_since(start);
     if (ctx->validation_messages() > 0)
-        return fail(std::to_string(ctx->validation_messages()) + " Vulkan validation messages; last: " +
-                    ctx->last_validation_message());
+        return fail(std::to_string(ctx->validation_messages()) +
+                    " Vulkan validation messages; last: " + ctx->last_validation_message());
 
     nlohmann::ordered_json line;
     line["triangles"] = stats->triangles;
@@ -211,15 +212,19 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     VoxelizeArgs vox;
-    auto* voxelize = app.add_subcommand("voxelize", "voxelize a mesh (PLY, OBJ, STL, glTF, GLB) into an OpenVDB file");
+    auto* voxelize =
+        app.add_subcommand("voxelize", "voxelize a mesh (PLY, OBJ, STL, glTF, GLB) into an OpenVDB file");
     voxelize->add_option("mesh", vox.mesh, "mesh file")->required();
     voxelize->add_option("--res", vox.res, "voxels per axis (8..1024)")->required();
     voxelize->add_option("--origin", vox.origin, "grid min corner X,Y,Z (world units); with --size");
-    voxelize->add_option("--size", vox.size, "grid edge length (world units); voxel size = size / res; with --origin");
+    voxelize->add_option("--size", vox.size,
+                         "grid edge length (world units); voxel size = size / res; with --origin");
     voxelize->add_option("--method", vox.method, "raster, compute or auto (default auto)");
     voxelize->add_option("--out", vox.out, "output .vdb file")->required();
-    voxelize->add_option("--device", vox.device, "device index or name substring (default: $GUST_DEVICE, then best)");
-    voxelize->add_flag("--validation", vox.validation, "enable the Vulkan validation layer; any message fails");
+    voxelize->add_option("--device", vox.device,
+                         "device index or name substring (default: $GUST_DEVICE, then best)");
+    voxelize->add_flag("--validation", vox.validation,
+                       "enable the Vulkan validation layer; any message fails");
 
     std::string info_mesh, info_device;
     auto* info = app.add_subcommand("info", "print the Vulkan device gust picks (and a mesh's statistics)");

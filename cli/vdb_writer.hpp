@@ -4,10 +4,9 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <span>
-
 #include <gust/gpu/result.hpp>
 #include <gust/voxelizer/grid.hpp>
+#include <span>
 
 namespace gust::cli {
 

@@ -5,9 +5,9 @@
 #ifdef __cplusplus
 #include <cstdint>
 #include <glm/glm.hpp>
-#define GUST_NAMESPACE_BEGIN                                                                               \
-    namespace gust::shaderio {                                                                             \
-    using namespace glm;                                                                                   \
+#define GUST_NAMESPACE_BEGIN                                                                                 \
+    namespace gust::shaderio {                                                                               \
+    using namespace glm;                                                                                     \
     using uint = std::uint32_t;
 #define GUST_NAMESPACE_END }
 #define GUST_INLINE inline

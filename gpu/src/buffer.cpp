@@ -1,15 +1,16 @@
-#include <gust/gpu/buffer.hpp>
-
 #include <cstring>
+#include <gust/gpu/buffer.hpp>
 #include <utility>
 
 namespace gust::gpu {
 
-Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, VkBufferUsageFlags extra_usage) {
+Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
+                              VkBufferUsageFlags extra_usage) {
     if (size == 0) return Result<Buffer>::failure("cannot create a buffer of 0 bytes");
     if (ctx.info().max_allocation_size && size > ctx.info().max_allocation_size)
         return Result<Buffer>::failure("buffer of " + std::to_string(size) + " bytes exceeds the device's " +
-                                       std::to_string(ctx.info().max_allocation_size) + "-byte allocation limit");
+                                       std::to_string(ctx.info().max_allocation_size) +
+                                       "-byte allocation limit");
     const auto& vk = ctx.vk();
     Buffer b;
     b.ctx_ = &ctx;
@@ -27,7 +28,9 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, Vk
     VkMemoryPropertyFlags required = 0;
     VkMemoryPropertyFlags preferred = 0;
     switch (use) {
-    case MemoryUse::Device: preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT; break;
+    case MemoryUse::Device:
+        preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        break;
     case MemoryUse::Upload:
         required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
         break;
@@ -46,12 +49,15 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, Vk
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = type;
     if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, nullptr, &b.memory_); r != VK_SUCCESS)
-        return Result<Buffer>::failure("cannot allocate " + std::to_string(req.size) + " bytes: " + to_string(r));
+        return Result<Buffer>::failure("cannot allocate " + std::to_string(req.size) +
+                                       " bytes: " + to_string(r));
     vk.vkBindBufferMemory(ctx.device(), b.buffer_, b.memory_, 0);
 
     const VkMemoryPropertyFlags got = ctx.memory_flags(type);
-    const VkMemoryPropertyFlags mappable = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    if ((got & mappable) == mappable) vk.vkMapMemory(ctx.device(), b.memory_, 0, VK_WHOLE_SIZE, 0, &b.mapped_);
+    const VkMemoryPropertyFlags mappable =
+        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    if ((got & mappable) == mappable)
+        vk.vkMapMemory(ctx.device(), b.memory_, 0, VK_WHOLE_SIZE, 0, &b.mapped_);
 
     VkBufferDeviceAddressInfo address{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
     address.buffer = b.buffer_;
@@ -69,9 +75,13 @@ void Buffer::release() {
     mapped_ = nullptr;
 }
 
-Buffer::~Buffer() { release(); }
+Buffer::~Buffer() {
+    release();
+}
 
-Buffer::Buffer(Buffer&& other) noexcept { *this = std::move(other); }
+Buffer::Buffer(Buffer&& other) noexcept {
+    *this = std::move(other);
+}
 
 Buffer& Buffer::operator=(Buffer&& other) noexcept {
     if (this != &other) {

@@ -1,10 +1,9 @@
-#include <gust/gpu/context.hpp>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
+#include <gust/gpu/context.hpp>
 
 namespace gust::gpu {
 
@@ -19,21 +18,31 @@ std::string lower(std::string s) {
 
 const char* type_name(VkPhysicalDeviceType type) {
     switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return "cpu";
+    default:
+        return "other";
     }
 }
 
 int type_rank(VkPhysicalDeviceType type) {
     switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
-    default: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return 1;
+    default:
+        return 0;
     }
 }
 
@@ -41,8 +50,10 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBit
                                               VkDebugUtilsMessageTypeFlagsEXT types,
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
     Severity s = Severity::Info;
-    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) s = Severity::Error;
-    else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) s = Severity::Warning;
+    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)
+        s = Severity::Error;
+    else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT)
+        s = Severity::Warning;
     const bool validation = (types & VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT) != 0;
     static_cast<Context*>(user)->report(s, validation, data->pMessage ? data->pMessage : "");
     return VK_FALSE;
@@ -52,20 +63,34 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBit
 
 const char* to_string(VkResult result) {
     switch (result) {
-    case VK_SUCCESS: return "VK_SUCCESS";
-    case VK_NOT_READY: return "VK_NOT_READY";
-    case VK_TIMEOUT: return "VK_TIMEOUT";
-    case VK_INCOMPLETE: return "VK_INCOMPLETE";
-    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
-    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
-    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
-    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
-    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
-    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
-    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
-    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER";
-    case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
-    default: return "VkResult error";
+    case VK_SUCCESS:
+        return "VK_SUCCESS";
+    case VK_NOT_READY:
+        return "VK_NOT_READY";
+    case VK_TIMEOUT:
+        return "VK_TIMEOUT";
+    case VK_INCOMPLETE:
+        return "VK_INCOMPLETE";
+    case VK_ERROR_OUT_OF_HOST_MEMORY:
+        return "VK_ERROR_OUT_OF_HOST_MEMORY";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY:
+        return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+    case VK_ERROR_INITIALIZATION_FAILED:
+        return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST:
+        return "VK_ERROR_DEVICE_LOST";
+    case VK_ERROR_LAYER_NOT_PRESENT:
+        return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT:
+        return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT:
+        return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER:
+        return "VK_ERROR_INCOMPATIBLE_DRIVER";
+    case VK_ERROR_TOO_MANY_OBJECTS:
+        return "VK_ERROR_TOO_MANY_OBJECTS";
+    default:
+        return "VkResult error";
     }
 }
 
@@ -93,17 +118,20 @@ Status Context::init(const ContextDesc& desc) {
     on_message_ = desc.on_message;
     loader_ = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
     if (!loader_) return Status::failure("cannot load the Vulkan loader libvulkan.so.1 (install libvulkan1)");
-    vk_.vkGetInstanceProcAddr = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader_, "vkGetInstanceProcAddr"));
+    vk_.vkGetInstanceProcAddr =
+        reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader_, "vkGetInstanceProcAddr"));
     if (!vk_.vkGetInstanceProcAddr) return Status::failure("libvulkan.so.1 has no vkGetInstanceProcAddr");
-#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(VK_NULL_HANDLE, #name));
+#define GUST_LOAD(name)                                                                                      \
+    vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(VK_NULL_HANDLE, #name));
     GUST_VK_GLOBAL_FUNCTIONS(GUST_LOAD)
 #undef GUST_LOAD
 
     std::uint32_t version = VK_API_VERSION_1_0;
     if (vk_.vkEnumerateInstanceVersion) vk_.vkEnumerateInstanceVersion(&version);
     if (version < VK_API_VERSION_1_3)
-        return Status::failure("the Vulkan loader supports only " + std::to_string(VK_API_VERSION_MAJOR(version)) +
-                               "." + std::to_string(VK_API_VERSION_MINOR(version)) + "; gust needs Vulkan 1.3");
+        return Status::failure("the Vulkan loader supports only " +
+                               std::to_string(VK_API_VERSION_MAJOR(version)) + "." +
+                               std::to_string(VK_API_VERSION_MINOR(version)) + "; gust needs Vulkan 1.3");
 
     std::vector<const char*> layers;
     std::vector<const char*> extensions;
@@ -132,9 +160,10 @@ Status Context::init(const ContextDesc& desc) {
     app.pApplicationName = "gust";
     app.pEngineName = "gust";
     app.apiVersion = VK_API_VERSION_1_3;
-    VkDebugUtilsMessengerCreateInfoEXT messenger_info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    messenger_info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
-                                     VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    VkDebugUtilsMessengerCreateInfoEXT messenger_info{
+        VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messenger_info.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
     messenger_info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
                                  VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                                  VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
@@ -172,14 +201,16 @@ Status Context::pick_device(const std::string& override_spec) {
     vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
     std::vector<VkPhysicalDevice> devices(count);
     vk_.vkEnumeratePhysicalDevices(instance_, &count, devices.data());
-    if (devices.empty()) return Status::failure("no Vulkan device found (install mesa-vulkan-drivers for lavapipe)");
+    if (devices.empty())
+        return Status::failure("no Vulkan device found (install mesa-vulkan-drivers for lavapipe)");
 
     std::string list;
     int best_rank = -1;
     for (std::uint32_t i = 0; i < count; ++i) {
         VkPhysicalDeviceProperties props;
         vk_.vkGetPhysicalDeviceProperties(devices[i], &props);
-        std::string entry = std::to_string(i) + ": " + props.deviceName + " (" + type_name(props.deviceType) + ")";
+        std::string entry =
+            std::to_string(i) + ": " + props.deviceName + " (" + type_name(props.deviceType) + ")";
         device_names_.push_back(entry);
         list += (list.empty() ? "" : ", ") + entry;
         const bool usable = props.apiVersion >= VK_API_VERSION_1_3;
@@ -233,7 +264,8 @@ Status Context::create_device() {
     need(f13.dynamicRendering, "dynamicRendering");
     need(f13.maintenance4, "maintenance4");
     if (!missing.empty())
-        return Status::failure(std::string("device '") + props.deviceName + "' lacks required features: " + missing);
+        return Status::failure(std::string("device '") + props.deviceName +
+                               "' lacks required features: " + missing);
 
     std::uint32_t count = 0;
     vk_.vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, nullptr);
@@ -248,7 +280,8 @@ Status Context::create_device() {
         }
     }
     if (family == UINT32_MAX)
-        return Status::failure(std::string("device '") + props.deviceName + "' has no graphics+compute queue");
+        return Status::failure(std::string("device '") + props.deviceName +
+                               "' has no graphics+compute queue");
     queue_family_ = family;
 
     vk_.vkEnumerateDeviceExtensionProperties(physical_, nullptr, &count, nullptr);
@@ -289,7 +322,8 @@ Status Context::create_device() {
     info.enabledExtensionCount = std::uint32_t(enabled.size());
     info.ppEnabledExtensionNames = enabled.data();
     if (VkResult r = vk_.vkCreateDevice(physical_, &info, nullptr, &device_); r != VK_SUCCESS)
-        return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName + "': " + to_string(r));
+        return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName +
+                               "': " + to_string(r));
 
 #define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetDeviceProcAddr(device_, #name));
     GUST_VK_DEVICE_FUNCTIONS(GUST_LOAD)

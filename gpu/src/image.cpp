@@ -1,5 +1,4 @@
 #include <gust/gpu/image.hpp>
-
 #include <utility>
 
 namespace gust::gpu {
@@ -28,13 +27,15 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
         return Result<Image>::failure(std::string("vkCreateImage failed: ") + to_string(r));
     VkMemoryRequirements req;
     vk.vkGetImageMemoryRequirements(ctx.device(), img.image_, &req);
-    const std::uint32_t type = ctx.find_memory_type(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    const std::uint32_t type =
+        ctx.find_memory_type(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     if (type == UINT32_MAX) return Result<Image>::failure("no memory type for an image");
     VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = type;
     if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, nullptr, &img.memory_); r != VK_SUCCESS)
-        return Result<Image>::failure("cannot allocate " + std::to_string(req.size) + " bytes: " + to_string(r));
+        return Result<Image>::failure("cannot allocate " + std::to_string(req.size) +
+                                      " bytes: " + to_string(r));
     vk.vkBindImageMemory(ctx.device(), img.image_, img.memory_, 0);
     VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     view.image = img.image_;
@@ -69,14 +70,16 @@ void Image::copy_from(VkCommandBuffer cmd, const Buffer& src) const {
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = extent_;
-    ctx_->vk().vkCmdCopyBufferToImage(cmd, src.handle(), image_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    ctx_->vk().vkCmdCopyBufferToImage(cmd, src.handle(), image_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                                      &region);
 }
 
 void Image::copy_to(VkCommandBuffer cmd, const Buffer& dst) const {
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = extent_;
-    ctx_->vk().vkCmdCopyImageToBuffer(cmd, image_, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, dst.handle(), 1, &region);
+    ctx_->vk().vkCmdCopyImageToBuffer(cmd, image_, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, dst.handle(), 1,
+                                      &region);
 }
 
 void Image::release() {
@@ -90,9 +93,13 @@ void Image::release() {
     memory_ = VK_NULL_HANDLE;
 }
 
-Image::~Image() { release(); }
+Image::~Image() {
+    release();
+}
 
-Image::Image(Image&& other) noexcept { *this = std::move(other); }
+Image::Image(Image&& other) noexcept {
+    *this = std::move(other);
+}
 
 Image& Image::operator=(Image&& other) noexcept {
     if (this != &other) {

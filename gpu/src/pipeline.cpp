@@ -1,5 +1,4 @@
 #include <gust/gpu/pipeline.hpp>
-
 #include <utility>
 #include <vector>
 
@@ -24,7 +23,8 @@ Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
     VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     info.pushConstantRangeCount = push_constant_bytes ? 1 : 0;
     info.pPushConstantRanges = &range;
-    if (VkResult r = ctx_->vk().vkCreatePipelineLayout(ctx_->device(), &info, nullptr, &layout_); r != VK_SUCCESS)
+    if (VkResult r = ctx_->vk().vkCreatePipelineLayout(ctx_->device(), &info, nullptr, &layout_);
+        r != VK_SUCCESS)
         return Status::failure(std::string("vkCreatePipelineLayout failed: ") + to_string(r));
     return {};
 }
@@ -43,9 +43,11 @@ Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> 
     info.stage.module = *module;
     info.stage.pName = "main";
     info.layout = p.layout_;
-    VkResult r = ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
+    VkResult r =
+        ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
     ctx.vk().vkDestroyShaderModule(ctx.device(), *module, nullptr);
-    if (r != VK_SUCCESS) return Result<Pipeline>::failure(std::string("vkCreateComputePipelines failed: ") + to_string(r));
+    if (r != VK_SUCCESS)
+        return Result<Pipeline>::failure(std::string("vkCreateComputePipelines failed: ") + to_string(r));
     return p;
 }
 
@@ -73,8 +75,10 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     if (status) status = add(desc.geometry, VK_SHADER_STAGE_GEOMETRY_BIT);
     if (status) status = add(desc.fragment, VK_SHADER_STAGE_FRAGMENT_BIT);
 
-    VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    VkPipelineVertexInputStateCreateInfo vertex_input{
+        VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly{
+        VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
     assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
     VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
     viewport.viewportCount = 1;
@@ -87,7 +91,8 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     raster.polygonMode = VK_POLYGON_MODE_FILL;
     raster.cullMode = VK_CULL_MODE_NONE;
     raster.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    VkPipelineMultisampleStateCreateInfo multisample{
+        VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
     multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
     VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
     const VkDynamicState dynamic_states[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
@@ -111,9 +116,11 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     if (status) {
         VkResult r =
             ctx.vk().vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
-        if (r != VK_SUCCESS) status = Status::failure(std::string("vkCreateGraphicsPipelines failed: ") + to_string(r));
+        if (r != VK_SUCCESS)
+            status = Status::failure(std::string("vkCreateGraphicsPipelines failed: ") + to_string(r));
     }
-    for (VkShaderModule m : modules) ctx.vk().vkDestroyShaderModule(ctx.device(), m, nullptr);
+    for (VkShaderModule m : modules)
+        ctx.vk().vkDestroyShaderModule(ctx.device(), m, nullptr);
     if (!status) return status;
     return p;
 }
@@ -131,9 +138,13 @@ void Pipeline::release() {
     layout_ = VK_NULL_HANDLE;
 }
 
-Pipeline::~Pipeline() { release(); }
+Pipeline::~Pipeline() {
+    release();
+}
 
-Pipeline::Pipeline(Pipeline&& other) noexcept { *this = std::move(other); }
+Pipeline::Pipeline(Pipeline&& other) noexcept {
+    *this = std::move(other);
+}
 
 Pipeline& Pipeline::operator=(Pipeline&& other) noexcept {
     if (this != &other) {

@@ -1,5 +1,4 @@
 #include <gust/gpu/profiler.hpp>
-
 #include <utility>
 
 namespace gust::gpu {
@@ -54,9 +53,13 @@ void Profiler::release() {
     pool_ = VK_NULL_HANDLE;
 }
 
-Profiler::~Profiler() { release(); }
+Profiler::~Profiler() {
+    release();
+}
 
-Profiler::Profiler(Profiler&& other) noexcept { *this = std::move(other); }
+Profiler::Profiler(Profiler&& other) noexcept {
+    *this = std::move(other);
+}
 
 Profiler& Profiler::operator=(Profiler&& other) noexcept {
     if (this != &other) {

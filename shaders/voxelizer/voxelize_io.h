@@ -25,27 +25,27 @@ struct DispatchArgs {
 /// Counters written by the voxelizer passes (one per call, zeroed before it). The buffer is also the
 /// indirect-dispatch buffer of the large pass.
 struct VoxelizeCounters {
-    uint fragments;       ///< fragments appended; may exceed the capacity, which means "redo larger"
-    uint rejected;        ///< triangles with a non-finite vertex
-    uint large_items;     ///< (triangle, tile) items queued for the current instance; may exceed the capacity
-    uint large_peak;      ///< the most items any instance queued, which tells the host to grow the list
+    uint fragments;   ///< fragments appended; may exceed the capacity, which means "redo larger"
+    uint rejected;    ///< triangles with a non-finite vertex
+    uint large_items; ///< (triangle, tile) items queued for the current instance; may exceed the capacity
+    uint large_peak;  ///< the most items any instance queued, which tells the host to grow the list
     DispatchArgs large_dispatch; ///< workgroups of the large pass, written by voxelize_args.comp
     uint pad;
 };
 
 /// Push constants of every voxelizer pass (<= 128 bytes, the guaranteed minimum).
 struct VoxelizePush {
-    mat4 to_grid;             ///< model matrix followed by world -> grid space ((p - origin) / h)
-    GUST_ADDRESS positions;   ///< float[3 * vertex_count]
-    GUST_ADDRESS indices;     ///< uint[3 * triangle_count]
-    GUST_ADDRESS fragments;   ///< uint[capacity] packed voxel keys (pack_voxel)
-    GUST_ADDRESS counters;    ///< VoxelizeCounters
-    GUST_ADDRESS large_list;  ///< uvec2[large_capacity] (triangle, tile) items for the large pass
-    uint res;                 ///< voxels per axis
-    uint capacity;            ///< fragment slots
-    uint triangle_count;      ///< triangles in this draw or dispatch
-    uint first_triangle;      ///< compute path: offset of this dispatch's first triangle
-    uint large_capacity;      ///< items the large list holds
+    mat4 to_grid;            ///< model matrix followed by world -> grid space ((p - origin) / h)
+    GUST_ADDRESS positions;  ///< float[3 * vertex_count]
+    GUST_ADDRESS indices;    ///< uint[3 * triangle_count]
+    GUST_ADDRESS fragments;  ///< uint[capacity] packed voxel keys (pack_voxel)
+    GUST_ADDRESS counters;   ///< VoxelizeCounters
+    GUST_ADDRESS large_list; ///< uvec2[large_capacity] (triangle, tile) items for the large pass
+    uint res;                ///< voxels per axis
+    uint capacity;           ///< fragment slots
+    uint triangle_count;     ///< triangles in this draw or dispatch
+    uint first_triangle;     ///< compute path: offset of this dispatch's first triangle
+    uint large_capacity;     ///< items the large list holds
     uint pad;
 };
 

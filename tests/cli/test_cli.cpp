@@ -3,17 +3,15 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
-#include <string>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-#include <openvdb/openvdb.h>
-
 #include <gust/scene/import.hpp>
 #include <gust/voxelizer/cpu_reference.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
+#include <nlohmann/json.hpp>
+#include <openvdb/openvdb.h>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace gust::test {
 namespace {
@@ -34,20 +32,26 @@ CliRun gust(const std::string& args) {
     FILE* pipe = popen(command.c_str(), "r");
     if (!pipe) return run;
     std::array<char, 4096> buffer;
-    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+    while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
+        run.out.append(buffer.data(), n);
     const int status = pclose(pipe);
     run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     if (FILE* f = std::fopen(err_file.c_str(), "r")) {
-        while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), f)) run.err.append(buffer.data(), n);
+        while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), f))
+            run.err.append(buffer.data(), n);
         std::fclose(f);
     }
     fs::remove(err_file);
     return run;
 }
 
-std::string asset(const std::string& relative) { return std::string(GUST_ASSETS_DIR) + "/" + relative; }
+std::string asset(const std::string& relative) {
+    return std::string(GUST_ASSETS_DIR) + "/" + relative;
+}
 
-fs::path temp_vdb(const std::string& name) { return fs::temp_directory_path() / ("gust_cli_" + name + ".vdb"); }
+fs::path temp_vdb(const std::string& name) {
+    return fs::temp_directory_path() / ("gust_cli_" + name + ".vdb");
+}
 
 /// Reads the "occupancy" grid back; null when absent or of another type.
 openvdb::BoolGrid::Ptr read_occupancy(const fs::path& path) {
@@ -84,8 +88,8 @@ std::vector<std::uint32_t> active_voxels(const openvdb::BoolGrid& grid) {
 
 TEST(CliVoxelize, writesOccupancyGridWithCentredTransformAndStatsLine) {
     const fs::path out = temp_vdb("bunny");
-    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 40 --method raster --validation --out " +
-                         out.string());
+    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") +
+                            " --res 40 --method raster --validation --out " + out.string());
     ASSERT_EQ(run.code, 0) << run.err;
     const auto stats = nlohmann::json::parse(run.out);
     for (const char* key : {"triangles", "rejected", "fragments", "voxels", "ms", "device"})
@@ -129,8 +133,9 @@ TEST(CliVoxelize, writesOccupancyGridWithCentredTransformAndStatsLine) {
 
 TEST(CliVoxelize, originAndSizeDefineTheGridExactly) {
     const fs::path out = temp_vdb("fox");
-    const CliRun run = gust("voxelize " + asset("characters/Fox.glb") +
-                         " --res 32 --origin -64,-16,-96 --size 192 --method compute --out " + out.string());
+    const CliRun run =
+        gust("voxelize " + asset("characters/Fox.glb") +
+             " --res 32 --origin -64,-16,-96 --size 192 --method compute --out " + out.string());
     ASSERT_EQ(run.code, 0) << run.err;
     auto grid = read_occupancy(out);
     ASSERT_TRUE(grid);
@@ -159,7 +164,8 @@ TEST(CliVoxelize, missingFileFailsNamingIt) {
 TEST(CliVoxelize, rejectsBadArguments) {
     const std::string bunny = asset("scans/bunny.ply");
     for (const std::string& args :
-         {"voxelize " + bunny + " --res 4 --out /tmp/x.vdb", "voxelize " + bunny + " --res 2000 --out /tmp/x.vdb",
+         {"voxelize " + bunny + " --res 4 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 2000 --out /tmp/x.vdb",
           "voxelize " + bunny + " --res 16 --method magic --out /tmp/x.vdb",
           "voxelize " + bunny + " --res 16 --origin 0,0,0 --out /tmp/x.vdb",
           "voxelize " + bunny + " --res 16 --origin 0,0 --size 1 --out /tmp/x.vdb",
@@ -173,7 +179,8 @@ TEST(CliVoxelize, rejectsBadArguments) {
 }
 
 TEST(CliVoxelize, unwritableOutputFailsNamingIt) {
-    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 16 --out /nonexistent/dir/out.vdb");
+    const CliRun run =
+        gust("voxelize " + asset("scans/bunny.ply") + " --res 16 --out /nonexistent/dir/out.vdb");
     EXPECT_NE(run.code, 0);
     EXPECT_NE(run.err.find("/nonexistent/dir/out.vdb"), std::string::npos) << run.err;
 }

@@ -1,14 +1,12 @@
+#include "support/gpu_env.hpp"
+
 #include <cstring>
-#include <numeric>
-#include <vector>
-
 #include <gtest/gtest.h>
-
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/image.hpp>
 #include <gust/gpu/profiler.hpp>
-
-#include "support/gpu_env.hpp"
+#include <numeric>
+#include <vector>
 
 namespace gust::test {
 namespace {
@@ -44,7 +42,9 @@ TEST(ContextCreation, validationMessagesAreCountedAndForwarded) {
     gpu::ContextDesc desc;
     desc.validation = true;
     int forwarded = 0;
-    desc.on_message = [&](gpu::Severity severity, const std::string&) { forwarded += severity == gpu::Severity::Error; };
+    desc.on_message = [&](gpu::Severity severity, const std::string&) {
+        forwarded += severity == gpu::Severity::Error;
+    };
     auto ctx = gpu::Context::create(desc);
     ASSERT_TRUE(ctx) << ctx.message();
     gpu::Context& c = **ctx;

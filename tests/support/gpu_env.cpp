@@ -23,7 +23,9 @@ gpu::Context& gpu_context() {
     return *context;
 }
 
-void GpuTest::SetUp() { messages_before_ = gpu_context().validation_messages(); }
+void GpuTest::SetUp() {
+    messages_before_ = gpu_context().validation_messages();
+}
 
 void GpuTest::TearDown() {
     EXPECT_EQ(gpu_context().validation_messages(), messages_before_)

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <gtest/gtest.h>
-
 #include <gust/gpu/context.hpp>
 
 namespace gust::test {
@@ -12,16 +11,17 @@ gpu::Context& gpu_context();
 
 /// Base fixture: records the validation count before the test and fails the test if it grew.
 class GpuTest : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override;
     void TearDown() override;
     gpu::Context& ctx() { return gpu_context(); }
 
-private:
+  private:
     std::uint32_t messages_before_ = 0;
 };
 
 /// The same check for parameterized suites.
-template <class Param> class GpuTestWithParam : public GpuTest, public ::testing::WithParamInterface<Param> {};
+template <class Param>
+class GpuTestWithParam : public GpuTest, public ::testing::WithParamInterface<Param> {};
 
 } // namespace gust::test

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
 
@@ -15,7 +14,8 @@ DistanceCheck check_against_distance_field(const TestMesh& mesh, const GridDesc&
     auto transform = openvdb::math::Transform::createLinearTransform(h);
     transform->postTranslate(openvdb::Vec3d(grid.origin.x, grid.origin.y, grid.origin.z) + 0.5 * h);
     std::vector<openvdb::Vec3s> points;
-    for (const glm::vec3& p : mesh.positions) points.emplace_back(p.x, p.y, p.z);
+    for (const glm::vec3& p : mesh.positions)
+        points.emplace_back(p.x, p.y, p.z);
     std::vector<openvdb::Vec3I> triangles;
     for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
         triangles.emplace_back(mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]);
@@ -38,8 +38,8 @@ DistanceCheck check_against_distance_field(const TestMesh& mesh, const GridDesc&
                 out.too_far += occupied && far;
                 if (bad && out.examples.size() < 5)
                     out.examples.push_back("voxel " + std::to_string(i) + "," + std::to_string(j) + "," +
-                                           std::to_string(k) + (occupied ? " occupied" : " empty") + ", centre " +
-                                           std::to_string(d) + " voxels from the surface");
+                                           std::to_string(k) + (occupied ? " occupied" : " empty") +
+                                           ", centre " + std::to_string(d) + " voxels from the surface");
             }
     return out;
 }

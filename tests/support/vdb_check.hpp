@@ -2,12 +2,12 @@
 // unsigned distance from each voxel centre to the mesh, computed independently by OpenVDB.
 #pragma once
 
+#include "support/mesh_gen.hpp"
+
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
-
-#include "support/mesh_gen.hpp"
 
 namespace gust::test {
 
@@ -15,7 +15,8 @@ namespace gust::test {
 struct DistanceCheck {
     std::size_t near_surface = 0; ///< voxel centres closer than 0.5 h to the surface
     std::size_t uncovered = 0;    ///< of those, voxels that are not occupied (must be 0)
-    std::size_t too_far = 0;      ///< occupied voxels whose centre is farther than sqrt(3)/2 h + 1e-3 h (must be 0)
+    std::size_t too_far =
+        0; ///< occupied voxels whose centre is farther than sqrt(3)/2 h + 1e-3 h (must be 0)
     std::vector<std::string> examples; ///< the first few offending voxels, for the failure message
 };
 

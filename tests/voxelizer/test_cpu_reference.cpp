@@ -461,7 +461,8 @@ TEST_P(CpuReferenceVsOpenVdb, referenceAgreesWithDistanceToSurface) {
     ASSERT_FALSE(voxels.empty());
 
     const test::DistanceCheck check = test::check_against_distance_field(mesh, grid, voxels);
-    for (const std::string& example : check.examples) ADD_FAILURE() << example;
+    for (const std::string& example : check.examples)
+        ADD_FAILURE() << example;
     EXPECT_EQ(check.uncovered, 0u);
     EXPECT_EQ(check.too_far, 0u);
     EXPECT_GT(check.near_surface, voxels.size() / 10);

@@ -1,22 +1,19 @@
 // The GPU paths against the CPU reference: equal sets, except voxels the surface touches within 1e-3 voxel.
+#include "support/gpu_env.hpp"
+#include "support/mesh_gen.hpp"
+#include "support/vdb_check.hpp"
+
 #include <algorithm>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <gust/scene/import.hpp>
+#include <gust/voxelizer/cpu_reference.hpp>
+#include <gust/voxelizer/voxelizer.hpp>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <tuple>
-
-#include <limits>
-
-#include <glm/gtc/matrix_transform.hpp>
-#include <gtest/gtest.h>
-
-#include <gust/scene/import.hpp>
-#include <gust/voxelizer/cpu_reference.hpp>
-#include <gust/voxelizer/voxelizer.hpp>
-
-#include "support/gpu_env.hpp"
-#include "support/mesh_gen.hpp"
-#include "support/vdb_check.hpp"
 
 namespace gust::test {
 namespace {
@@ -116,9 +113,9 @@ TEST_P(MatchesReference, exceptWithinToleranceOfTouching) {
     const VoxelDiff diff = diff_voxels(gpu, ref.voxels);
     const InstanceDesc cpu_inst{c.mesh.view(), glm::mat4(1.0f)};
     const auto bad = unexplained_differences(diff, {&cpu_inst, 1}, c.grid);
-    EXPECT_TRUE(bad.empty()) << bad.size() << " voxels differ by more than 1e-3 voxel (" << diff.missing.size()
-                             << " missing, " << diff.extra.size() << " extra, " << ref.voxels.size()
-                             << " in the reference)";
+    EXPECT_TRUE(bad.empty()) << bad.size() << " voxels differ by more than 1e-3 voxel ("
+                             << diff.missing.size() << " missing, " << diff.extra.size() << " extra, "
+                             << ref.voxels.size() << " in the reference)";
 }
 
 std::string param_name(const ::testing::TestParamInfo<Param>& info) {
@@ -126,17 +123,18 @@ std::string param_name(const ::testing::TestParamInfo<Param>& info) {
            to_string(std::get<2>(info.param));
 }
 
-INSTANTIATE_TEST_SUITE_P(Meshes, MatchesReference,
-                         ::testing::Combine(::testing::Values("bunny", "dragon_res3", "fox", "soup", "boxes",
-                                                              "huge", "outside"),
-                                            ::testing::Values(8u, 37u, 64u, 128u),
-                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
-                         param_name);
+INSTANTIATE_TEST_SUITE_P(
+    Meshes, MatchesReference,
+    ::testing::Combine(::testing::Values("bunny", "dragon_res3", "fox", "soup", "boxes", "huge", "outside"),
+                       ::testing::Values(8u, 37u, 64u, 128u),
+                       ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+    param_name);
 
 // The largest grid: grid-aligned boxes and plane sections spanning all 1024^2 columns.
 INSTANTIATE_TEST_SUITE_P(LargestGrid, MatchesReference,
                          ::testing::Combine(::testing::Values("boxes", "huge"), ::testing::Values(1024u),
-                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+                                            ::testing::Values(VoxelizeMethod::Raster,
+                                                              VoxelizeMethod::Compute)),
                          param_name);
 
 using DistanceParam = std::tuple<std::string, VoxelizeMethod>;
@@ -154,7 +152,8 @@ TEST_P(AgreesWithOpenVdb, occupiesEveryVoxelNearTheSurfaceAndNoneFarFromIt) {
     ASSERT_TRUE((*voxelizer)->voxelize({&inst, 1}, c.grid, method));
     const std::vector<std::uint32_t> voxels = sorted_unique(*(*voxelizer)->read_fragments());
     const DistanceCheck check = check_against_distance_field(c.mesh, c.grid, voxels);
-    for (const std::string& example : check.examples) ADD_FAILURE() << example;
+    for (const std::string& example : check.examples)
+        ADD_FAILURE() << example;
     EXPECT_EQ(check.uncovered, 0u);
     EXPECT_EQ(check.too_far, 0u);
     EXPECT_GT(check.near_surface, voxels.size() / 10);
@@ -162,7 +161,8 @@ TEST_P(AgreesWithOpenVdb, occupiesEveryVoxelNearTheSurfaceAndNoneFarFromIt) {
 
 INSTANTIATE_TEST_SUITE_P(Meshes, AgreesWithOpenVdb,
                          ::testing::Combine(::testing::Values("bunny", "dragon_res3", "soup"),
-                                            ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
+                                            ::testing::Values(VoxelizeMethod::Raster,
+                                                              VoxelizeMethod::Compute)),
                          [](const ::testing::TestParamInfo<DistanceParam>& p) {
                              return std::get<0>(p.param) + "_" + to_string(std::get<1>(p.param));
                          });
@@ -185,7 +185,8 @@ TEST_F(VoxelizerTest, tinyInitialCapacityStillYieldsTheFullSet) {
             const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
             auto stats = (*voxelizer)->voxelize({&inst, 1}, g, method);
             ASSERT_TRUE(stats) << stats.message();
-            EXPECT_EQ(stats->retries, capacity == 1u ? 1u : 0u) << to_string(method) << " " << stats->fragments;
+            EXPECT_EQ(stats->retries, capacity == 1u ? 1u : 0u)
+                << to_string(method) << " " << stats->fragments;
             EXPECT_GE(stats->capacity, stats->fragments);
             sets[capacity == 1u] = sorted_unique(*(*voxelizer)->read_fragments());
         }

@@ -1,20 +1,19 @@
-#include <gust/voxelizer/voxelizer.hpp>
+#include "voxelizer/voxelize_io.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <gust/voxelizer/voxelizer.hpp>
 #include <limits>
-
-#include "voxelizer/voxelize_io.h"
 
 namespace gust {
 
 namespace {
+#include "gust_shaders/voxelize_args_comp.h"
 #include "gust_shaders/voxelize_frag.h"
 #include "gust_shaders/voxelize_geom.h"
-#include "gust_shaders/voxelize_args_comp.h"
 #include "gust_shaders/voxelize_large_comp.h"
 #include "gust_shaders/voxelize_tri_comp.h"
 #include "gust_shaders/voxelize_vert.h"
@@ -30,7 +29,9 @@ constexpr std::uint64_t kFragmentsPerTriangleGuess = 6;
 /// Large-triangle work items allocated before the first pass (each is one tile of a large triangle).
 constexpr std::uint64_t kInitialLargeItems = 4096;
 
-template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) { return {a, N}; }
+template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) {
+    return {a, N};
+}
 
 glm::mat4 world_to_grid(const GridDesc& grid) {
     const float inv_h = 1.0f / grid.voxel_size;
@@ -43,9 +44,12 @@ glm::mat4 world_to_grid(const GridDesc& grid) {
 
 const char* to_string(VoxelizeMethod method) {
     switch (method) {
-    case VoxelizeMethod::Raster: return "raster";
-    case VoxelizeMethod::Compute: return "compute";
-    case VoxelizeMethod::Auto: return "auto";
+    case VoxelizeMethod::Raster:
+        return "raster";
+    case VoxelizeMethod::Compute:
+        return "compute";
+    case VoxelizeMethod::Auto:
+        return "auto";
     }
     return "unknown";
 }
@@ -183,7 +187,8 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
     auto positions = gpu::Buffer::create(ctx_, packed.size() * sizeof(float), gpu::MemoryUse::Device);
     if (!positions) return positions.status();
     if (Status s = gpu::upload(ctx_, *positions, packed.data(), packed.size() * sizeof(float)); !s) return s;
-    auto indices = gpu::Buffer::create(ctx_, mesh.index_count * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    auto indices =
+        gpu::Buffer::create(ctx_, mesh.index_count * sizeof(std::uint32_t), gpu::MemoryUse::Device);
     if (!indices) return indices.status();
     if (Status s = gpu::upload(ctx_, *indices, mesh.indices, mesh.index_count * sizeof(std::uint32_t)); !s)
         return s;
@@ -217,10 +222,12 @@ Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const G
             const auto start = std::chrono::steady_clock::now();
             auto stats = run({&inst, 1}, one, grid);
             if (!stats) return stats.status();
-            double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            double ms =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             if (!stats->ms.empty()) {
                 ms = 0.0;
-                for (const auto& pass : stats->ms) ms += pass.second;
+                for (const auto& pass : stats->ms)
+                    ms += pass.second;
             }
             if (m == VoxelizeMethod::Raster || ms < best_ms) {
                 best_ms = ms;
@@ -232,14 +239,17 @@ Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const G
     return {};
 }
 
-Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
-                                     const GridDesc& grid) {
+Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
+                                     std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
     VoxelizeStats stats;
-    for (const GpuInstance& inst : instances) stats.triangles += inst.mesh->triangles_;
+    for (const GpuInstance& inst : instances)
+        stats.triangles += inst.mesh->triangles_;
     // First guess so a one-shot call rarely redoes its pass: small triangles emit a few voxels each
     // (4.2 per triangle for the full dragon at 512^3). Big triangles still grow the list below.
     const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
-    if (Status s = ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * stats.triangles)); !s)
+    if (Status s =
+            ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * stats.triangles));
+        !s)
         return s;
     const glm::mat4 to_grid = world_to_grid(grid);
     const auto& vk = ctx_.vk();
@@ -256,7 +266,8 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
             profiler_.reset(cmd);
             vk.vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
             gpu::barrier(ctx_, cmd);
-            const bool any_raster = std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
+            const bool any_raster =
+                std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
             if (any_raster) {
                 profiler_.begin(cmd, "raster");
                 VkRenderingInfo rendering{VK_STRUCTURE_TYPE_RENDERING_INFO};
@@ -297,7 +308,8 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
                     push.first_triangle = first;
                     push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
                     compute_small_.bind(cmd, &push, sizeof(push));
-                    vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
+                    vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize,
+                                     1, 1);
                 }
                 gpu::barrier(ctx_, cmd);
                 compute_args_.bind(cmd, &push, sizeof(push));
@@ -319,9 +331,11 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
         if (counters.fragments <= capacity_ && !large_overflow) break;
         // Grow with headroom so that a scene growing slowly does not redo every frame.
         if (counters.fragments > capacity_)
-            if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s) return s;
+            if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s)
+                return s;
         if (large_overflow)
-            if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4); !s)
+            if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4);
+                !s)
                 return s;
         ++stats.retries;
     }
@@ -332,7 +346,8 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances, std
 
 Result<std::vector<std::uint32_t>> Voxelizer::read_fragments() const {
     std::vector<std::uint32_t> out(fragment_count_);
-    if (Status s = gpu::download(ctx_, fragments_, out.data(), out.size() * sizeof(std::uint32_t)); !s) return s;
+    if (Status s = gpu::download(ctx_, fragments_, out.data(), out.size() * sizeof(std::uint32_t)); !s)
+        return s;
     return out;
 }
 

@@ -4,7 +4,6 @@
 
 #include <cstddef>
 #include <cstdint>
-
 #include <gust/gpu/context.hpp>
 
 namespace gust::gpu {
@@ -19,10 +18,11 @@ enum class MemoryUse {
 /// A buffer with its own memory allocation. Move-only; destroys itself (the caller keeps the Context
 /// alive longer and makes sure the GPU no longer uses it).
 class Buffer {
-public:
+  public:
     Buffer() = default;
     /// Creates a buffer of `size` bytes (> 0). Storage, transfer and device-address usage are always added.
-    static Result<Buffer> create(Context& ctx, VkDeviceSize size, MemoryUse use, VkBufferUsageFlags extra_usage = 0);
+    static Result<Buffer> create(Context& ctx, VkDeviceSize size, MemoryUse use,
+                                 VkBufferUsageFlags extra_usage = 0);
     ~Buffer();
     Buffer(Buffer&& other) noexcept;
     Buffer& operator=(Buffer&& other) noexcept;
@@ -37,7 +37,7 @@ public:
     void* mapped() const { return mapped_; }
     explicit operator bool() const { return buffer_ != VK_NULL_HANDLE; }
 
-private:
+  private:
     Context* ctx_ = nullptr;
     VkBuffer buffer_ = VK_NULL_HANDLE;
     VkDeviceMemory memory_ = VK_NULL_HANDLE;

@@ -5,13 +5,12 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <gust/gpu/result.hpp>
+#include <gust/gpu/vk.hpp>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
-
-#include <gust/gpu/result.hpp>
-#include <gust/gpu/vk.hpp>
 
 namespace gust::gpu {
 
@@ -34,11 +33,11 @@ struct ContextDesc {
 
 /// What was chosen, for stats and `gust info`.
 struct DeviceInfo {
-    std::string name;            ///< VkPhysicalDeviceProperties::deviceName
-    std::string type;            ///< "discrete", "integrated", "virtual", "cpu" or "other"
+    std::string name; ///< VkPhysicalDeviceProperties::deviceName
+    std::string type; ///< "discrete", "integrated", "virtual", "cpu" or "other"
     std::uint32_t api_version = 0;
     std::uint32_t vendor_id = 0;
-    std::string driver;          ///< driver name and info
+    std::string driver;                      ///< driver name and info
     bool conservative_rasterization = false; ///< VK_EXT_conservative_rasterization enabled
     float timestamp_period_ns = 0.0f;        ///< 0 when the queue has no timestamps
     std::uint64_t max_storage_buffer_range = 0;
@@ -49,7 +48,7 @@ struct DeviceInfo {
 /// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
 /// (one thread records and submits at a time).
 class Context {
-public:
+  public:
     /// Creates an instance and picks a device per `desc`. Fails with a message naming what is missing.
     static Result<std::unique_ptr<Context>> create(const ContextDesc& desc);
     ~Context();
@@ -85,7 +84,7 @@ public:
     /// Internal: called by the debug messenger.
     void report(Severity severity, bool validation, const std::string& message);
 
-private:
+  private:
     Context() = default;
     Status init(const ContextDesc& desc);
     Status pick_device(const std::string& override_spec);

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <cstdint>
-
 #include <gust/gpu/buffer.hpp>
 
 namespace gust::gpu {
@@ -19,7 +18,7 @@ struct ImageDesc {
 /// A device-local image, its memory and a view of the whole image. Move-only; starts in
 /// VK_IMAGE_LAYOUT_UNDEFINED and tracks the layout set through transition().
 class Image {
-public:
+  public:
     Image() = default;
     /// Creates the image and its view; fails with a message when the format or size is unsupported.
     static Result<Image> create(Context& ctx, const ImageDesc& desc);
@@ -42,7 +41,7 @@ public:
     /// Records a copy of the image (TRANSFER_SRC_OPTIMAL) into `dst`, tightly packed.
     void copy_to(VkCommandBuffer cmd, const Buffer& dst) const;
 
-private:
+  private:
     Context* ctx_ = nullptr;
     VkImage image_ = VK_NULL_HANDLE;
     VkImageView view_ = VK_NULL_HANDLE;

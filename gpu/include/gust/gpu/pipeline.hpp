@@ -3,9 +3,8 @@
 #pragma once
 
 #include <cstdint>
-#include <span>
-
 #include <gust/gpu/context.hpp>
+#include <span>
 
 namespace gust::gpu {
 
@@ -21,7 +20,7 @@ struct GraphicsPipelineDesc {
 
 /// A pipeline and its layout. Move-only.
 class Pipeline {
-public:
+  public:
     Pipeline() = default;
     /// A compute pipeline with `push_constant_bytes` of push constants (entry point "main").
     static Result<Pipeline> compute(Context& ctx, std::span<const std::uint32_t> spirv,
@@ -39,7 +38,7 @@ public:
     VkPipeline handle() const { return pipeline_; }
     VkPipelineLayout layout() const { return layout_; }
 
-private:
+  private:
     Context* ctx_ = nullptr;
     VkPipeline pipeline_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;

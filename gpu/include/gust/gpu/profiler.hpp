@@ -2,17 +2,16 @@
 #pragma once
 
 #include <cstdint>
+#include <gust/gpu/context.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <gust/gpu/context.hpp>
 
 namespace gust::gpu {
 
 /// Records begin/end timestamps per named pass. One recording at a time; reuse with reset().
 class Profiler {
-public:
+  public:
     /// Up to `max_passes` passes per recording. A device without timestamps yields empty results.
     static Result<Profiler> create(Context& ctx, std::uint32_t max_passes = 32);
     Profiler() = default;
@@ -31,7 +30,7 @@ public:
     /// Milliseconds per pass, in recording order, once the commands have completed.
     std::vector<std::pair<std::string, double>> read() const;
 
-private:
+  private:
     Context* ctx_ = nullptr;
     VkQueryPool pool_ = VK_NULL_HANDLE;
     std::uint32_t capacity_ = 0;

@@ -9,7 +9,7 @@ namespace gust {
 
 /// Success, or failure with a human-readable message. Cheap to copy on success.
 class Status {
-public:
+  public:
     Status() = default;
     /// A failed status carrying `message` (the message should name the input and the reason).
     static Status failure(std::string message) {
@@ -23,14 +23,14 @@ public:
     /// Empty on success.
     const std::string& message() const { return message_; }
 
-private:
+  private:
     bool failed_ = false;
     std::string message_;
 };
 
 /// A value of type T, or a failure message.
 template <class T> class Result {
-public:
+  public:
     Result(T value) : value_(std::move(value)) {}
     Result(Status status) : status_(std::move(status)) {}
     static Result failure(std::string message) { return Result(Status::failure(std::move(message))); }
@@ -45,7 +45,7 @@ public:
     const T* operator->() const { return &*value_; }
     T& operator*() { return *value_; }
 
-private:
+  private:
     std::optional<T> value_;
     Status status_;
 };

@@ -10,86 +10,86 @@
 namespace gust::gpu {
 
 // Entry points loaded from vkGetInstanceProcAddr(VK_NULL_HANDLE, ...).
-#define GUST_VK_GLOBAL_FUNCTIONS(X)                                                                        \
-    X(vkCreateInstance)                                                                                    \
-    X(vkEnumerateInstanceLayerProperties)                                                                  \
-    X(vkEnumerateInstanceExtensionProperties)                                                              \
+#define GUST_VK_GLOBAL_FUNCTIONS(X)                                                                          \
+    X(vkCreateInstance)                                                                                      \
+    X(vkEnumerateInstanceLayerProperties)                                                                    \
+    X(vkEnumerateInstanceExtensionProperties)                                                                \
     X(vkEnumerateInstanceVersion)
 
 // Entry points loaded from vkGetInstanceProcAddr(instance, ...).
-#define GUST_VK_INSTANCE_FUNCTIONS(X)                                                                      \
-    X(vkDestroyInstance)                                                                                   \
-    X(vkEnumeratePhysicalDevices)                                                                          \
-    X(vkGetPhysicalDeviceProperties)                                                                       \
-    X(vkGetPhysicalDeviceProperties2)                                                                      \
-    X(vkGetPhysicalDeviceFeatures2)                                                                        \
-    X(vkGetPhysicalDeviceQueueFamilyProperties)                                                            \
-    X(vkGetPhysicalDeviceMemoryProperties)                                                                 \
-    X(vkEnumerateDeviceExtensionProperties)                                                                \
-    X(vkCreateDevice)                                                                                      \
+#define GUST_VK_INSTANCE_FUNCTIONS(X)                                                                        \
+    X(vkDestroyInstance)                                                                                     \
+    X(vkEnumeratePhysicalDevices)                                                                            \
+    X(vkGetPhysicalDeviceProperties)                                                                         \
+    X(vkGetPhysicalDeviceProperties2)                                                                        \
+    X(vkGetPhysicalDeviceFeatures2)                                                                          \
+    X(vkGetPhysicalDeviceQueueFamilyProperties)                                                              \
+    X(vkGetPhysicalDeviceMemoryProperties)                                                                   \
+    X(vkEnumerateDeviceExtensionProperties)                                                                  \
+    X(vkCreateDevice)                                                                                        \
     X(vkGetDeviceProcAddr)
 
 // Optional instance entry points (VK_EXT_debug_utils); null when the extension is off.
-#define GUST_VK_DEBUG_FUNCTIONS(X)                                                                         \
-    X(vkCreateDebugUtilsMessengerEXT)                                                                      \
+#define GUST_VK_DEBUG_FUNCTIONS(X)                                                                           \
+    X(vkCreateDebugUtilsMessengerEXT)                                                                        \
     X(vkDestroyDebugUtilsMessengerEXT)
 
 // Entry points loaded from vkGetDeviceProcAddr(device, ...).
-#define GUST_VK_DEVICE_FUNCTIONS(X)                                                                        \
-    X(vkDestroyDevice)                                                                                     \
-    X(vkGetDeviceQueue)                                                                                    \
-    X(vkDeviceWaitIdle)                                                                                    \
-    X(vkCreateBuffer)                                                                                      \
-    X(vkDestroyBuffer)                                                                                     \
-    X(vkGetBufferMemoryRequirements)                                                                       \
-    X(vkBindBufferMemory)                                                                                  \
-    X(vkGetBufferDeviceAddress)                                                                            \
-    X(vkAllocateMemory)                                                                                    \
-    X(vkFreeMemory)                                                                                        \
-    X(vkMapMemory)                                                                                         \
-    X(vkUnmapMemory)                                                                                       \
-    X(vkCreateImage)                                                                                       \
-    X(vkDestroyImage)                                                                                      \
-    X(vkGetImageMemoryRequirements)                                                                        \
-    X(vkBindImageMemory)                                                                                   \
-    X(vkCreateImageView)                                                                                   \
-    X(vkDestroyImageView)                                                                                  \
-    X(vkCmdCopyBufferToImage)                                                                              \
-    X(vkCmdCopyImageToBuffer)                                                                              \
-    X(vkCreateShaderModule)                                                                                \
-    X(vkDestroyShaderModule)                                                                               \
-    X(vkCreatePipelineLayout)                                                                              \
-    X(vkDestroyPipelineLayout)                                                                             \
-    X(vkCreateComputePipelines)                                                                            \
-    X(vkCreateGraphicsPipelines)                                                                           \
-    X(vkDestroyPipeline)                                                                                   \
-    X(vkCreateCommandPool)                                                                                 \
-    X(vkDestroyCommandPool)                                                                                \
-    X(vkAllocateCommandBuffers)                                                                            \
-    X(vkFreeCommandBuffers)                                                                                \
-    X(vkBeginCommandBuffer)                                                                                \
-    X(vkEndCommandBuffer)                                                                                  \
-    X(vkCreateFence)                                                                                       \
-    X(vkDestroyFence)                                                                                      \
-    X(vkResetFences)                                                                                       \
-    X(vkWaitForFences)                                                                                     \
-    X(vkQueueSubmit2)                                                                                      \
-    X(vkCreateQueryPool)                                                                                   \
-    X(vkDestroyQueryPool)                                                                                  \
-    X(vkGetQueryPoolResults)                                                                               \
-    X(vkCmdResetQueryPool)                                                                                 \
-    X(vkCmdWriteTimestamp2)                                                                                \
-    X(vkCmdBindPipeline)                                                                                   \
-    X(vkCmdPushConstants)                                                                                  \
-    X(vkCmdDispatch)                                                                                       \
-    X(vkCmdDispatchIndirect)                                                                               \
-    X(vkCmdPipelineBarrier2)                                                                               \
-    X(vkCmdFillBuffer)                                                                                     \
-    X(vkCmdCopyBuffer)                                                                                     \
-    X(vkCmdBeginRendering)                                                                                 \
-    X(vkCmdEndRendering)                                                                                   \
-    X(vkCmdSetViewport)                                                                                    \
-    X(vkCmdSetScissor)                                                                                     \
+#define GUST_VK_DEVICE_FUNCTIONS(X)                                                                          \
+    X(vkDestroyDevice)                                                                                       \
+    X(vkGetDeviceQueue)                                                                                      \
+    X(vkDeviceWaitIdle)                                                                                      \
+    X(vkCreateBuffer)                                                                                        \
+    X(vkDestroyBuffer)                                                                                       \
+    X(vkGetBufferMemoryRequirements)                                                                         \
+    X(vkBindBufferMemory)                                                                                    \
+    X(vkGetBufferDeviceAddress)                                                                              \
+    X(vkAllocateMemory)                                                                                      \
+    X(vkFreeMemory)                                                                                          \
+    X(vkMapMemory)                                                                                           \
+    X(vkUnmapMemory)                                                                                         \
+    X(vkCreateImage)                                                                                         \
+    X(vkDestroyImage)                                                                                        \
+    X(vkGetImageMemoryRequirements)                                                                          \
+    X(vkBindImageMemory)                                                                                     \
+    X(vkCreateImageView)                                                                                     \
+    X(vkDestroyImageView)                                                                                    \
+    X(vkCmdCopyBufferToImage)                                                                                \
+    X(vkCmdCopyImageToBuffer)                                                                                \
+    X(vkCreateShaderModule)                                                                                  \
+    X(vkDestroyShaderModule)                                                                                 \
+    X(vkCreatePipelineLayout)                                                                                \
+    X(vkDestroyPipelineLayout)                                                                               \
+    X(vkCreateComputePipelines)                                                                              \
+    X(vkCreateGraphicsPipelines)                                                                             \
+    X(vkDestroyPipeline)                                                                                     \
+    X(vkCreateCommandPool)                                                                                   \
+    X(vkDestroyCommandPool)                                                                                  \
+    X(vkAllocateCommandBuffers)                                                                              \
+    X(vkFreeCommandBuffers)                                                                                  \
+    X(vkBeginCommandBuffer)                                                                                  \
+    X(vkEndCommandBuffer)                                                                                    \
+    X(vkCreateFence)                                                                                         \
+    X(vkDestroyFence)                                                                                        \
+    X(vkResetFences)                                                                                         \
+    X(vkWaitForFences)                                                                                       \
+    X(vkQueueSubmit2)                                                                                        \
+    X(vkCreateQueryPool)                                                                                     \
+    X(vkDestroyQueryPool)                                                                                    \
+    X(vkGetQueryPoolResults)                                                                                 \
+    X(vkCmdResetQueryPool)                                                                                   \
+    X(vkCmdWriteTimestamp2)                                                                                  \
+    X(vkCmdBindPipeline)                                                                                     \
+    X(vkCmdPushConstants)                                                                                    \
+    X(vkCmdDispatch)                                                                                         \
+    X(vkCmdDispatchIndirect)                                                                                 \
+    X(vkCmdPipelineBarrier2)                                                                                 \
+    X(vkCmdFillBuffer)                                                                                       \
+    X(vkCmdCopyBuffer)                                                                                       \
+    X(vkCmdBeginRendering)                                                                                   \
+    X(vkCmdEndRendering)                                                                                     \
+    X(vkCmdSetViewport)                                                                                      \
+    X(vkCmdSetScissor)                                                                                       \
     X(vkCmdDraw)
 
 #define GUST_VK_DECLARE(name) PFN_##name name = nullptr;

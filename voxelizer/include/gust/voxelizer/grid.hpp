@@ -3,14 +3,13 @@
 
 #include <cstddef>
 #include <cstdint>
-
 #include <glm/glm.hpp>
 
 namespace gust {
 
 /// A cube of `res`^3 voxels. Voxel (i,j,k) is the closed box [origin + (i,j,k) h, origin + (i+1,j+1,k+1) h].
 struct GridDesc {
-    glm::vec3 origin{0.0f}; ///< world-space min corner, metres
+    glm::vec3 origin{0.0f};  ///< world-space min corner, metres
     float voxel_size = 1.0f; ///< h, metres, > 0
     std::uint32_t res = 64;  ///< voxels per axis, 8..1024
 };
@@ -30,14 +29,14 @@ inline constexpr glm::uvec3 unpack_voxel(std::uint32_t key) {
 
 /// A borrowed, strided triangle mesh (meshoptimizer style). Nothing is copied until a call needs it.
 struct MeshView {
-    const float* positions = nullptr;  ///< x,y,z floats of vertex 0; vertex v starts at byte v*stride
+    const float* positions = nullptr; ///< x,y,z floats of vertex 0; vertex v starts at byte v*stride
     std::size_t vertex_count = 0;
-    std::size_t position_stride = 12;  ///< bytes between consecutive vertices, >= 12
+    std::size_t position_stride = 12;       ///< bytes between consecutive vertices, >= 12
     const std::uint32_t* indices = nullptr; ///< three per triangle, each < vertex_count
-    std::size_t index_count = 0;       ///< multiple of 3
+    std::size_t index_count = 0;            ///< multiple of 3
     glm::vec3 position(std::size_t v) const {
         const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(positions) +
-                                                      v * position_stride);
+                                                       v * position_stride);
         return {p[0], p[1], p[2]};
     }
 };

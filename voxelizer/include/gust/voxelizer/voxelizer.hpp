@@ -2,17 +2,16 @@
 #pragma once
 
 #include <cstdint>
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/pipeline.hpp>
+#include <gust/gpu/profiler.hpp>
+#include <gust/voxelizer/grid.hpp>
 #include <map>
 #include <memory>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <gust/gpu/buffer.hpp>
-#include <gust/gpu/pipeline.hpp>
-#include <gust/gpu/profiler.hpp>
-#include <gust/voxelizer/grid.hpp>
 
 namespace gust {
 
@@ -30,11 +29,11 @@ bool parse_method(const std::string& text, VoxelizeMethod& out);
 
 /// A mesh uploaded to the device, validated once. Owned by the caller; outlives its use in calls.
 class GpuMesh {
-public:
+  public:
     std::uint32_t triangle_count() const { return triangles_; }
     std::uint32_t vertex_count() const { return vertices_; }
 
-private:
+  private:
     friend class Voxelizer;
     gpu::Buffer positions_; ///< float[3 * vertices]
     gpu::Buffer indices_;   ///< uint[3 * triangles]
@@ -57,18 +56,19 @@ struct VoxelizerDesc {
 
 /// What one voxelize() call did.
 struct VoxelizeStats {
-    std::uint64_t triangles = 0;  ///< triangles submitted
-    std::uint64_t rejected = 0;   ///< triangles with a non-finite vertex after the model transform
-    std::uint64_t fragments = 0;  ///< entries in the fragment list (a voxel appears once per triangle touching it)
-    std::uint32_t retries = 0;    ///< passes redone because the fragment list was too small
-    std::uint64_t capacity = 0;   ///< fragment slots after the call
+    std::uint64_t triangles = 0; ///< triangles submitted
+    std::uint64_t rejected = 0;  ///< triangles with a non-finite vertex after the model transform
+    std::uint64_t fragments =
+        0; ///< entries in the fragment list (a voxel appears once per triangle touching it)
+    std::uint32_t retries = 0;                      ///< passes redone because the fragment list was too small
+    std::uint64_t capacity = 0;                     ///< fragment slots after the call
     VoxelizeMethod method = VoxelizeMethod::Raster; ///< path used (Auto reports the last mesh's choice)
     std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
 };
 
 /// Owns the pipelines and the fragment list. One call at a time (thread-compatible).
 class Voxelizer {
-public:
+  public:
     /// Builds the pipelines on `ctx` (which must outlive the Voxelizer).
     static Result<std::unique_ptr<Voxelizer>> create(gpu::Context& ctx, const VoxelizerDesc& desc = {});
 
@@ -89,7 +89,7 @@ public:
     const gpu::Buffer& fragment_buffer() const { return fragments_; }
     std::uint64_t fragment_count() const { return fragment_count_; }
 
-private:
+  private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
     Status ensure_capacity(std::uint64_t fragments);
     Status ensure_large_list(std::uint64_t items);
