@@ -44,6 +44,7 @@ template <class T> class Result {
     T* operator->() { return &*value_; }
     const T* operator->() const { return &*value_; }
     T& operator*() { return *value_; }
+    const T& operator*() const { return *value_; }
 
   private:
     std::optional<T> value_;

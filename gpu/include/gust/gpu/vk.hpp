@@ -85,7 +85,8 @@ namespace gust::gpu {
     X(vkCmdDispatchIndirect)                                                                                 \
     X(vkCmdPipelineBarrier2)                                                                                 \
     X(vkCmdFillBuffer)                                                                                       \
-    X(vkCmdCopyBuffer)                                                                                       \
+    X(vkCmdCopyBuffer)                                                                                     \
+    X(vkCmdUpdateBuffer)                                                                                       \
     X(vkCmdBeginRendering)                                                                                   \
     X(vkCmdEndRendering)                                                                                     \
     X(vkCmdSetViewport)                                                                                      \

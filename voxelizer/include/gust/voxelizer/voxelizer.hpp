@@ -88,6 +88,11 @@ class Voxelizer {
     /// The device fragment list of the last call and its length, for passes that consume it on the GPU.
     const gpu::Buffer& fragment_buffer() const { return fragments_; }
     std::uint64_t fragment_count() const { return fragment_count_; }
+    /// Device address of the uint counting the last call's fragments (may exceed the capacity only
+    /// inside a call that then redoes its pass).
+    VkDeviceAddress fragment_count_address() const { return counters_.address(); }
+    /// Fragment slots of the current list.
+    std::uint64_t fragment_capacity() const { return capacity_; }
 
   private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}

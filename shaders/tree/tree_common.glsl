@@ -1,0 +1,33 @@
+// Buffers and helpers shared by the tree passes.
+#include "tree_io.h"
+
+layout(buffer_reference, scalar) buffer StateRef { TreeState s; };
+layout(buffer_reference, scalar) readonly buffer BindingsRef { TreeBindings b; };
+layout(buffer_reference, scalar) buffer NodesRef { uvec2 v[]; };
+layout(buffer_reference, scalar) buffer WordsRef { uint v[]; };
+layout(buffer_reference, scalar) buffer RecordsRef { BlockRecord v[]; };
+
+layout(push_constant, scalar) uniform Push { TreePush pc; };
+
+TreeBindings tb;
+
+/// Loads the bindings; every pass calls it first.
+void load_bindings() { tb = BindingsRef(pc.bindings).b; }
+
+StateRef state() { return StateRef(tb.state); }
+NodesRef nodes() { return NodesRef(tb.nodes); }
+WordsRef masks() { return WordsRef(tb.masks); }
+
+uint children_per_node() { return 1u << (3u * tb.log2_branching); }
+
+/// Linear thread index over a 2D grid of workgroups made by dispatch_for().
+uint thread_index() {
+    return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kTreeGroupSize + gl_LocalInvocationID.x;
+}
+
+uvec3 fragment_voxel(uint i) {
+    uint key = WordsRef(tb.fragments).v[i];
+    return uvec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u);
+}
+
+uint fragment_count() { return min(WordsRef(tb.fragment_count).v[0], tb.fragment_capacity); }

@@ -1,0 +1,26 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per fragment at the last level: sets its voxel's bit in the leaf's static or dynamic words, and
+// lists each leaf with dynamic bits once per frame so the next frame can clear them.
+#include "tree_common.glsl"
+
+layout(local_size_x = kTreeGroupSize) in;
+
+void main() {
+    load_bindings();
+    uint i = thread_index();
+    if (i >= state().s.fragments_dispatch.items) return;
+    uint node = tb.levels == 1u ? 0u : WordsRef(tb.frag_node).v[i];
+    if (node == kNoNode) return;
+    uint block = nodes().v[node].x;
+    if (block == 0u) return;
+    uint bit = child_slot(fragment_voxel(i), tb.levels - 1u, tb.levels, tb.log2_branching);
+    uint words = mask_words(tb.log2_branching);
+    uint base = block * mask_stride(tb.log2_branching);
+    uint layer = pc.pinned != 0u ? 0u : words;
+    atomicOr(masks().v[base + layer + bit / 32u], 1u << (bit % 32u));
+    if (pc.pinned != 0u) return;
+    if (atomicExchange(masks().v[base + 2u * words], pc.frame) == pc.frame) return;
+    uint slot = atomicAdd(state().s.leaves_next, 1u);
+    if (slot < tb.list_capacity) WordsRef(tb.leaves[pc.frame & 1u]).v[slot] = node;
+}

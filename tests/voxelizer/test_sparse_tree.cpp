@@ -1,0 +1,224 @@
+// The tree against from-scratch voxelization, frame after frame, for every branching factor.
+#include "support/gpu_env.hpp"
+#include "support/mesh_gen.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <gust/voxelizer/sparse_tree.hpp>
+#include <gust/voxelizer/voxelizer.hpp>
+#include <memory>
+#include <string>
+#include <tuple>
+
+namespace gust::test {
+namespace {
+
+std::vector<std::uint32_t> sorted_unique(std::vector<std::uint32_t> v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    return v;
+}
+
+/// A static box and a sphere that moves, voxelized on the GPU and fed to a tree.
+class Scene {
+  public:
+    Scene(gpu::Context& ctx, std::uint32_t res, const TreeDesc& tree_desc) {
+        grid.res = res;
+        grid.voxel_size = 1.0f / float(res);
+        wall = grid_aligned_boxes(grid, 1, 11);
+        ball = icosphere(2, glm::vec3(0.0f), 0.12f);
+        static_vox = std::move(Voxelizer::create(ctx).value());
+        dynamic_vox = std::move(Voxelizer::create(ctx).value());
+        wall_mesh = std::move(static_vox->upload(wall.view()).value());
+        ball_mesh = std::move(dynamic_vox->upload(ball.view()).value());
+        TreeDesc d = tree_desc;
+        d.res = res;
+        auto t = SparseTree::create(ctx, d);
+        EXPECT_TRUE(t) << t.message();
+        tree = std::move(t.value());
+    }
+
+    /// A path that repeats every 40 frames.
+    static glm::vec3 ball_centre(int frame) {
+        const float s = float(frame % 40) / 40.0f;
+        return {0.15f + 0.7f * s, 0.5f + 0.2f * std::sin(6.2831853f * s), 0.45f};
+    }
+
+    /// One frame; returns the tree stats and checks the leaves against the union of both fragment lists.
+    TreeStats frame(int n, bool rebuild_static, bool ball_present, bool check = true) {
+        const GpuInstance wall_inst{&wall_mesh, glm::mat4(1.0f)};
+        if (rebuild_static) {
+            EXPECT_TRUE(static_vox->voxelize({&wall_inst, 1}, grid, VoxelizeMethod::Compute));
+        }
+        const GpuInstance ball_inst{&ball_mesh, glm::translate(glm::mat4(1.0f), ball_centre(n))};
+        EXPECT_TRUE(
+            dynamic_vox->voxelize({&ball_inst, ball_present ? 1u : 0u}, grid, VoxelizeMethod::Compute));
+        const FragmentSource st{static_vox->fragment_buffer().address(), static_vox->fragment_count_address(),
+                                static_vox->fragment_capacity()};
+        const FragmentSource dy{dynamic_vox->fragment_buffer().address(),
+                                dynamic_vox->fragment_count_address(), dynamic_vox->fragment_capacity()};
+        auto stats = tree->update(rebuild_static ? &st : nullptr, &dy);
+        EXPECT_TRUE(stats) << stats.message();
+        if (check) {
+            std::vector<std::uint32_t> expected = *static_vox->read_fragments();
+            const auto dyn = *dynamic_vox->read_fragments();
+            expected.insert(expected.end(), dyn.begin(), dyn.end());
+            expected = sorted_unique(expected);
+            const auto leaves = tree->leaf_voxels();
+            EXPECT_TRUE(leaves);
+            EXPECT_EQ(*leaves, expected) << "frame " << n;
+        }
+        return stats ? *stats : TreeStats{};
+    }
+
+    GridDesc grid;
+    TestMesh wall, ball;
+    std::unique_ptr<Voxelizer> static_vox, dynamic_vox;
+    GpuMesh wall_mesh, ball_mesh;
+    std::unique_ptr<SparseTree> tree;
+};
+
+using Param = std::tuple<std::uint32_t, std::uint32_t>; // branching, res
+
+class TreeMatchesVoxelization : public GpuTestWithParam<Param> {};
+
+TEST_P(TreeMatchesVoxelization, afterEveryFrameOfAMovingObjectBesideStaticGeometry) {
+    const auto [branching, res] = GetParam();
+    TreeDesc desc;
+    desc.branching = branching;
+    desc.hysteresis = 2;
+    Scene scene(ctx(), res, desc);
+    for (int n = 0; n < 12; ++n) {
+        const TreeStats stats = scene.frame(n, n == 0, true);
+        EXPECT_EQ(stats.exhausted, 0u);
+        EXPECT_GT(stats.nodes, 1u);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Branching, TreeMatchesVoxelization,
+                         ::testing::Values(Param{2, 32}, Param{4, 64}, Param{8, 64}),
+                         [](const ::testing::TestParamInfo<Param>& p) {
+                             // Appended piecewise: GCC 12 warns (-Wrestrict) on the chained operator+.
+                             std::string name = "b";
+                             name += std::to_string(std::get<0>(p.param));
+                             name += "_res";
+                             name += std::to_string(std::get<1>(p.param));
+                             return name;
+                         });
+
+using TreeTest = GpuTest;
+
+TEST_F(TreeTest, rejectsBadShapes) {
+    TreeDesc d;
+    d.branching = 3;
+    EXPECT_FALSE(SparseTree::create(ctx(), d));
+    d.branching = 4;
+    d.res = 128;
+    auto r = SparseTree::create(ctx(), d);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.message().find("power"), std::string::npos);
+    d.branching = 2;
+    d.res = 2048;
+    EXPECT_FALSE(SparseTree::create(ctx(), d));
+}
+
+TEST_F(TreeTest, objectThatLeavesReturnsThePoolToItsBaseline) {
+    TreeDesc desc;
+    desc.branching = 4;
+    desc.hysteresis = 0;
+    Scene scene(ctx(), 64, desc);
+    const TreeStats baseline = scene.frame(0, true, false);
+    TreeStats with_ball;
+    for (int n = 1; n < 6; ++n)
+        with_ball = scene.frame(n, false, true);
+    EXPECT_GT(with_ball.pool_bytes, baseline.pool_bytes);
+    const TreeStats after = scene.frame(6, false, false);
+    EXPECT_EQ(after.pool_bytes, baseline.pool_bytes);
+    EXPECT_EQ(after.nodes, baseline.nodes);
+    EXPECT_EQ(after.nodes_per_level, baseline.nodes_per_level);
+    EXPECT_GT(after.coarsened, 0u);
+}
+
+TEST_F(TreeTest, hysteresisKeepsBlocksForKFramesThenCoarsens) {
+    TreeDesc desc;
+    desc.branching = 2;
+    desc.hysteresis = 3;
+    Scene scene(ctx(), 32, desc);
+    const TreeStats baseline = scene.frame(0, true, false);
+    // The ball stands still for two updates (2 and 3), then leaves; its blocks were last reached in
+    // update 3 and stay while at most K = 3 updates have passed since.
+    scene.frame(1, false, true);
+    const TreeStats present = scene.frame(1, false, true);
+    for (int n = 3; n <= 5; ++n) {
+        const TreeStats s = scene.frame(n, false, false);
+        EXPECT_EQ(s.pool_bytes, present.pool_bytes) << "update " << s.frame;
+        EXPECT_EQ(s.coarsened, 0u);
+    }
+    const TreeStats gone = scene.frame(6, false, false);
+    EXPECT_EQ(gone.pool_bytes, baseline.pool_bytes);
+    EXPECT_GT(gone.coarsened, 0u);
+}
+
+TEST_F(TreeTest, manyFramesOfMotionDoNotGrowThePool) {
+    TreeDesc desc;
+    desc.branching = 4;
+    desc.hysteresis = 1;
+    Scene scene(ctx(), 16, desc);
+    scene.frame(0, true, true, false);
+    std::uint32_t node_mark = 0, mask_mark = 0;
+    for (int n = 1; n < 2000; ++n) {
+        const TreeStats s = scene.frame(n, false, true, n % 500 == 0);
+        if (n == 80) {
+            // Two full periods of the path: every state the pool goes through has occurred once.
+            node_mark = s.node_blocks_used;
+            mask_mark = s.mask_blocks_used;
+        }
+        if (n > 80) {
+            ASSERT_LE(s.node_blocks_used, node_mark) << "frame " << n;
+            ASSERT_LE(s.mask_blocks_used, mask_mark) << "frame " << n;
+        }
+    }
+}
+
+TEST_F(TreeTest, poolTooSmallGivesAValidPartialTreeThenTheFullOneOnceGrown) {
+    TreeDesc desc;
+    desc.branching = 2;
+    desc.node_blocks = 6;
+    desc.mask_blocks = 4;
+    Scene scene(ctx(), 32, desc);
+    const TreeStats partial = scene.frame(0, true, true, false);
+    EXPECT_GT(partial.exhausted, 0u);
+    std::vector<std::uint32_t> full = *scene.static_vox->read_fragments();
+    const auto dyn = *scene.dynamic_vox->read_fragments();
+    full.insert(full.end(), dyn.begin(), dyn.end());
+    full = sorted_unique(full);
+    const auto leaves = *scene.tree->leaf_voxels();
+    EXPECT_LT(leaves.size(), full.size());
+    EXPECT_TRUE(std::includes(full.begin(), full.end(), leaves.begin(), leaves.end()));
+    ASSERT_TRUE(scene.tree->reserve(4096, 8192));
+    const TreeStats grown = scene.frame(0, true, true);
+    EXPECT_EQ(grown.exhausted, 0u);
+}
+
+TEST_F(TreeTest, sameSequenceTwiceGivesIdenticalTrees) {
+    TreeDesc desc;
+    desc.branching = 8;
+    desc.hysteresis = 2;
+    std::vector<std::vector<std::uint32_t>> runs[2];
+    std::vector<std::uint64_t> nodes[2];
+    for (int run = 0; run < 2; ++run) {
+        Scene scene(ctx(), 64, desc);
+        for (int n = 0; n < 8; ++n) {
+            const TreeStats s = scene.frame(n, n == 0, true, false);
+            nodes[run].push_back(s.nodes);
+            runs[run].push_back(*scene.tree->leaf_voxels());
+        }
+    }
+    EXPECT_EQ(runs[0], runs[1]);
+    EXPECT_EQ(nodes[0], nodes[1]);
+}
+
+} // namespace
+} // namespace gust::test

@@ -1,0 +1,91 @@
+// A sparse voxel tree of branching b per axis, kept on the GPU from frame to frame: refined where
+// fragments arrive, coarsened where they have been gone for K frames (DESIGN.md "Sparse tree").
+#pragma once
+
+#include <cstdint>
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/pipeline.hpp>
+#include <gust/voxelizer/grid.hpp>
+#include <memory>
+#include <vector>
+
+namespace gust {
+
+/// Shape and initial capacity of a tree.
+struct TreeDesc {
+    std::uint32_t branching = 4;      ///< children per axis: 2 (octree), 4 or 8
+    std::uint32_t res = 256;          ///< voxels per axis, a power of `branching` in [8, 1024]
+    std::uint32_t node_blocks = 1024; ///< initial node-pool capacity, in blocks of branching^3 nodes
+    std::uint32_t mask_blocks = 4096; ///< initial leaf-mask capacity, in blocks (one per leaf brick)
+    std::uint32_t hysteresis = 8; ///< K: blocks whose owner went more than K frames unreached are coarsened
+};
+
+/// A fragment list on the device, as the voxelizer leaves it.
+struct FragmentSource {
+    VkDeviceAddress keys = 0;   ///< uint[capacity] packed voxel keys
+    VkDeviceAddress count = 0;  ///< uint fragment count (clamped to capacity when read)
+    std::uint64_t capacity = 0; ///< slots at `keys`
+};
+
+/// What one update did, and what the tree holds after it.
+struct TreeStats {
+    std::uint32_t frame = 0;
+    std::vector<std::uint64_t> nodes_per_level; ///< allocated nodes at levels 1..depth-1, then leaf bricks
+    std::uint64_t nodes = 0;                    ///< sum of nodes_per_level plus the root
+    std::uint32_t refined = 0;                  ///< blocks handed out this update
+    std::uint32_t coarsened = 0;                ///< blocks taken back this update
+    std::uint32_t exhausted = 0;        ///< refinements refused because a pool was full (tree is partial)
+    std::uint32_t free_node_blocks = 0; ///< node blocks on the free list
+    std::uint32_t free_mask_blocks = 0; ///< mask blocks on the free list
+    std::uint32_t node_blocks_used = 0; ///< high-water mark of the node pool (live + free blocks)
+    std::uint32_t mask_blocks_used =
+        0;                            ///< high-water mark of the mask pool (live + free blocks, + 1 reserved)
+    std::uint64_t pool_bytes = 0;     ///< bytes of live node and mask blocks
+    std::uint64_t capacity_bytes = 0; ///< bytes the pools hold
+};
+
+/// The tree. Thread-compatible; the Context must outlive it.
+class SparseTree {
+  public:
+    /// Fails on a branching other than 2, 4, 8 or a res that is not a power of it in [8, 1024].
+    static Result<std::unique_ptr<SparseTree>> create(gpu::Context& ctx, const TreeDesc& desc);
+
+    /// One frame: when `rebuild_static` is given, the tree is emptied and those fragments are inserted
+    /// as static (never coarsened); then `dynamic` fragments (may be null) are inserted, last frame's
+    /// dynamic occupancy is replaced, and stale blocks are coarsened. Blocks until the GPU is done.
+    Result<TreeStats> update(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
+
+    /// Grows the pools (never shrinks); contents are kept. Takes effect from the next update.
+    Status reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks);
+
+    /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree).
+    Result<std::vector<std::uint32_t>> leaf_voxels() const;
+
+    std::uint32_t depth() const { return levels_; }
+    std::uint32_t branching() const { return 1u << log2_b_; }
+    std::uint32_t node_capacity() const { return node_blocks_; }
+    std::uint32_t mask_capacity() const { return mask_blocks_; }
+
+  private:
+    explicit SparseTree(gpu::Context& ctx) : ctx_(ctx) {}
+    Status allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep);
+    Status ensure_scratch(std::uint64_t fragments);
+    Status write_bindings(gpu::Buffer& bindings, const FragmentSource& source);
+    void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned);
+    Result<TreeStats> read_stats() const;
+
+    gpu::Context& ctx_;
+    std::uint32_t log2_b_ = 2;
+    std::uint32_t levels_ = 1;
+    std::uint32_t hysteresis_ = 8;
+    std::uint32_t node_blocks_ = 0;
+    std::uint32_t mask_blocks_ = 0;
+    std::uint32_t frame_ = 0;
+    std::uint64_t scratch_capacity_ = 0;
+    gpu::Pipeline begin_, fragments_, clear_, visit_, plan_, alloc_, advance_, leaf_, coarsen_;
+    gpu::Buffer state_, nodes_, masks_, node_free_, mask_free_;
+    gpu::Buffer frag_node_, requests_, records_[2], leaves_[2];
+    gpu::Buffer static_bindings_, dynamic_bindings_;
+};
+
+} // namespace gust

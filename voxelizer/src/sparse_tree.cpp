@@ -1,0 +1,318 @@
+#include "tree/tree_io.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstring>
+#include <functional>
+#include <gust/voxelizer/sparse_tree.hpp>
+
+namespace gust {
+
+namespace {
+#include "gust_shaders/tree_advance_comp.h"
+#include "gust_shaders/tree_alloc_comp.h"
+#include "gust_shaders/tree_begin_comp.h"
+#include "gust_shaders/tree_clear_comp.h"
+#include "gust_shaders/tree_coarsen_comp.h"
+#include "gust_shaders/tree_fragments_comp.h"
+#include "gust_shaders/tree_leaf_comp.h"
+#include "gust_shaders/tree_plan_comp.h"
+#include "gust_shaders/tree_visit_comp.h"
+
+using shaderio::BlockRecord;
+using shaderio::kMaxLevels;
+using shaderio::TreeBindings;
+using shaderio::TreePush;
+using shaderio::TreeState;
+
+template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) {
+    return {a, N};
+}
+
+/// Scratch lists never shrink below this many entries.
+constexpr std::uint64_t kMinScratch = 1024;
+
+} // namespace
+
+Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const TreeDesc& desc) {
+    std::uint32_t log2_b = 0;
+    switch (desc.branching) {
+    case 2:
+        log2_b = 1;
+        break;
+    case 4:
+        log2_b = 2;
+        break;
+    case 8:
+        log2_b = 3;
+        break;
+    default:
+        return Result<std::unique_ptr<SparseTree>>::failure("branching must be 2, 4 or 8, got " +
+                                                            std::to_string(desc.branching));
+    }
+    std::uint32_t levels = 0;
+    std::uint32_t size = 1;
+    while (size < desc.res && levels < kMaxLevels) {
+        size <<= log2_b;
+        ++levels;
+    }
+    if (desc.res < kMinRes || desc.res > kMaxRes || size != desc.res)
+        return Result<std::unique_ptr<SparseTree>>::failure(
+            "tree resolution " + std::to_string(desc.res) + " must be a power of the branching factor " +
+            std::to_string(desc.branching) + " in [" + std::to_string(kMinRes) + ", " +
+            std::to_string(kMaxRes) + "]");
+    if (desc.node_blocks < 1 || desc.mask_blocks < 1)
+        return Result<std::unique_ptr<SparseTree>>::failure("pool capacities must be at least one block");
+
+    std::unique_ptr<SparseTree> tree(new SparseTree(ctx));
+    tree->log2_b_ = log2_b;
+    tree->levels_ = levels;
+    tree->hysteresis_ = desc.hysteresis;
+    struct Stage {
+        gpu::Pipeline* pipeline;
+        std::span<const std::uint32_t> code;
+    };
+    const Stage stages[] = {
+        {&tree->begin_, words(tree_begin_comp)},     {&tree->fragments_, words(tree_fragments_comp)},
+        {&tree->clear_, words(tree_clear_comp)},     {&tree->visit_, words(tree_visit_comp)},
+        {&tree->plan_, words(tree_plan_comp)},       {&tree->alloc_, words(tree_alloc_comp)},
+        {&tree->advance_, words(tree_advance_comp)}, {&tree->leaf_, words(tree_leaf_comp)},
+        {&tree->coarsen_, words(tree_coarsen_comp)}};
+    for (const Stage& stage : stages) {
+        auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(TreePush));
+        if (!pipeline) return pipeline.status();
+        *stage.pipeline = std::move(*pipeline);
+    }
+    auto state = gpu::Buffer::create(ctx, sizeof(TreeState), gpu::MemoryUse::Readback,
+                                     VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+    if (!state) return state.status();
+    tree->state_ = std::move(*state);
+    for (gpu::Buffer* bindings : {&tree->static_bindings_, &tree->dynamic_bindings_}) {
+        auto b = gpu::Buffer::create(ctx, sizeof(TreeBindings), gpu::MemoryUse::Upload);
+        if (!b) return b.status();
+        *bindings = std::move(*b);
+    }
+    if (Status s = tree->allocate_pools(desc.node_blocks, desc.mask_blocks, false); !s) return s;
+    if (Status s = tree->ensure_scratch(kMinScratch); !s) return s;
+    TreeState empty{};
+    empty.node_blocks_used = 1;
+    empty.mask_blocks_used = 1;
+    std::memcpy(tree->state_.mapped(), &empty, sizeof(empty));
+    Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+        ctx.vk().vkCmdFillBuffer(cmd, tree->nodes_.handle(), 0, VK_WHOLE_SIZE, 0);
+    });
+    if (!cleared) return cleared;
+    return tree;
+}
+
+Status SparseTree::allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep) {
+    const std::uint64_t children = 1ull << (3 * log2_b_);
+    const std::uint64_t stride = shaderio::mask_stride(log2_b_);
+    const std::uint64_t list = std::uint64_t(node_blocks) + mask_blocks;
+    struct Want {
+        gpu::Buffer* buffer;
+        VkDeviceSize bytes;
+    };
+    const Want wants[] = {{&nodes_, node_blocks * children * sizeof(glm::uvec2)},
+                          {&masks_, mask_blocks * stride * sizeof(std::uint32_t)},
+                          {&node_free_, node_blocks * sizeof(std::uint32_t)},
+                          {&mask_free_, mask_blocks * sizeof(std::uint32_t)},
+                          {&records_[0], list * sizeof(BlockRecord)},
+                          {&records_[1], list * sizeof(BlockRecord)},
+                          {&leaves_[0], list * sizeof(std::uint32_t)},
+                          {&leaves_[1], list * sizeof(std::uint32_t)}};
+    std::vector<gpu::Buffer> fresh;
+    for (const Want& want : wants) {
+        auto b = gpu::Buffer::create(ctx_, want.bytes, gpu::MemoryUse::Device);
+        if (!b) return b.status();
+        fresh.push_back(std::move(*b));
+    }
+    if (keep) {
+        Status copied = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+            for (std::size_t i = 0; i < fresh.size(); ++i) {
+                const VkBufferCopy region{0, 0, wants[i].buffer->size()};
+                ctx_.vk().vkCmdCopyBuffer(cmd, wants[i].buffer->handle(), fresh[i].handle(), 1, &region);
+            }
+        });
+        if (!copied) return copied;
+    }
+    for (std::size_t i = 0; i < fresh.size(); ++i)
+        *wants[i].buffer = std::move(fresh[i]);
+    node_blocks_ = node_blocks;
+    mask_blocks_ = mask_blocks;
+    return {};
+}
+
+Status SparseTree::reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks) {
+    return allocate_pools(std::max(node_blocks, node_blocks_), std::max(mask_blocks, mask_blocks_), true);
+}
+
+Status SparseTree::ensure_scratch(std::uint64_t fragments) {
+    if (fragments <= scratch_capacity_) return {};
+    const std::uint64_t capacity = std::max(fragments, kMinScratch);
+    for (gpu::Buffer* b : {&frag_node_, &requests_}) {
+        auto buffer = gpu::Buffer::create(ctx_, capacity * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+        if (!buffer) return buffer.status();
+        *b = std::move(*buffer);
+    }
+    scratch_capacity_ = capacity;
+    return {};
+}
+
+Status SparseTree::write_bindings(gpu::Buffer& bindings, const FragmentSource& source) {
+    TreeBindings b{};
+    b.state = state_.address();
+    b.nodes = nodes_.address();
+    b.masks = masks_.address();
+    b.node_free = node_free_.address();
+    b.mask_free = mask_free_.address();
+    b.fragments = source.keys;
+    b.fragment_count = source.count;
+    b.frag_node = frag_node_.address();
+    b.request_list = requests_.address();
+    b.records[0] = records_[0].address();
+    b.records[1] = records_[1].address();
+    b.leaves[0] = leaves_[0].address();
+    b.leaves[1] = leaves_[1].address();
+    b.fragment_capacity = std::uint32_t(std::min<std::uint64_t>(source.capacity, scratch_capacity_));
+    b.node_capacity = node_blocks_;
+    b.mask_capacity = mask_blocks_;
+    b.list_capacity = node_blocks_ + mask_blocks_;
+    b.log2_branching = log2_b_;
+    b.levels = levels_;
+    b.hysteresis = hysteresis_;
+    return gpu::upload(ctx_, bindings, &b, sizeof(b));
+}
+
+void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned) {
+    const auto& vk = ctx_.vk();
+    TreePush push{bindings.address(), frame_, 0, pinned ? 1u : 0u, 0};
+    auto once = [&](const gpu::Pipeline& p) {
+        p.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatch(cmd, 1, 1, 1);
+        gpu::barrier(ctx_, cmd);
+    };
+    auto indirect = [&](const gpu::Pipeline& p, std::size_t offset) {
+        p.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offset);
+        gpu::barrier(ctx_, cmd);
+    };
+    once(fragments_);
+    for (std::uint32_t level = 0; level < levels_; ++level) {
+        push.level = level;
+        indirect(visit_, offsetof(TreeState, fragments_dispatch));
+        once(plan_);
+        indirect(alloc_, offsetof(TreeState, requests_dispatch));
+        if (level + 1 < levels_) indirect(advance_, offsetof(TreeState, fragments_dispatch));
+    }
+    indirect(leaf_, offsetof(TreeState, fragments_dispatch));
+}
+
+Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
+    std::uint64_t needed = 0;
+    for (const FragmentSource* s : {rebuild_static, dynamic})
+        if (s) needed = std::max(needed, s->capacity);
+    if (Status s = ensure_scratch(needed); !s) return s;
+    if (rebuild_static)
+        if (Status s = write_bindings(static_bindings_, *rebuild_static); !s) return s;
+    const FragmentSource none{};
+    if (Status s = write_bindings(dynamic_bindings_, dynamic ? *dynamic : none); !s) return s;
+    ++frame_;
+
+    const auto& vk = ctx_.vk();
+    Status done = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        if (rebuild_static) {
+            TreeState empty{};
+            empty.node_blocks_used = 1;
+            empty.mask_blocks_used = 1;
+            vk.vkCmdUpdateBuffer(cmd, state_.handle(), 0, sizeof(empty), &empty);
+            vk.vkCmdFillBuffer(cmd, nodes_.handle(), 0, (1ull << (3 * log2_b_)) * sizeof(glm::uvec2), 0);
+            gpu::barrier(ctx_, cmd);
+        }
+        TreePush push{dynamic_bindings_.address(), frame_, 0, 0, 0};
+        begin_.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatch(cmd, 1, 1, 1);
+        gpu::barrier(ctx_, cmd);
+        clear_.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
+        gpu::barrier(ctx_, cmd);
+        if (rebuild_static) record_insert(cmd, static_bindings_, true);
+        if (dynamic) record_insert(cmd, dynamic_bindings_, false);
+        coarsen_.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
+        gpu::barrier(ctx_, cmd);
+    });
+    if (!done) return done;
+    return read_stats();
+}
+
+Result<TreeStats> SparseTree::read_stats() const {
+    TreeState st{};
+    std::memcpy(&st, state_.mapped(), sizeof(st));
+    TreeStats out;
+    out.frame = frame_;
+    const std::uint64_t children = 1ull << (3 * log2_b_);
+    const std::uint64_t stride = shaderio::mask_stride(log2_b_);
+    out.nodes = 1;
+    for (std::uint32_t level = 0; level < levels_; ++level) {
+        const bool leaf = level + 1 == levels_;
+        const std::uint64_t count = leaf ? st.blocks_per_level[level] : st.blocks_per_level[level] * children;
+        out.nodes_per_level.push_back(count);
+        if (!leaf) out.nodes += count;
+    }
+    out.refined = st.refined;
+    out.coarsened = st.coarsened;
+    out.exhausted = st.exhausted;
+    out.free_node_blocks = st.node_free_top;
+    out.free_mask_blocks = st.mask_free_top;
+    out.node_blocks_used = st.node_blocks_used;
+    out.mask_blocks_used = st.mask_blocks_used;
+    const std::uint64_t live_nodes = st.node_blocks_used - st.node_free_top;
+    const std::uint64_t live_masks = st.mask_blocks_used - 1 - st.mask_free_top;
+    out.pool_bytes = live_nodes * children * sizeof(glm::uvec2) + live_masks * stride * sizeof(std::uint32_t);
+    out.capacity_bytes = nodes_.size() + masks_.size();
+    return out;
+}
+
+Result<std::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
+    TreeState st{};
+    std::memcpy(&st, state_.mapped(), sizeof(st));
+    const std::uint32_t children = 1u << (3 * log2_b_);
+    const std::uint32_t stride = shaderio::mask_stride(log2_b_);
+    const std::uint32_t words = shaderio::mask_words(log2_b_);
+    std::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) * children);
+    std::vector<std::uint32_t> masks(std::size_t(st.mask_blocks_used) * stride);
+    if (Status s = gpu::download(ctx_, nodes_, nodes.data(), nodes.size() * sizeof(glm::uvec2)); !s) return s;
+    if (Status s = gpu::download(ctx_, masks_, masks.data(), masks.size() * sizeof(std::uint32_t)); !s)
+        return s;
+
+    const std::uint32_t b = 1u << log2_b_;
+    const auto decode = [&](std::uint32_t slot) {
+        return glm::uvec3(slot & (b - 1), (slot >> log2_b_) & (b - 1), slot >> (2 * log2_b_));
+    };
+    std::vector<std::uint32_t> out;
+    std::function<void(std::uint32_t, std::uint32_t, glm::uvec3, std::uint32_t)> walk =
+        [&](std::uint32_t node, std::uint32_t level, glm::uvec3 origin, std::uint32_t size) {
+            const std::uint32_t block = nodes[node].x;
+            if (block == 0) return;
+            if (level + 1 == levels_) {
+                if (block >= st.mask_blocks_used) return;
+                const std::uint32_t* m = &masks[std::size_t(block) * stride];
+                for (std::uint32_t bit = 0; bit < children; ++bit)
+                    if (((m[bit / 32] | m[words + bit / 32]) >> (bit % 32)) & 1u) {
+                        const glm::uvec3 v = origin + decode(bit);
+                        out.push_back(pack_voxel(v.x, v.y, v.z));
+                    }
+                return;
+            }
+            if (block >= st.node_blocks_used) return;
+            const std::uint32_t child_size = size >> log2_b_;
+            for (std::uint32_t c = 0; c < children; ++c)
+                walk(block * children + c, level + 1, origin + decode(c) * child_size, child_size);
+        };
+    walk(0, 0, glm::uvec3(0), 1u << (log2_b_ * levels_));
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+} // namespace gust
