@@ -9,6 +9,9 @@ layout(location = 1) flat in vec3 in_b;
 layout(location = 2) flat in vec3 in_c;
 layout(location = 3) flat in uint in_axis;
 layout(location = 4) flat in vec4 in_clip;
+layout(location = 5) flat in vec3 in_va;
+layout(location = 6) flat in vec3 in_vb;
+layout(location = 7) flat in vec3 in_vc;
 
 void main() {
     vec2 centre = gl_FragCoord.xy;
@@ -21,6 +24,9 @@ void main() {
     s.w_min = min(in_a.z, min(in_b.z, in_c.z));
     s.w_max = max(in_a.z, max(in_b.z, in_c.z));
     s.axis = in_axis;
+    s.va = in_va;
+    s.vb = in_vb;
+    s.vc = in_vc;
     voxelize_column(s, int(floor(centre.x)), int(floor(centre.y)));
     flush_voxels();
 }

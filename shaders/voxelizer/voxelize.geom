@@ -14,6 +14,9 @@ layout(location = 1) flat out vec3 out_b;
 layout(location = 2) flat out vec3 out_c;
 layout(location = 3) flat out uint out_axis;
 layout(location = 4) flat out vec4 out_clip;
+layout(location = 5) flat out vec3 out_va;
+layout(location = 6) flat out vec3 out_vb;
+layout(location = 7) flat out vec3 out_vc;
 
 // Half a pixel plus a little, so centres exactly on a dilated edge are never lost to the fill rule.
 const float kDilation = 0.5 + 1e-3;
@@ -24,6 +27,9 @@ void emit(vec2 p, Setup s, vec4 clip) {
     out_c = s.c;
     out_axis = s.axis;
     out_clip = clip;
+    out_va = s.va;
+    out_vb = s.vb;
+    out_vc = s.vc;
     gl_Position = vec4(p / float(pc.res) * 2.0 - 1.0, 0.5, 1.0);
     EmitVertex();
 }
@@ -36,6 +42,7 @@ void main() {
     }
     Setup s;
     if (!setup_triangle(g0, g1, g2, s)) return;
+    setup_velocities(uint(gl_PrimitiveIDIn), s);
 
     vec2 p[3] = vec2[3](s.a.xy, s.b.xy, s.c.xy);
     vec2 lo = min(p[0], min(p[1], p[2]));

@@ -2,20 +2,37 @@
 #include "tri_box.h"
 #include "voxelize_io.h"
 
+layout(buffer_reference, scalar) readonly buffer InstanceRef { VoxelizeInstance i; };
 layout(buffer_reference, scalar) readonly buffer Positions { float v[]; };
 layout(buffer_reference, scalar) readonly buffer Indices { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Fragments { uint v[]; };
+layout(buffer_reference, scalar) writeonly buffer Velocities { uvec2 v[]; };
 layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
 layout(buffer_reference, scalar) buffer LargeList { uvec2 v[]; };
 
 layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
 
+vec3 load_position(uint64_t positions, uint index) {
+    Positions p = Positions(positions);
+    return vec3(p.v[3u * index], p.v[3u * index + 1u], p.v[3u * index + 2u]);
+}
+
 /// Vertex `corner` of triangle `tri` in grid space (voxel units, grid min corner at 0).
 vec3 load_grid_vertex(uint tri, uint corner) {
-    uint index = Indices(pc.indices).v[3u * tri + corner];
-    Positions p = Positions(pc.positions);
-    vec3 pos = vec3(p.v[3u * index], p.v[3u * index + 1u], p.v[3u * index + 2u]);
-    return (pc.to_grid * vec4(pos, 1.0)).xyz;
+    InstanceRef inst = InstanceRef(pc.instance);
+    uint index = Indices(inst.i.indices).v[3u * tri + corner];
+    return (inst.i.to_grid * vec4(load_position(inst.i.positions, index), 1.0)).xyz;
+}
+
+/// World-space velocity (m/s) of vertex `corner` of triangle `tri` between last frame and this one,
+/// as motion vectors are made: this frame's world position minus last frame's, over the frame time.
+vec3 load_vertex_velocity(uint tri, uint corner) {
+    InstanceRef inst = InstanceRef(pc.instance);
+    if (pc.velocities == 0ul || inst.i.inv_dt == 0.0) return vec3(0.0);
+    uint index = Indices(inst.i.indices).v[3u * tri + corner];
+    vec3 now = (inst.i.model * vec4(load_position(inst.i.positions, index), 1.0)).xyz;
+    vec3 before = (inst.i.prev_model * vec4(load_position(inst.i.prev_positions, index), 1.0)).xyz;
+    return (now - before) * inst.i.inv_dt;
 }
 
 bool is_finite(vec3 p) { return !any(isnan(p)) && !any(isinf(p)); }
@@ -24,6 +41,7 @@ bool is_finite(vec3 p) { return !any(isnan(p)) && !any(isinf(p)); }
 // since every invocation contends for the same counter.
 const uint kPendingCapacity = 8u;
 uint pending[kPendingCapacity];
+uvec2 pending_velocity[kPendingCapacity];
 uint pending_count = 0u;
 
 /// Appends the pending voxels to the fragment list; past the capacity only the counter moves, which
@@ -31,20 +49,26 @@ uint pending_count = 0u;
 void flush_voxels() {
     if (pending_count == 0u) return;
     uint slot = atomicAdd(Counters(pc.counters).c.fragments, pending_count);
-    for (uint i = 0u; i < pending_count; ++i)
-        if (slot + i < pc.capacity) Fragments(pc.fragments).v[slot + i] = pending[i];
+    for (uint i = 0u; i < pending_count; ++i) {
+        if (slot + i >= pc.capacity) break;
+        Fragments(pc.fragments).v[slot + i] = pending[i];
+        if (pc.velocities != 0ul) Velocities(pc.velocities).v[slot + i] = pending_velocity[i];
+    }
     pending_count = 0u;
 }
 
-/// Queues one voxel for the fragment list (call flush_voxels() before the invocation ends).
-void emit_voxel(uvec3 ijk) {
-    pending[pending_count++] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
-    if (pending_count == kPendingCapacity) flush_voxels();
+/// Queues one voxel and its surface velocity for the fragment list (call flush_voxels() before the
+/// invocation ends).
+void emit_voxel(uvec3 ijk, vec3 velocity) {
+    pending[pending_count] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
+    pending_velocity[pending_count] = uvec2(packHalf2x16(velocity.xy), packHalf2x16(vec2(velocity.z, 0.0)));
+    if (++pending_count == kPendingCapacity) flush_voxels();
 }
 
 /// A triangle in projection space (w along its dominant axis).
 struct Setup {
     vec3 a, b, c, n;
+    vec3 va, vb, vc; ///< vertex velocities (m/s, world)
     float w_min, w_max;
     uint axis;
     ivec2 col_lo, col_hi; ///< inclusive range of pixel columns, clipped to the grid
@@ -73,14 +97,39 @@ bool setup_triangle(vec3 g0, vec3 g1, vec3 g2, out Setup s) {
     return true;
 }
 
+/// Fills the vertex velocities of a set-up triangle.
+void setup_velocities(uint tri, inout Setup s) {
+    s.va = load_vertex_velocity(tri, 0u);
+    s.vb = load_vertex_velocity(tri, 1u);
+    s.vc = load_vertex_velocity(tri, 2u);
+}
+
+/// Surface velocity above the centre of column (x, y): the vertex velocities weighted by the
+/// barycentric coordinates of the nearest point of the projected triangle (clamped, renormalised).
+vec3 column_velocity(Setup s, int x, int y) {
+    vec2 e0 = s.b.xy - s.a.xy;
+    vec2 e1 = s.c.xy - s.a.xy;
+    vec2 d = vec2(float(x) + 0.5, float(y) + 0.5) - s.a.xy;
+    float den = e0.x * e1.y - e0.y * e1.x;
+    vec3 w = vec3(1.0);
+    if (abs(den) > 1e-20) {
+        float l1 = (d.x * e1.y - d.y * e1.x) / den;
+        float l2 = (e0.x * d.y - e0.y * d.x) / den;
+        w = max(vec3(1.0 - l1 - l2, l1, l2), vec3(0.0));
+        if (w.x + w.y + w.z <= 0.0) w = vec3(1.0);
+    }
+    return (w.x * s.va + w.y * s.vb + w.z * s.vc) / (w.x + w.y + w.z);
+}
+
 /// Emits every voxel of column (x, y) that the triangle meets, each confirmed by the exact test.
 void voxelize_column(Setup s, int x, int y) {
     ivec2 layers = column_layers(s.n, s.a, s.w_min, s.w_max, float(x), float(y));
     int k0 = max(layers.x, 0);
     int k1 = min(layers.y, int(pc.res) - 1);
+    vec3 velocity = pc.velocities != 0ul ? column_velocity(s, x, y) : vec3(0.0);
     for (int k = k0; k <= k1; ++k) {
         vec3 centre = vec3(float(x) + 0.5, float(y) + 0.5, float(k) + 0.5);
         if (tri_box_overlap(centre, vec3(0.5), s.a, s.b, s.c))
-            emit_voxel(uvec3(swizzle_from_projection(vec3(x, y, k), s.axis)));
+            emit_voxel(uvec3(swizzle_from_projection(vec3(x, y, k), s.axis)), velocity);
     }
 }

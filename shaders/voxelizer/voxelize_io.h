@@ -33,12 +33,24 @@ struct VoxelizeCounters {
     uint pad;
 };
 
+/// One instance of a call, in a buffer (push constants hold its address).
+struct VoxelizeInstance {
+    mat4 to_grid;                ///< model matrix followed by world -> grid space ((p - origin) / h)
+    mat4 model;                  ///< mesh -> world this frame
+    mat4 prev_model;             ///< mesh -> world last frame
+    GUST_ADDRESS positions;      ///< float[3 * vertex_count], this frame
+    GUST_ADDRESS prev_positions; ///< float[3 * vertex_count], last frame (the same buffer for rigid meshes)
+    GUST_ADDRESS indices;        ///< uint[3 * triangle_count]
+    uint triangle_count;
+    float inv_dt; ///< 1 / frame time in seconds; 0 when no velocities are wanted
+};
+
 /// Push constants of every voxelizer pass (<= 128 bytes, the guaranteed minimum).
 struct VoxelizePush {
-    mat4 to_grid;            ///< model matrix followed by world -> grid space ((p - origin) / h)
-    GUST_ADDRESS positions;  ///< float[3 * vertex_count]
-    GUST_ADDRESS indices;    ///< uint[3 * triangle_count]
-    GUST_ADDRESS fragments;  ///< uint[capacity] packed voxel keys (pack_voxel)
+    GUST_ADDRESS instance;  ///< VoxelizeInstance
+    GUST_ADDRESS fragments; ///< uint[capacity] packed voxel keys (pack_voxel)
+    GUST_ADDRESS
+        velocities; ///< uvec2[capacity] surface velocity per fragment (half x, y, z; m/s, world); 0: none
     GUST_ADDRESS counters;   ///< VoxelizeCounters
     GUST_ADDRESS large_list; ///< uvec2[large_capacity] (triangle, tile) items for the large pass
     uint res;                ///< voxels per axis
@@ -52,12 +64,13 @@ struct VoxelizePush {
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gust::shaderio::VoxelizePush) == 128, "push constants must match the GLSL layout");
-static_assert(offsetof(gust::shaderio::VoxelizePush, positions) == 64);
-static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 104);
+static_assert(sizeof(gust::shaderio::VoxelizePush) == 64, "push constants must match the GLSL layout");
+static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 40);
+static_assert(sizeof(gust::shaderio::VoxelizeInstance) == 224);
+static_assert(offsetof(gust::shaderio::VoxelizeInstance, positions) == 192);
 static_assert(sizeof(gust::shaderio::VoxelizeCounters) == 32);
 static_assert(offsetof(gust::shaderio::VoxelizeCounters, large_dispatch) == 16);
-static_assert(offsetof(gust::shaderio::VoxelizePush, large_capacity) == 120);
+static_assert(offsetof(gust::shaderio::VoxelizePush, large_capacity) == 56);
 #endif
 
 #endif

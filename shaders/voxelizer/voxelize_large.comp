@@ -12,6 +12,7 @@ void main() {
     uvec2 queued = LargeList(pc.large_list).v[item];
     Setup s;
     setup_triangle(load_grid_vertex(queued.x, 0u), load_grid_vertex(queued.x, 1u), load_grid_vertex(queued.x, 2u), s);
+    setup_velocities(queued.x, s);
     ivec2 extent = s.col_hi - s.col_lo + 1;
     uint columns = uint(extent.x) * uint(extent.y);
     uint first = queued.y * kTileColumns;

@@ -26,6 +26,7 @@ void main() {
             LargeList(pc.large_list).v[slot + i] = uvec2(t, i);
         return;
     }
+    setup_velocities(t, s);
     for (int y = s.col_lo.y; y <= s.col_hi.y; ++y)
         for (int x = s.col_lo.x; x <= s.col_hi.x; ++x) voxelize_column(s, x, y);
     flush_voxels();

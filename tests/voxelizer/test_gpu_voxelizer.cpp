@@ -4,6 +4,7 @@
 #include "support/vdb_check.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 #include <gust/scene/import.hpp>
@@ -326,6 +327,98 @@ TEST_F(VoxelizerTest, autoPicksAMeasuredMethodAndMatches) {
     const VoxelDiff diff =
         diff_voxels(sorted_unique(*(*voxelizer)->read_fragments()), voxelize_reference({&cpu, 1}, g).voxels);
     EXPECT_TRUE(unexplained_differences(diff, {&cpu, 1}, g).empty());
+}
+
+class CarriesSurfaceVelocity : public GpuTestWithParam<VoxelizeMethod> {};
+
+TEST_P(CarriesSurfaceVelocity, ofATranslatedMesh) {
+    const GridDesc g = exact_grid(32);
+    const TestMesh sphere = icosphere(2, glm::vec3(0.0f), 0.4f);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(sphere.view());
+    ASSERT_TRUE(mesh);
+    const glm::vec3 before(-0.9f, 0.0f, 0.5f), after(-0.8f, 0.05f, 0.45f);
+    const float dt = 0.02f;
+    GpuInstance inst{&*mesh, glm::translate(glm::mat4(1.0f), after)};
+    inst.prev_model = glm::translate(glm::mat4(1.0f), before);
+    auto stats = (*voxelizer)->voxelize({&inst, 1}, g, GetParam(), dt);
+    ASSERT_TRUE(stats) << stats.message();
+    auto velocities = (*voxelizer)->read_velocities();
+    ASSERT_TRUE(velocities) << velocities.message();
+    ASSERT_EQ(velocities->size(), stats->fragments);
+    ASSERT_GT(velocities->size(), 100u);
+    const glm::vec3 expected = (after - before) / dt; // (5, 2.5, -2.5) m/s
+    for (const glm::vec3& v : *velocities)
+        ASSERT_LT(glm::length(v - expected), 0.01f) << v.x << "," << v.y << "," << v.z;
+}
+
+TEST_P(CarriesSurfaceVelocity, ofARotatingMeshAtTheSurfacePoint) {
+    const GridDesc g = exact_grid(48);
+    const glm::vec3 centre(-0.5f, 0.5f, 1.0f);
+    const TestMesh sphere = icosphere(3, glm::vec3(0.0f), 0.6f);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(sphere.view());
+    ASSERT_TRUE(mesh);
+    const float dt = 0.01f, omega = 2.0f; // rad/s about +y
+    GpuInstance inst{&*mesh,
+                     glm::rotate(glm::translate(glm::mat4(1.0f), centre), omega * dt, glm::vec3(0, 1, 0))};
+    inst.prev_model = glm::translate(glm::mat4(1.0f), centre);
+    ASSERT_TRUE((*voxelizer)->voxelize({&inst, 1}, g, GetParam(), dt));
+    const auto keys = *(*voxelizer)->read_fragments();
+    const auto velocities = *(*voxelizer)->read_velocities();
+    ASSERT_EQ(keys.size(), velocities.size());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        const glm::vec3 p = g.origin + (glm::vec3(unpack_voxel(keys[i])) + 0.5f) * g.voxel_size;
+        const glm::vec3 r = p - centre;
+        const glm::vec3 expected = glm::cross(glm::vec3(0.0f, omega, 0.0f), r);
+        // The velocity is the surface's at a point within a voxel of the centre: |omega| h of slack.
+        worst = std::max(worst, double(glm::length(velocities[i] - expected)));
+    }
+    EXPECT_LT(worst, 1.8 * omega * g.voxel_size);
+}
+
+TEST_P(CarriesSurfaceVelocity, ofUpdatedVertexPositions) {
+    const GridDesc g = exact_grid(32);
+    TestMesh sphere = icosphere(2, glm::vec3(-0.5f, 0.4f, 0.6f), 0.3f);
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    auto mesh = (*voxelizer)->upload(sphere.view());
+    ASSERT_TRUE(mesh);
+    // A "pose" that stretches the sphere upwards: each vertex moves by 0.1 * its height above the centre.
+    std::vector<glm::vec3> posed = sphere.positions;
+    for (glm::vec3& p : posed)
+        p.y += 0.1f * (p.y - 0.4f);
+    ASSERT_TRUE((*voxelizer)->update_positions(*mesh, posed));
+    const float dt = 0.05f;
+    const GpuInstance inst{&*mesh, glm::mat4(1.0f)};
+    ASSERT_TRUE((*voxelizer)->voxelize({&inst, 1}, g, GetParam(), dt));
+    const auto keys = *(*voxelizer)->read_fragments();
+    const auto velocities = *(*voxelizer)->read_velocities();
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        const glm::vec3 p = g.origin + (glm::vec3(unpack_voxel(keys[i])) + 0.5f) * g.voxel_size;
+        const float expected_vy = 0.1f * (p.y - 0.4f) / dt;
+        ASSERT_NEAR(velocities[i].y, expected_vy, 0.1f * 1.8f * g.voxel_size / dt);
+        ASSERT_NEAR(velocities[i].x, 0.0f, 1e-3f);
+    }
+    const std::vector<glm::vec3> wrong(3);
+    EXPECT_FALSE((*voxelizer)->update_positions(*mesh, wrong));
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, CarriesSurfaceVelocity,
+                         ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute),
+                         [](const ::testing::TestParamInfo<VoxelizeMethod>& p) {
+                             return to_string(p.param);
+                         });
+
+TEST_F(VoxelizerTest, rejectsNegativeOrNonFiniteFrameTime) {
+    auto voxelizer = Voxelizer::create(ctx());
+    ASSERT_TRUE(voxelizer);
+    EXPECT_FALSE((*voxelizer)->voxelize({}, exact_grid(8), VoxelizeMethod::Compute, -0.1f));
+    EXPECT_FALSE((*voxelizer)->voxelize({}, exact_grid(8), VoxelizeMethod::Compute, std::nanf("")));
+    EXPECT_FALSE((*voxelizer)->read_velocities());
 }
 
 } // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <glm/gtc/packing.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
 #include <limits>
 
@@ -21,6 +22,7 @@ namespace {
 using shaderio::kMaxGroupsX;
 using shaderio::kVoxelizeGroupSize;
 using shaderio::VoxelizeCounters;
+using shaderio::VoxelizeInstance;
 using shaderio::VoxelizePush;
 
 /// Fragments per triangle assumed when sizing the list before the first pass.
@@ -146,6 +148,38 @@ Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
     return {};
 }
 
+Status Voxelizer::ensure_velocity_capacity() {
+    if (velocities_ && velocities_.size() >= capacity_ * sizeof(glm::uvec2)) return {};
+    auto buffer = gpu::Buffer::create(ctx_, capacity_ * sizeof(glm::uvec2), gpu::MemoryUse::Device);
+    if (!buffer) return buffer.status();
+    velocities_ = std::move(*buffer);
+    return {};
+}
+
+Status Voxelizer::ensure_instances(std::size_t count) {
+    const VkDeviceSize bytes = std::max<std::size_t>(count, 1) * sizeof(VoxelizeInstance);
+    if (instances_ && instances_.size() >= bytes) return {};
+    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Upload);
+    if (!buffer) return buffer.status();
+    instances_ = std::move(*buffer);
+    return {};
+}
+
+Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
+    if (positions.size() != mesh.vertices_)
+        return Status::failure("got " + std::to_string(positions.size()) + " positions for a mesh of " +
+                               std::to_string(mesh.vertices_) + " vertices");
+    if (mesh.triangles_ == 0) return {};
+    if (!mesh.prev_positions_) {
+        auto buffer = gpu::Buffer::create(ctx_, mesh.positions_.size(), gpu::MemoryUse::Device);
+        if (!buffer) return buffer.status();
+        mesh.prev_positions_ = std::move(*buffer);
+    }
+    // Last frame's positions become the previous ones; the older buffer takes this frame's.
+    std::swap(mesh.positions_, mesh.prev_positions_);
+    return gpu::upload(ctx_, mesh.positions_, positions.data(), positions.size_bytes());
+}
+
 Status Voxelizer::ensure_large_list(std::uint64_t items) {
     if (items <= large_capacity_) return {};
     if (items > UINT32_MAX || items * sizeof(glm::uvec2) > ctx_.info().max_allocation_size)
@@ -198,8 +232,14 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
 }
 
 Result<VoxelizeStats> Voxelizer::voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
-                                          VoxelizeMethod method) {
+                                          VoxelizeMethod method, float dt) {
     if (Status s = validate_grid(grid); !s) return s;
+    if (!std::isfinite(dt) || dt < 0.0f)
+        return Result<VoxelizeStats>::failure("frame time must be finite and >= 0, got " +
+                                              std::to_string(dt));
+    inv_dt_ = dt > 0.0f ? 1.0f / dt : 0.0f;
+    if (dt > 0.0f)
+        if (Status s = ensure_velocity_capacity(); !s) return s;
     for (const GpuInstance& inst : instances)
         if (!inst.mesh) return Result<VoxelizeStats>::failure("an instance has no mesh");
     if (method == VoxelizeMethod::Auto)
@@ -255,7 +295,29 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
     const auto& vk = ctx_.vk();
 
     for (;;) {
+        if (inv_dt_ > 0.0f)
+            if (Status s = ensure_velocity_capacity(); !s) return s;
+        if (Status s = ensure_instances(instances.size()); !s) return s;
+        std::vector<VoxelizeInstance> records(instances.size());
+        for (std::size_t i = 0; i < instances.size(); ++i) {
+            const GpuInstance& inst = instances[i];
+            const GpuMesh& mesh = *inst.mesh;
+            VoxelizeInstance& r = records[i];
+            r.to_grid = to_grid * inst.model;
+            r.model = inst.model;
+            r.prev_model = inst.prev_model.value_or(inst.model);
+            r.positions = mesh.positions_ ? mesh.positions_.address() : 0;
+            r.prev_positions = mesh.prev_positions_ ? mesh.prev_positions_.address() : r.positions;
+            r.indices = mesh.indices_ ? mesh.indices_.address() : 0;
+            r.triangle_count = mesh.triangles_;
+            r.inv_dt = inv_dt_;
+        }
+        if (Status s =
+                gpu::upload(ctx_, instances_, records.data(), records.size() * sizeof(VoxelizeInstance));
+            !s)
+            return s;
         VoxelizePush push{};
+        push.velocities = inv_dt_ > 0.0f ? velocities_.address() : 0;
         push.fragments = fragments_.address();
         push.counters = counters_.address();
         push.large_list = large_list_.address();
@@ -281,9 +343,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                 for (std::size_t i = 0; i < instances.size(); ++i) {
                     const GpuMesh& mesh = *instances[i].mesh;
                     if (methods[i] != VoxelizeMethod::Raster || mesh.triangles_ == 0) continue;
-                    push.to_grid = to_grid * instances[i].model;
-                    push.positions = mesh.positions_.address();
-                    push.indices = mesh.indices_.address();
+                    push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
                     push.triangle_count = mesh.triangles_;
                     raster_.bind(cmd, &push, sizeof(push));
                     vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
@@ -297,9 +357,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                 if (methods[i] != VoxelizeMethod::Compute || mesh.triangles_ == 0) continue;
                 if (first_compute) profiler_.begin(cmd, "compute");
                 first_compute = false;
-                push.to_grid = to_grid * instances[i].model;
-                push.positions = mesh.positions_.address();
-                push.indices = mesh.indices_.address();
+                push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
                 // The large-triangle queue is per instance: empty it before each one.
                 vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_items), 4, 0);
                 gpu::barrier(ctx_, cmd);
@@ -348,6 +406,20 @@ Result<std::vector<std::uint32_t>> Voxelizer::read_fragments() const {
     std::vector<std::uint32_t> out(fragment_count_);
     if (Status s = gpu::download(ctx_, fragments_, out.data(), out.size() * sizeof(std::uint32_t)); !s)
         return s;
+    return out;
+}
+
+Result<std::vector<glm::vec3>> Voxelizer::read_velocities() const {
+    if (inv_dt_ <= 0.0f)
+        return Result<std::vector<glm::vec3>>::failure("the last call was made without a frame time");
+    std::vector<glm::uvec2> packed(fragment_count_);
+    if (Status s = gpu::download(ctx_, velocities_, packed.data(), packed.size() * sizeof(glm::uvec2)); !s)
+        return s;
+    std::vector<glm::vec3> out(packed.size());
+    for (std::size_t i = 0; i < packed.size(); ++i) {
+        const glm::vec2 xy = glm::unpackHalf2x16(packed[i].x);
+        out[i] = glm::vec3(xy, glm::unpackHalf2x16(packed[i].y).x);
+    }
     return out;
 }
 

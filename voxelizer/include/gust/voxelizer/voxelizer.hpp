@@ -8,6 +8,7 @@
 #include <gust/voxelizer/grid.hpp>
 #include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -35,8 +36,9 @@ class GpuMesh {
 
   private:
     friend class Voxelizer;
-    gpu::Buffer positions_; ///< float[3 * vertices]
-    gpu::Buffer indices_;   ///< uint[3 * triangles]
+    gpu::Buffer positions_;      ///< float[3 * vertices], this frame
+    gpu::Buffer prev_positions_; ///< float[3 * vertices], last frame (only once positions were updated)
+    gpu::Buffer indices_;        ///< uint[3 * triangles]
     std::uint32_t triangles_ = 0;
     std::uint32_t vertices_ = 0;
     std::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
@@ -45,7 +47,8 @@ class GpuMesh {
 /// One placement of an uploaded mesh.
 struct GpuInstance {
     const GpuMesh* mesh = nullptr;
-    glm::mat4 model{1.0f}; ///< mesh space -> world space
+    glm::mat4 model{1.0f};               ///< mesh space -> world space, this frame
+    std::optional<glm::mat4> prev_model; ///< last frame's; none means it did not move
 };
 
 /// Options for a Voxelizer.
@@ -78,9 +81,14 @@ class Voxelizer {
 
     /// Voxelizes every instance into the fragment list, blocking until done. The list holds each
     /// voxel once per triangle that touches it; it is never truncated: when it overflows it is grown
-    /// and the pass redone (counted in `retries`).
+    /// and the pass redone (counted in `retries`). With `dt` > 0 (seconds since last frame) each
+    /// fragment also gets the surface velocity there (velocity_buffer()).
     Result<VoxelizeStats> voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
-                                   VoxelizeMethod method);
+                                   VoxelizeMethod method, float dt = 0.0f);
+
+    /// Replaces a mesh's vertex positions (a skinned pose) with `positions` (mesh space, one per vertex);
+    /// the previous ones are kept for velocities. Blocks until uploaded.
+    Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions);
 
     /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
     Result<std::vector<std::uint32_t>> read_fragments() const;
@@ -93,11 +101,18 @@ class Voxelizer {
     VkDeviceAddress fragment_count_address() const { return counters_.address(); }
     /// Fragment slots of the current list.
     std::uint64_t fragment_capacity() const { return capacity_; }
+    /// Surface velocity per fragment of the last call made with dt > 0: uvec2 per fragment holding
+    /// half-float x, y (first word) and z (second word), m/s in world space.
+    const gpu::Buffer& velocity_buffer() const { return velocities_; }
+    /// Copies the velocities of the last call to the host (same order as read_fragments()).
+    Result<std::vector<glm::vec3>> read_velocities() const;
 
   private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
     Status ensure_capacity(std::uint64_t fragments);
     Status ensure_large_list(std::uint64_t items);
+    Status ensure_velocity_capacity();
+    Status ensure_instances(std::size_t count);
     Result<VoxelizeStats> run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
                               const GridDesc& grid);
     Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
@@ -111,6 +126,9 @@ class Voxelizer {
     gpu::Buffer fragments_;
     gpu::Buffer counters_;
     gpu::Buffer large_list_;
+    gpu::Buffer velocities_;
+    gpu::Buffer instances_;
+    float inv_dt_ = 0.0f;
     std::uint64_t large_capacity_ = 0;
     std::uint64_t capacity_ = 0;
     std::uint64_t fragment_count_ = 0;
