@@ -16,6 +16,7 @@ void main() {
     st.s.exhausted = 0u;
     st.s.refined = 0u;
     st.s.coarsened = 0u;
+    st.s.dynamic_voxels = 0u;
     st.s.records_dispatch = dispatch_for(st.s.records_prev);
     st.s.leaves_dispatch = dispatch_for(st.s.leaves_prev);
 }

@@ -48,6 +48,8 @@ struct TreeState {
     uint records_next;                 ///< entries in this frame's coarsening list
     uint leaves_prev;                  ///< leaves whose dynamic words last frame set
     uint leaves_next;                  ///< leaves whose dynamic words this frame set
+    uint static_voxels;                ///< voxels set in static words (since the last rebuild)
+    uint dynamic_voxels;               ///< voxels set in dynamic words this frame and not in static ones
     uint blocks_per_level[kMaxLevels]; ///< live blocks whose owner is at each level
     TreeDispatch fragments_dispatch;   ///< over this frame's fragments
     TreeDispatch requests_dispatch;    ///< over the current level's requests
@@ -122,7 +124,7 @@ GUST_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::TreePush) == 24, "push constants must match the GLSL layout");
 static_assert(sizeof(gust::shaderio::TreeBindings) == 13 * 8 + 8 * 4);
-static_assert(sizeof(gust::shaderio::TreeState) == (14 + 10 + 16) * 4);
+static_assert(sizeof(gust::shaderio::TreeState) == (16 + 10 + 16) * 4);
 #endif
 
 #endif

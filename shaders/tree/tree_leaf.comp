@@ -18,8 +18,14 @@ void main() {
     uint words = mask_words(tb.log2_branching);
     uint base = block * mask_stride(tb.log2_branching);
     uint layer = pc.pinned != 0u ? 0u : words;
-    atomicOr(masks().v[base + layer + bit / 32u], 1u << (bit % 32u));
-    if (pc.pinned != 0u) return;
+    uint flag = 1u << (bit % 32u);
+    uint before = atomicOr(masks().v[base + layer + bit / 32u], flag);
+    bool newly = (before & flag) == 0u;
+    if (pc.pinned != 0u) {
+        if (newly) atomicAdd(state().s.static_voxels, 1u);
+        return;
+    }
+    if (newly && (masks().v[base + bit / 32u] & flag) == 0u) atomicAdd(state().s.dynamic_voxels, 1u);
     if (atomicExchange(masks().v[base + 2u * words], pc.frame) == pc.frame) return;
     uint slot = atomicAdd(state().s.leaves_next, 1u);
     if (slot < tb.list_capacity) WordsRef(tb.leaves[pc.frame & 1u]).v[slot] = node;

@@ -69,6 +69,9 @@ class Scene {
             const auto leaves = tree->leaf_voxels();
             EXPECT_TRUE(leaves);
             EXPECT_EQ(*leaves, expected) << "frame " << n;
+            if (stats) {
+                EXPECT_EQ(stats->voxels, expected.size()) << "frame " << n;
+            }
         }
         return stats ? *stats : TreeStats{};
     }

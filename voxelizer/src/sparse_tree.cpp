@@ -92,6 +92,9 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
         if (!b) return b.status();
         *bindings = std::move(*b);
     }
+    auto profiler = gpu::Profiler::create(ctx);
+    if (!profiler) return profiler.status();
+    tree->profiler_ = std::move(*profiler);
     if (Status s = tree->allocate_pools(desc.node_blocks, desc.mask_blocks, false); !s) return s;
     if (Status s = tree->ensure_scratch(kMinScratch); !s) return s;
     TreeState empty{};
@@ -221,6 +224,8 @@ Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const
 
     const auto& vk = ctx_.vk();
     Status done = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        profiler_.reset(cmd);
+        profiler_.begin(cmd, "tree_begin");
         if (rebuild_static) {
             TreeState empty{};
             empty.node_blocks_used = 1;
@@ -236,11 +241,22 @@ Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const
         clear_.bind(cmd, &push, sizeof(push));
         vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
         gpu::barrier(ctx_, cmd);
-        if (rebuild_static) record_insert(cmd, static_bindings_, true);
-        if (dynamic) record_insert(cmd, dynamic_bindings_, false);
+        profiler_.end(cmd);
+        if (rebuild_static) {
+            profiler_.begin(cmd, "tree_static");
+            record_insert(cmd, static_bindings_, true);
+            profiler_.end(cmd);
+        }
+        if (dynamic) {
+            profiler_.begin(cmd, "tree_dynamic");
+            record_insert(cmd, dynamic_bindings_, false);
+            profiler_.end(cmd);
+        }
+        profiler_.begin(cmd, "tree_coarsen");
         coarsen_.bind(cmd, &push, sizeof(push));
         vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
         gpu::barrier(ctx_, cmd);
+        profiler_.end(cmd);
     });
     if (!done) return done;
     return read_stats();
@@ -271,6 +287,8 @@ Result<TreeStats> SparseTree::read_stats() const {
     const std::uint64_t live_masks = st.mask_blocks_used - 1 - st.mask_free_top;
     out.pool_bytes = live_nodes * children * sizeof(glm::uvec2) + live_masks * stride * sizeof(std::uint32_t);
     out.capacity_bytes = nodes_.size() + masks_.size();
+    out.voxels = std::uint64_t(st.static_voxels) + st.dynamic_voxels;
+    out.ms = profiler_.read();
     return out;
 }
 

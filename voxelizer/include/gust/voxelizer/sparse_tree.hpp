@@ -5,8 +5,11 @@
 #include <cstdint>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/pipeline.hpp>
+#include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/grid.hpp>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace gust {
@@ -32,6 +35,7 @@ struct TreeStats {
     std::uint32_t frame = 0;
     std::vector<std::uint64_t> nodes_per_level; ///< allocated nodes at levels 1..depth-1, then leaf bricks
     std::uint64_t nodes = 0;                    ///< sum of nodes_per_level plus the root
+    std::uint64_t voxels = 0;                   ///< voxels set in leaves (static or dynamic)
     std::uint32_t refined = 0;                  ///< blocks handed out this update
     std::uint32_t coarsened = 0;                ///< blocks taken back this update
     std::uint32_t exhausted = 0;        ///< refinements refused because a pool was full (tree is partial)
@@ -42,6 +46,7 @@ struct TreeStats {
         0;                            ///< high-water mark of the mask pool (live + free blocks, + 1 reserved)
     std::uint64_t pool_bytes = 0;     ///< bytes of live node and mask blocks
     std::uint64_t capacity_bytes = 0; ///< bytes the pools hold
+    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
 };
 
 /// The tree. Thread-compatible; the Context must outlive it.
@@ -86,6 +91,7 @@ class SparseTree {
     gpu::Buffer state_, nodes_, masks_, node_free_, mask_free_;
     gpu::Buffer frag_node_, requests_, records_[2], leaves_[2];
     gpu::Buffer static_bindings_, dynamic_bindings_;
+    gpu::Profiler profiler_;
 };
 
 } // namespace gust
