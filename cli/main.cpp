@@ -1,4 +1,5 @@
 // The `gust` command line: voxelize, info.
+#include "simulate.hpp"
 #include "vdb_writer.hpp"
 
 #include <CLI/CLI.hpp>
@@ -226,6 +227,18 @@ int main(int argc, char** argv) {
     voxelize->add_flag("--validation", vox.validation,
                        "enable the Vulkan validation layer; any message fails");
 
+    gust::cli::SimulateArgs sim;
+    auto* simulate =
+        app.add_subcommand("simulate", "run a scene file headless, writing stats.jsonl and OpenVDB frames");
+    simulate->add_option("scene", sim.scene, "scene file (JSON, docs/scene-format.md)")->required();
+    simulate->add_option("--frames", sim.frames, "frames to run")->required();
+    simulate->add_option("--out", sim.out, "output folder")->required();
+    simulate->add_option("--every", sim.every, "also write every K-th frame's VDB (frame 0 always)");
+    simulate->add_option("--method", sim.method, "raster, compute or auto (default auto)");
+    simulate->add_option("--device", sim.device, "device index or name substring");
+    simulate->add_flag("--validation", sim.validation,
+                       "enable the Vulkan validation layer; any message fails");
+
     std::string info_mesh, info_device;
     auto* info = app.add_subcommand("info", "print the Vulkan device gust picks (and a mesh's statistics)");
     info->add_option("mesh", info_mesh, "optional mesh file to describe");
@@ -237,5 +250,6 @@ int main(int argc, char** argv) {
         return app.exit(e);
     }
     if (voxelize->parsed()) return run_voxelize(vox);
+    if (simulate->parsed()) return gust::cli::run_simulate(sim);
     return run_info(info_mesh, info_device);
 }

@@ -1,0 +1,71 @@
+// One frame of DESIGN.md's steps 2 and 3: voxelize what changed and keep the sparse tree current.
+#pragma once
+
+#include <cstdint>
+#include <gust/voxelizer/sparse_tree.hpp>
+#include <gust/voxelizer/voxelizer.hpp>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace gust {
+
+/// The grid, the tree's shape and how to voxelize.
+struct WorldDesc {
+    GridDesc grid; ///< grid.res must be a power of tree.branching
+    TreeDesc tree; ///< tree.res is taken from grid.res
+    VoxelizeMethod method = VoxelizeMethod::Auto;
+};
+
+/// What one step did.
+struct WorldFrame {
+    std::uint64_t frame = 0;        ///< 0 for the first step
+    bool static_rebuilt = false;    ///< the static set changed and was voxelized again
+    VoxelizeStats static_voxelize;  ///< of the static set (the last rebuild's when not rebuilt now)
+    VoxelizeStats dynamic_voxelize; ///< of this frame's dynamic instances
+    TreeStats tree;                 ///< after the update
+    std::uint32_t pool_growths = 0; ///< times the pools were grown (and the update redone) this step
+    std::vector<std::pair<std::string, double>> ms; ///< milliseconds per pass (GPU where timed)
+};
+
+/// Static and dynamic voxelization feeding one tree. Thread-compatible; the Context must outlive it.
+class VoxelWorld {
+  public:
+    static Result<std::unique_ptr<VoxelWorld>> create(gpu::Context& ctx, const WorldDesc& desc);
+
+    /// Uploads a mesh for use in instances of this world.
+    Result<GpuMesh> upload(const MeshView& mesh) { return dynamic_->upload(mesh); }
+    /// Replaces a deforming mesh's positions for this frame (see Voxelizer::update_positions).
+    Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
+        return dynamic_->update_positions(mesh, positions);
+    }
+
+    /// Sets the static instances; the next step voxelizes them again only if they differ from the last
+    /// set (meshes or matrices). Meshes must stay alive and unchanged while in the set.
+    void set_static(std::vector<GpuInstance> instances);
+
+    /// Voxelizes the dynamic instances (with velocities over `dt` seconds, > 0), updates the tree, and
+    /// grows its pools and redoes the update when they ran out. Blocks until the GPU is done.
+    Result<WorldFrame> step(std::span<const GpuInstance> dynamic, float dt);
+
+    const SparseTree& tree() const { return *tree_; }
+    /// The dynamic fragment list and its velocities, for the solver.
+    const Voxelizer& dynamic_voxelizer() const { return *dynamic_; }
+    const Voxelizer& static_voxelizer() const { return *static_; }
+    const GridDesc& grid() const { return desc_.grid; }
+
+  private:
+    explicit VoxelWorld(const WorldDesc& desc) : desc_(desc) {}
+
+    WorldDesc desc_;
+    std::unique_ptr<Voxelizer> static_, dynamic_;
+    std::unique_ptr<SparseTree> tree_;
+    std::vector<GpuInstance> static_set_;
+    bool static_dirty_ = true;
+    VoxelizeStats last_static_;
+    std::uint64_t frame_ = 0;
+};
+
+} // namespace gust
