@@ -3,8 +3,11 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <gtest/gtest.h>
+#include <gust/scene/domain_grid.hpp>
 #include <gust/scene/import.hpp>
+#include <gust/scene/scene_runtime.hpp>
 #include <gust/voxelizer/cpu_reference.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
 #include <nlohmann/json.hpp>
@@ -183,6 +186,80 @@ TEST(CliVoxelize, unwritableOutputFailsNamingIt) {
         gust("voxelize " + asset("scans/bunny.ply") + " --res 16 --out /nonexistent/dir/out.vdb");
     EXPECT_NE(run.code, 0);
     EXPECT_NE(run.err.find("/nonexistent/dir/out.vdb"), std::string::npos) << run.err;
+}
+
+TEST(CliSimulate, writesStatsLinesAndOccupancyFramesMatchingTheReference) {
+    const fs::path out = fs::temp_directory_path() / "gust_cli_simulate";
+    fs::remove_all(out);
+    const std::string scene_path = asset("scenes/fox_bunnies.json");
+    const CliRun run =
+        gust("simulate " + scene_path + " --frames 5 --every 2 --validation --out " + out.string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    std::ifstream stats(out / "stats.jsonl");
+    std::string line;
+    int frames = 0;
+    while (std::getline(stats, line)) {
+        const auto j = nlohmann::json::parse(line);
+        for (const char* key : {"frame", "fragments", "voxels", "nodes", "refined", "coarsened", "pool_bytes",
+                                "fragment_bytes", "dense_bytes", "ms"})
+            EXPECT_TRUE(j.contains(key)) << key;
+        EXPECT_EQ(j["frame"], frames);
+        EXPECT_TRUE(j["ms"].is_object());
+        EXPECT_GT(j["voxels"].get<std::uint64_t>(), 0u);
+        ++frames;
+    }
+    EXPECT_EQ(frames, 5);
+    for (const char* name : {"frame_0000.vdb", "frame_0002.vdb", "frame_0004.vdb"})
+        EXPECT_TRUE(fs::exists(out / name)) << name;
+    EXPECT_FALSE(fs::exists(out / "frame_0001.vdb"));
+
+    // Frame 0 against the CPU reference of the scene's geometry at t = 0.
+    auto scene = load_scene(scene_path);
+    ASSERT_TRUE(scene) << scene.message();
+    auto runtime = SceneRuntime::load(*scene);
+    ASSERT_TRUE(runtime) << runtime.message();
+    const GridDesc grid = *domain_grid(scene->domain);
+    std::vector<std::vector<glm::vec3>> posed;
+    for (std::size_t i = 0; i < runtime->object_count(); ++i)
+        posed.push_back(runtime->positions(i, 0.0));
+    std::vector<InstanceDesc> instances;
+    for (std::size_t i = 0; i < runtime->object_count(); ++i) {
+        MeshView view;
+        view.positions = reinterpret_cast<const float*>(posed[i].data());
+        view.vertex_count = posed[i].size();
+        view.indices = runtime->mesh(i).indices.data();
+        view.index_count = runtime->mesh(i).indices.size();
+        instances.push_back({view, runtime->model(i, 0.0)});
+    }
+    const auto expected = voxelize_reference(instances, grid).voxels;
+    auto occupancy = read_occupancy(out / "frame_0000.vdb");
+    ASSERT_TRUE(occupancy);
+    EXPECT_NEAR(occupancy->voxelSize().x(), grid.voxel_size, 1e-6);
+    const openvdb::Vec3d c = occupancy->indexToWorld(openvdb::Coord(0, 0, 0));
+    EXPECT_NEAR(c.x(), grid.origin.x + 0.5 * grid.voxel_size, 1e-5);
+    const VoxelDiff diff = diff_voxels(active_voxels(*occupancy), expected);
+    EXPECT_TRUE(unexplained_differences(diff, instances, grid).empty())
+        << diff.missing.size() << " missing, " << diff.extra.size() << " extra of " << expected.size();
+    fs::remove_all(out);
+}
+
+TEST(CliSimulate, badSceneFailsNamingTheFileAndKey) {
+    const fs::path dir = fs::temp_directory_path() / "gust_cli_bad_scene";
+    fs::create_directories(dir);
+    {
+        std::ofstream f(dir / "scene.json");
+        f << R"({"dt": -1, "domain": {"center": [0,0,0], "cells": [16,16,16], "cell_size": 1}, "objects": []})";
+    }
+    const CliRun run =
+        gust("simulate " + (dir / "scene.json").string() + " --frames 2 --out " + (dir / "out").string());
+    EXPECT_NE(run.code, 0);
+    EXPECT_NE(run.err.find("scene.json"), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find("dt"), std::string::npos) << run.err;
+    const CliRun missing =
+        gust("simulate /nonexistent/scene.json --frames 2 --out " + (dir / "out").string());
+    EXPECT_NE(missing.code, 0);
+    EXPECT_NE(missing.err.find("/nonexistent/scene.json"), std::string::npos) << missing.err;
+    fs::remove_all(dir);
 }
 
 TEST(CliInfo, printsTheDeviceAndAMeshsCounts) {

@@ -1,0 +1,142 @@
+// Animated scenes through VoxelWorld: after every frame the tree's leaves equal a from-scratch
+// voxelization of that frame's geometry, for every branching factor.
+#include "support/gpu_env.hpp"
+
+#include <algorithm>
+#include <gtest/gtest.h>
+#include <gust/scene/domain_grid.hpp>
+#include <gust/scene/primitives.hpp>
+#include <gust/scene/scene_runtime.hpp>
+#include <gust/voxelizer/voxel_world.hpp>
+#include <memory>
+#include <string>
+#include <tuple>
+
+namespace gust::test {
+namespace {
+
+MeshView view_of(const Mesh& mesh) {
+    MeshView view;
+    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
+    view.vertex_count = mesh.positions.size();
+    view.indices = mesh.indices.data();
+    view.index_count = mesh.indices.size();
+    return view;
+}
+
+using Param = std::tuple<std::string, std::uint32_t>; // scene file, branching
+
+class WorldMatchesScratch : public GpuTestWithParam<Param> {};
+
+TEST_P(WorldMatchesScratch, afterEveryFrame) {
+    const auto& [file, branching] = GetParam();
+    auto scene = load_scene(std::string(GUST_ASSETS_DIR) + "/scenes/" + file);
+    ASSERT_TRUE(scene) << scene.message();
+    scene->domain.branching = branching;
+    auto runtime = SceneRuntime::load(*scene);
+    ASSERT_TRUE(runtime) << runtime.message();
+    auto grid = domain_grid(scene->domain);
+    ASSERT_TRUE(grid) << grid.message();
+
+    WorldDesc desc;
+    desc.grid = *grid;
+    desc.method = VoxelizeMethod::Compute;
+    desc.tree.branching = branching;
+    desc.tree.hysteresis = 2;
+    // Small pools so that growing them during the run is exercised too.
+    desc.tree.node_blocks = 8;
+    desc.tree.mask_blocks = 64;
+    auto world = VoxelWorld::create(ctx(), desc);
+    ASSERT_TRUE(world) << world.message();
+    auto scratch = Voxelizer::create(ctx());
+    ASSERT_TRUE(scratch);
+
+    std::vector<GpuMesh> meshes;
+    for (std::size_t i = 0; i < runtime->object_count(); ++i) {
+        auto mesh = (*world)->upload(view_of(runtime->mesh(i)));
+        ASSERT_TRUE(mesh) << mesh.message();
+        meshes.push_back(std::move(*mesh));
+    }
+    std::vector<GpuInstance> statics;
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+        if (scene->objects[i].is_static) statics.push_back({&meshes[i], runtime->model(i, 0.0)});
+    (*world)->set_static(statics);
+
+    // Frames spread over three seconds of the animation, so the movers cross the whole scene.
+    const int frames = 10;
+    const double stride = 3.0 / frames;
+    std::uint32_t growths = 0;
+    for (int f = 0; f < frames; ++f) {
+        const double t = f * stride;
+        std::vector<GpuInstance> dynamic;
+        for (std::size_t i = 0; i < meshes.size(); ++i) {
+            if (scene->objects[i].is_static) continue;
+            if (runtime->deforms(i)) {
+                ASSERT_TRUE((*world)->update_positions(meshes[i], runtime->positions(i, t)));
+            }
+            GpuInstance inst{&meshes[i], runtime->model(i, t)};
+            inst.prev_model = runtime->model(i, t - stride);
+            dynamic.push_back(inst);
+        }
+        auto step = (*world)->step(dynamic, float(stride));
+        ASSERT_TRUE(step) << step.message();
+        EXPECT_EQ(step->static_rebuilt, f == 0 || step->pool_growths > 0);
+        EXPECT_EQ(step->tree.exhausted, 0u);
+        growths += step->pool_growths;
+
+        std::vector<GpuInstance> everything = statics;
+        everything.insert(everything.end(), dynamic.begin(), dynamic.end());
+        ASSERT_TRUE((*scratch)->voxelize(everything, *grid, VoxelizeMethod::Compute));
+        std::vector<std::uint32_t> expected = *(*scratch)->read_fragments();
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        const auto leaves = (*world)->tree().leaf_voxels();
+        ASSERT_TRUE(leaves);
+        ASSERT_EQ(*leaves, expected) << file << " frame " << f;
+        EXPECT_EQ(step->tree.voxels, expected.size());
+    }
+    EXPECT_GT(growths, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, WorldMatchesScratch,
+                         ::testing::Combine(::testing::Values("fox_bunnies.json", "dragon_wall_arch.json"),
+                                            ::testing::Values(2u, 4u, 8u)),
+                         [](const ::testing::TestParamInfo<Param>& p) {
+                             std::string name =
+                                 std::get<0>(p.param).substr(0, std::get<0>(p.param).find('.'));
+                             name += "_b";
+                             name += std::to_string(std::get<1>(p.param));
+                             return name;
+                         });
+
+using WorldTest = GpuTest;
+
+TEST_F(WorldTest, staticSetIsVoxelizedAgainOnlyWhenItChanges) {
+    GridDesc grid;
+    grid.res = 16;
+    grid.voxel_size = 1.0f / 16.0f;
+    WorldDesc desc;
+    desc.grid = grid;
+    desc.tree.branching = 2;
+    auto world = VoxelWorld::create(ctx(), desc);
+    ASSERT_TRUE(world);
+    const Mesh box = make_box_mesh(glm::vec3(0.2f), glm::vec3(0.6f));
+    auto mesh = (*world)->upload(view_of(box));
+    ASSERT_TRUE(mesh);
+    (*world)->set_static({{&*mesh, glm::mat4(1.0f)}});
+    EXPECT_TRUE((*world)->step({}, 0.1f)->static_rebuilt);
+    EXPECT_FALSE((*world)->step({}, 0.1f)->static_rebuilt);
+    (*world)->set_static({{&*mesh, glm::mat4(1.0f)}});
+    EXPECT_FALSE((*world)->step({}, 0.1f)->static_rebuilt);
+    glm::mat4 moved(1.0f);
+    moved[3] = glm::vec4(0.1f, 0.0f, 0.0f, 1.0f);
+    (*world)->set_static({{&*mesh, moved}});
+    auto frame = (*world)->step({}, 0.1f);
+    ASSERT_TRUE(frame);
+    EXPECT_TRUE(frame->static_rebuilt);
+    EXPECT_EQ(frame->frame, 3u);
+    EXPECT_FALSE((*world)->step({}, 0.0f));
+}
+
+} // namespace
+} // namespace gust::test
