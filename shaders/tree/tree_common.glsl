@@ -27,7 +27,7 @@ uint thread_index() {
 
 uvec3 fragment_voxel(uint i) {
     uint key = WordsRef(tb.fragments).v[i];
-    return uvec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u);
+    return uvec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u) >> tb.key_shift;
 }
 
 uint fragment_count() { return min(WordsRef(tb.fragment_count).v[0], tb.fragment_capacity); }

@@ -90,7 +90,7 @@ struct TreeBindings {
     uint log2_branching; ///< 1, 2 or 3
     uint levels;         ///< tree depth: res = b^levels
     uint hysteresis;     ///< K: a block whose owner went more than K frames unreached is coarsened
-    uint pad;
+    uint key_shift;      ///< fragment keys are at res << key_shift: each coordinate is shifted right by it
 };
 
 /// Push constants of every tree pass.

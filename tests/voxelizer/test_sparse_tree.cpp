@@ -127,6 +127,34 @@ TEST_F(TreeTest, rejectsBadShapes) {
     EXPECT_FALSE(SparseTree::create(ctx(), d));
 }
 
+TEST_F(TreeTest, shallowerTreeOverFinerFragmentsHoldsTheirParentVoxels) {
+    TreeDesc desc;
+    desc.branching = 2;
+    Scene scene(ctx(), 64, desc);
+    scene.frame(0, true, true, false);
+    TreeDesc coarse;
+    coarse.branching = 2;
+    coarse.res = 16;
+    coarse.fragment_shift = 2;
+    auto tree = SparseTree::create(ctx(), coarse);
+    ASSERT_TRUE(tree) << tree.message();
+    const FragmentSource st{scene.static_vox->fragment_buffer().address(),
+                            scene.static_vox->fragment_count_address(),
+                            scene.static_vox->fragment_capacity()};
+    auto stats = (*tree)->update(&st, nullptr);
+    ASSERT_TRUE(stats) << stats.message();
+    std::vector<std::uint32_t> expected;
+    const std::vector<std::uint32_t> fine = *scene.static_vox->read_fragments();
+    for (std::uint32_t key : fine) {
+        const glm::uvec3 v = unpack_voxel(key) >> 2u;
+        expected.push_back(pack_voxel(v.x, v.y, v.z));
+    }
+    EXPECT_EQ(*(*tree)->leaf_voxels(), sorted_unique(expected));
+    EXPECT_EQ((*tree)->depth(), 4u);
+    coarse.fragment_shift = 7;
+    EXPECT_FALSE(SparseTree::create(ctx(), coarse));
+}
+
 TEST_F(TreeTest, objectThatLeavesReturnsThePoolToItsBaseline) {
     TreeDesc desc;
     desc.branching = 4;

@@ -56,7 +56,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
         size <<= log2_b;
         ++levels;
     }
-    if (desc.res < kMinRes || desc.res > kMaxRes || size != desc.res)
+    if (desc.res < desc.branching || desc.res > kMaxRes || size != desc.res)
         return Result<std::unique_ptr<SparseTree>>::failure(
             "tree resolution " + std::to_string(desc.res) + " must be a power of the branching factor " +
             std::to_string(desc.branching) + " in [" + std::to_string(kMinRes) + ", " +
@@ -68,6 +68,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     tree->log2_b_ = log2_b;
     tree->levels_ = levels;
     tree->hysteresis_ = desc.hysteresis;
+    tree->fragment_shift_ = desc.fragment_shift;
     struct Stage {
         gpu::Pipeline* pipeline;
         std::span<const std::uint32_t> code;
@@ -184,6 +185,7 @@ Status SparseTree::write_bindings(gpu::Buffer& bindings, const FragmentSource& s
     b.log2_branching = log2_b_;
     b.levels = levels_;
     b.hysteresis = hysteresis_;
+    b.key_shift = fragment_shift_;
     return gpu::upload(ctx_, bindings, &b, sizeof(b));
 }
 

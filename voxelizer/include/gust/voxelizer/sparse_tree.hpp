@@ -17,10 +17,13 @@ namespace gust {
 /// Shape and initial capacity of a tree.
 struct TreeDesc {
     std::uint32_t branching = 4;      ///< children per axis: 2 (octree), 4 or 8
-    std::uint32_t res = 256;          ///< voxels per axis, a power of `branching` in [8, 1024]
+    std::uint32_t res = 256;          ///< voxels per axis, a power of `branching` in [branching, 1024]
     std::uint32_t node_blocks = 1024; ///< initial node-pool capacity, in blocks of branching^3 nodes
     std::uint32_t mask_blocks = 4096; ///< initial leaf-mask capacity, in blocks (one per leaf brick)
     std::uint32_t hysteresis = 8; ///< K: blocks whose owner went more than K frames unreached are coarsened
+    /// Fragments come from a grid finer by 2^fragment_shift per axis (a shallower tree over the same
+    /// fragments, as the seed's depth table builds); 0 for fragments at `res`.
+    std::uint32_t fragment_shift = 0;
 };
 
 /// A fragment list on the device, as the voxelizer leaves it.
@@ -52,7 +55,8 @@ struct TreeStats {
 /// The tree. Thread-compatible; the Context must outlive it.
 class SparseTree {
   public:
-    /// Fails on a branching other than 2, 4, 8 or a res that is not a power of it in [8, 1024].
+    /// Fails on a branching other than 2, 4, 8, a res that is not a power of it in [branching, 1024], or
+    /// a fragment grid finer than 1024.
     static Result<std::unique_ptr<SparseTree>> create(gpu::Context& ctx, const TreeDesc& desc);
 
     /// One frame: when `rebuild_static` is given, the tree is emptied and those fragments are inserted
@@ -83,6 +87,7 @@ class SparseTree {
     std::uint32_t log2_b_ = 2;
     std::uint32_t levels_ = 1;
     std::uint32_t hysteresis_ = 8;
+    std::uint32_t fragment_shift_ = 0;
     std::uint32_t node_blocks_ = 0;
     std::uint32_t mask_blocks_ = 0;
     std::uint32_t frame_ = 0;
