@@ -59,8 +59,12 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     if (desc.res < desc.branching || desc.res > kMaxRes || size != desc.res)
         return Result<std::unique_ptr<SparseTree>>::failure(
             "tree resolution " + std::to_string(desc.res) + " must be a power of the branching factor " +
-            std::to_string(desc.branching) + " in [" + std::to_string(kMinRes) + ", " +
+            std::to_string(desc.branching) + " in [" + std::to_string(desc.branching) + ", " +
             std::to_string(kMaxRes) + "]");
+    if (desc.fragment_shift > 10 || (std::uint64_t(desc.res) << desc.fragment_shift) > kMaxRes)
+        return Result<std::unique_ptr<SparseTree>>::failure("fragment_shift " + std::to_string(desc.fragment_shift) +
+                                                            " puts the fragment grid beyond " +
+                                                            std::to_string(kMaxRes) + " voxels per axis");
     if (desc.node_blocks < 1 || desc.mask_blocks < 1)
         return Result<std::unique_ptr<SparseTree>>::failure("pool capacities must be at least one block");
 
