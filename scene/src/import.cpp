@@ -67,33 +67,11 @@ std::string problem(const Mesh& mesh) {
 }
 
 Result<Mesh> load(const fs::path& path) {
-    std::error_code ec;
-    const fs::file_status status = fs::status(path, ec);
-    if (!fs::exists(status)) {
-        if (ec && ec != std::errc::no_such_file_or_directory) {
-            return Result<Mesh>::failure("cannot access file (" + ec.message() + ")");
-        }
-        return Result<Mesh>::failure("file not found");
-    }
-    if (fs::is_directory(status)) return Result<Mesh>::failure("is a directory, not a mesh file");
-    if (!fs::is_regular_file(status)) return Result<Mesh>::failure("not a regular file");
-
-    const std::string ext = lower(path.extension().string());
-    if (std::find(kExtensions.begin(), kExtensions.end(), ext) == kExtensions.end()) {
-        const std::string what = ext.empty() ? "no file extension" : "unsupported extension '" + ext + "'";
-        return Result<Mesh>::failure(what + " " + expected_extensions());
-    }
-
-    const std::uintmax_t size = fs::file_size(path, ec);
-    if (ec) return Result<Mesh>::failure("cannot read file size (" + ec.message() + ")");
-    if (size == 0) return Result<Mesh>::failure("empty file");
-    if (size > std::numeric_limits<std::size_t>::max()) return Result<Mesh>::failure("file too large");
-
-    Result<std::vector<unsigned char>> bytes = read_bytes(path, size);
-    if (!bytes) return bytes.status();
-
-    Result<Mesh> mesh = (ext == ".gltf" || ext == ".glb") ? detail::load_gltf(*bytes, path)
-                                                          : detail::load_with_assimp(*bytes, ext.substr(1));
+    Result<detail::MeshFile> file = detail::read_mesh_file(path);
+    if (!file) return file.status();
+    const std::vector<unsigned char>& bytes = file->bytes;
+    Result<Mesh> mesh = file->gltf() ? detail::load_gltf(bytes, path)
+                                     : detail::load_with_assimp(bytes, file->extension.substr(1));
     if (!mesh) return mesh;
     if (std::string reason = problem(*mesh); !reason.empty()) return Result<Mesh>::failure(reason);
     mesh->name = path.filename().string();
@@ -123,6 +101,37 @@ Status validate_mesh(const Mesh& mesh) {
 }
 
 namespace detail {
+
+Result<MeshFile> read_mesh_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (!fs::exists(status)) {
+        if (ec && ec != std::errc::no_such_file_or_directory) {
+            return Result<MeshFile>::failure("cannot access file (" + ec.message() + ")");
+        }
+        return Result<MeshFile>::failure("file not found");
+    }
+    if (fs::is_directory(status)) return Result<MeshFile>::failure("is a directory, not a mesh file");
+    if (!fs::is_regular_file(status)) return Result<MeshFile>::failure("not a regular file");
+
+    MeshFile file;
+    file.extension = lower(path.extension().string());
+    if (std::find(kExtensions.begin(), kExtensions.end(), file.extension) == kExtensions.end()) {
+        const std::string what =
+            file.extension.empty() ? "no file extension" : "unsupported extension '" + file.extension + "'";
+        return Result<MeshFile>::failure(what + " " + expected_extensions());
+    }
+
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (ec) return Result<MeshFile>::failure("cannot read file size (" + ec.message() + ")");
+    if (size == 0) return Result<MeshFile>::failure("empty file");
+    if (size > std::numeric_limits<std::size_t>::max()) return Result<MeshFile>::failure("file too large");
+
+    Result<std::vector<unsigned char>> bytes = read_bytes(path, size);
+    if (!bytes) return bytes.status();
+    file.bytes = std::move(*bytes);
+    return file;
+}
 
 std::string clean_message(std::string_view message) {
     constexpr std::size_t kMaxLength = 300;

@@ -12,6 +12,17 @@
 
 namespace gust::detail {
 
+/// A mesh file read into memory.
+struct MeshFile {
+    std::vector<unsigned char> bytes; ///< the whole file
+    std::string extension;            ///< lower case, with the dot: ".glb"
+    bool gltf() const { return extension == ".gltf" || extension == ".glb"; }
+};
+
+/// Reads the mesh file at `path` after the checks every format shares: it exists, is a regular file
+/// with one of load_mesh's extensions, and is not empty.
+Result<MeshFile> read_mesh_file(const std::filesystem::path& path);
+
 /// Converts the PLY, OBJ or STL file held in `bytes` (whose extension, lower case without the dot, is
 /// `extension`) with Assimp, after checking what Assimp would trust blindly (PLY and STL counts).
 Result<Mesh> load_with_assimp(const std::vector<unsigned char>& bytes, std::string_view extension);

@@ -2,6 +2,7 @@
 // type is dropped without a word, a required extension it cannot decode surfaces as an unrelated
 // error, and accessor ranges are not checked against their buffers. So the JSON is checked against
 // the core schema's property types first, and every accessor read is bounds-checked here.
+#include "gltf_detail.hpp"
 #include "import_detail.hpp"
 
 #include <algorithm>
@@ -365,115 +366,6 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 // ---------------------------------------------------------------------------------------------------
 // Accessors
 
-/// Where one primitive is, for messages: "mesh 'Cube' primitive 0".
-std::string where(const tinygltf::Model& model, std::size_t mesh, std::size_t primitive) {
-    const std::string& name = model.meshes[mesh].name;
-    return (name.empty() ? "mesh " + std::to_string(mesh) : "mesh '" + name + "'") + " primitive " +
-           std::to_string(primitive);
-}
-
-/// `size` bytes at `offset` inside buffer view `view`, or a failure naming `what`.
-Result<const unsigned char*> view_bytes(const tinygltf::Model& model, int view, std::uint64_t offset,
-                                        std::uint64_t size, const std::string& what) {
-    using R = Result<const unsigned char*>;
-    if (view < 0 || static_cast<std::size_t>(view) >= model.bufferViews.size()) {
-        return R::failure(what + " refers to missing buffer view " + std::to_string(view));
-    }
-    const tinygltf::BufferView& bv = model.bufferViews[static_cast<std::size_t>(view)];
-    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model.buffers.size()) {
-        return R::failure("buffer view " + std::to_string(view) + " refers to missing buffer " +
-                          std::to_string(bv.buffer));
-    }
-    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(bv.buffer)].data;
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) {
-        return R::failure("buffer view " + std::to_string(view) + " lies outside its buffer (" +
-                          std::to_string(data.size()) + " bytes)");
-    }
-    if (offset > bv.byteLength || size > bv.byteLength - offset) {
-        return R::failure(what + " reads past the end of buffer view " + std::to_string(view));
-    }
-    return data.data() + bv.byteOffset + offset;
-}
-
-/// Reads every element of accessor `index` with `decode(bytes)`, sparse substitutions applied.
-/// Accessors without a buffer view are zero-filled; their count is limited to the file size so that a
-/// bare count cannot demand unbounded memory.
-template <class T, class Decode>
-Result<std::vector<T>> read_accessor(const tinygltf::Model& model, int index, std::size_t file_size,
-                                     Decode decode) {
-    using R = Result<std::vector<T>>;
-    const std::string what = "accessor " + std::to_string(index);
-    if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
-        return R::failure(what + " does not exist");
-    }
-    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
-    const int component =
-        tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(accessor.componentType));
-    const int components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(accessor.type));
-    if (component <= 0 || components <= 0) return R::failure(what + " has an invalid type");
-    const auto element = static_cast<std::uint64_t>(component) * static_cast<std::uint64_t>(components);
-    const std::uint64_t count = accessor.count;
-
-    std::vector<T> out;
-    if (accessor.bufferView >= 0) {
-        if (static_cast<std::size_t>(accessor.bufferView) >= model.bufferViews.size()) {
-            return R::failure(what + " refers to missing buffer view " + std::to_string(accessor.bufferView));
-        }
-        const tinygltf::BufferView& bv = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
-        const std::uint64_t stride = bv.byteStride != 0 ? bv.byteStride : element;
-        if (stride < element) return R::failure(what + " has a byte stride smaller than its elements");
-        if (count > 0) {
-            // Compared before multiplying so that a huge count cannot overflow the byte span.
-            if (count - 1 > bv.byteLength / stride) {
-                return R::failure(what + " reads past the end of buffer view " +
-                                  std::to_string(accessor.bufferView));
-            }
-            Result<const unsigned char*> bytes = view_bytes(model, accessor.bufferView, accessor.byteOffset,
-                                                            (count - 1) * stride + element, what);
-            if (!bytes) return bytes.status();
-            out.reserve(static_cast<std::size_t>(count));
-            for (std::uint64_t i = 0; i < count; ++i) {
-                out.push_back(decode(*bytes + i * stride));
-            }
-        }
-    } else if (count > file_size) {
-        return R::failure(what + " has no buffer view and " + std::to_string(count) +
-                          " elements, more than the file could describe");
-    } else {
-        out.assign(static_cast<std::size_t>(count), T{});
-    }
-
-    if (!accessor.sparse.isSparse) return out;
-    const auto& sparse = accessor.sparse;
-    const auto sparse_count = static_cast<std::uint64_t>(sparse.count);
-    if (sparse.count < 0 || sparse_count > count) return R::failure(what + " has an invalid sparse count");
-    const int sparse_type = sparse.indices.componentType;
-    if (sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-        sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-        sparse_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) {
-        return R::failure(what + " has an invalid sparse index type");
-    }
-    const auto index_size =
-        static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(sparse_type)));
-    Result<const unsigned char*> indices =
-        view_bytes(model, sparse.indices.bufferView, static_cast<std::uint64_t>(sparse.indices.byteOffset),
-                   sparse_count * index_size, what + " sparse indices");
-    if (!indices) return indices.status();
-    Result<const unsigned char*> values =
-        view_bytes(model, sparse.values.bufferView, static_cast<std::uint64_t>(sparse.values.byteOffset),
-                   sparse_count * element, what + " sparse values");
-    if (!values) return values.status();
-    for (std::uint64_t i = 0; i < sparse_count; ++i) {
-        std::uint64_t target = 0;
-        for (std::size_t b = index_size; b-- > 0;) { // little-endian
-            target = (target << 8) | (*indices)[i * index_size + b];
-        }
-        if (target >= count) return R::failure(what + " has a sparse index out of range");
-        out[static_cast<std::size_t>(target)] = decode(*values + i * element);
-    }
-    return out;
-}
-
 glm::vec3 decode_vec3(const unsigned char* p) {
     glm::vec3 v;
     std::memcpy(&v, p, sizeof v);
@@ -525,26 +417,12 @@ Result<std::vector<std::uint32_t>> read_indices(const tinygltf::Model& model, in
 // ---------------------------------------------------------------------------------------------------
 // Scene
 
-glm::dmat4 local_transform(const tinygltf::Node& node) {
-    if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data());
-    glm::dmat4 m(1.0);
-    if (node.translation.size() == 3) m = glm::translate(m, glm::make_vec3(node.translation.data()));
-    if (node.rotation.size() == 4) {
-        const std::vector<double>& q = node.rotation; // glTF order: x, y, z, w
-        glm::dquat rotation(q[3], q[0], q[1], q[2]);
-        const double length = glm::length(rotation);
-        if (length > 0) rotation /= length;
-        m *= glm::mat4_cast(rotation);
-    }
-    if (node.scale.size() == 3) m = glm::scale(m, glm::make_vec3(node.scale.data()));
-    return m;
-}
-
 class Builder {
   public:
     Builder(const tinygltf::Model& model, std::size_t file_size) : model_(model), file_size_(file_size) {}
 
-    Status add_mesh(std::size_t mesh_index, const glm::dmat4& transform) {
+    /// Adds the triangles of mesh `mesh_index` as instanced by node `node`, placed by `transform`.
+    Status add_mesh(std::size_t mesh_index, const glm::dmat4& transform, int node) {
         const tinygltf::Mesh& mesh = model_.meshes[mesh_index];
         // Primitives often share one POSITION accessor (one primitive per material).
         std::map<int, std::uint32_t> bases;
@@ -560,7 +438,8 @@ class Builder {
                 mode != TINYGLTF_MODE_TRIANGLE_FAN) {
                 return fail("unknown primitive mode " + std::to_string(mode), mesh_index, p);
             }
-            if (Status status = add_primitive(primitive, mode, transform, bases, mesh_index, p); !status) {
+            if (Status status = add_primitive(primitive, mode, transform, bases, {node, mesh_index, p});
+                !status) {
                 return status;
             }
         }
@@ -569,14 +448,17 @@ class Builder {
 
     bool saw_points_or_lines() const { return saw_points_or_lines_; }
     Mesh& mesh() { return out_; }
+    std::vector<GltfVertexBlock>& blocks() { return blocks_; }
 
   private:
     Status fail(const std::string& reason, std::size_t mesh, std::size_t primitive) const {
-        return Status::failure(reason + " in " + where(model_, mesh, primitive));
+        return Status::failure(reason + " in " + primitive_name(model_, mesh, primitive));
     }
 
     Status add_primitive(const tinygltf::Primitive& primitive, int mode, const glm::dmat4& transform,
-                         std::map<int, std::uint32_t>& bases, std::size_t mesh, std::size_t p) {
+                         std::map<int, std::uint32_t>& bases, GltfVertexBlock block) {
+        const std::size_t mesh = block.mesh;
+        const std::size_t p = block.primitive;
         const auto position = primitive.attributes.find("POSITION");
         if (position == primitive.attributes.end()) return fail("no POSITION attribute", mesh, p);
         for (const auto& [name, accessor] : primitive.attributes) {
@@ -603,6 +485,9 @@ class Builder {
                 return Status::failure("too many vertices for 32-bit indices");
             }
             base = bases.emplace(position->second, static_cast<std::uint32_t>(out_.positions.size())).first;
+            block.first = base->second;
+            block.count = static_cast<std::uint32_t>(positions->size());
+            blocks_.push_back(block);
             for (const glm::vec3& v : *positions) {
                 out_.positions.emplace_back(transform * glm::dvec4(v, 1.0));
             }
@@ -660,6 +545,7 @@ class Builder {
     const tinygltf::Model& model_;
     std::size_t file_size_;
     Mesh out_;
+    std::vector<GltfVertexBlock> blocks_;
     bool saw_points_or_lines_ = false;
 };
 
@@ -727,52 +613,6 @@ Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::ve
     return roots;
 }
 
-Result<Mesh> build(const tinygltf::Model& model, std::size_t file_size) {
-    Result<std::vector<int>> parent = parents(model);
-    if (!parent) return parent.status();
-    Result<std::vector<int>> roots = scene_roots(model, *parent);
-    if (!roots) return roots.status();
-
-    Builder builder(model, file_size);
-    // Depth-first with an explicit stack: node chains can be as deep as the file is long.
-    struct Visit {
-        int node;
-        glm::dmat4 parent_world;
-    };
-    std::vector<Visit> stack;
-    for (auto it = roots->rbegin(); it != roots->rend(); ++it)
-        stack.push_back({*it, glm::dmat4(1.0)});
-    // Exporters do list non-root nodes as scene roots (Kenney's UniGLTF files list the child of a
-    // "tmpParent" node), so such a node starts from the identity, and a node already reached through
-    // another root is not instanced twice.
-    std::vector<bool> visited(model.nodes.size(), false);
-    while (!stack.empty()) {
-        const Visit visit = stack.back();
-        stack.pop_back();
-        if (visited[static_cast<std::size_t>(visit.node)]) continue;
-        visited[static_cast<std::size_t>(visit.node)] = true;
-        const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(visit.node)];
-        const glm::dmat4 world = visit.parent_world * local_transform(node);
-        if (node.mesh >= 0) {
-            if (static_cast<std::size_t>(node.mesh) >= model.meshes.size()) {
-                return Result<Mesh>::failure("node " + std::to_string(visit.node) +
-                                             " refers to missing mesh " + std::to_string(node.mesh));
-            }
-            // glTF ignores the node transform of a skinned mesh (the joints place it); with the
-            // joints in their bind pose that leaves the raw POSITION data.
-            const glm::dmat4 transform = node.skin >= 0 ? glm::dmat4(1.0) : world;
-            if (Status status = builder.add_mesh(static_cast<std::size_t>(node.mesh), transform); !status) {
-                return status;
-            }
-        }
-        for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
-            stack.push_back({*it, world});
-    }
-    if (builder.mesh().indices.empty())
-        return Result<Mesh>::failure(no_triangles_reason(builder.saw_points_or_lines()));
-    return std::move(builder.mesh());
-}
-
 // libdraco, which Assimp links, exports its own tinygltf build under the same symbol names, and its
 // types do not match this header. Calls go to whichever of the two the dynamic linker met first, so a
 // link order with draco first would corrupt memory; refuse instead. tinygltf compiled into the same
@@ -797,9 +637,55 @@ Status check_tinygltf_binding() {
 
 } // namespace
 
-Result<Mesh> load_gltf(const std::vector<unsigned char>& bytes, const std::filesystem::path& path) {
+std::string primitive_name(const tinygltf::Model& model, std::size_t mesh, std::size_t primitive) {
+    const std::string& name = model.meshes[mesh].name;
+    return (name.empty() ? "mesh " + std::to_string(mesh) : "mesh '" + name + "'") + " primitive " +
+           std::to_string(primitive);
+}
+
+Result<const unsigned char*> view_bytes(const tinygltf::Model& model, int view, std::uint64_t offset,
+                                        std::uint64_t size, const std::string& what) {
+    using R = Result<const unsigned char*>;
+    if (view < 0 || static_cast<std::size_t>(view) >= model.bufferViews.size()) {
+        return R::failure(what + " refers to missing buffer view " + std::to_string(view));
+    }
+    const tinygltf::BufferView& bv = model.bufferViews[static_cast<std::size_t>(view)];
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model.buffers.size()) {
+        return R::failure("buffer view " + std::to_string(view) + " refers to missing buffer " +
+                          std::to_string(bv.buffer));
+    }
+    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(bv.buffer)].data;
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) {
+        return R::failure("buffer view " + std::to_string(view) + " lies outside its buffer (" +
+                          std::to_string(data.size()) + " bytes)");
+    }
+    if (offset > bv.byteLength || size > bv.byteLength - offset) {
+        return R::failure(what + " reads past the end of buffer view " + std::to_string(view));
+    }
+    return data.data() + bv.byteOffset + offset;
+}
+
+glm::dmat4 trs_matrix(const glm::dvec3& translation, glm::dquat rotation, const glm::dvec3& scale) {
+    const double length = glm::length(rotation);
+    if (length > 0) rotation /= length;
+    return glm::scale(glm::translate(glm::dmat4(1.0), translation) * glm::mat4_cast(rotation), scale);
+}
+
+glm::dmat4 local_transform(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data());
+    const std::vector<double>& t = node.translation;
+    const std::vector<double>& r = node.rotation; // glTF order: x, y, z, w
+    const std::vector<double>& s = node.scale;
+    return trs_matrix(t.size() == 3 ? glm::make_vec3(t.data()) : glm::dvec3(0.0),
+                      r.size() == 4 ? glm::dquat(r[3], r[0], r[1], r[2]) : glm::dquat(1.0, 0.0, 0.0, 0.0),
+                      s.size() == 3 ? glm::make_vec3(s.data()) : glm::dvec3(1.0));
+}
+
+Result<tinygltf::Model> parse_gltf(const std::vector<unsigned char>& bytes,
+                                   const std::filesystem::path& path) {
+    using R = Result<tinygltf::Model>;
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
-        return Result<Mesh>::failure("file too large for tinygltf (over 4 GiB)");
+        return R::failure("file too large for tinygltf (over 4 GiB)");
     }
     if (Status status = check_tinygltf_binding(); !status) return status;
     Result<std::string_view> text = json_text(bytes);
@@ -822,10 +708,74 @@ Result<Mesh> load_gltf(const std::vector<unsigned char>& bytes, const std::files
                                              reinterpret_cast<const char*>(bytes.data()), size, base_dir);
     } catch (const std::exception& e) {
         // tinygltf indexes some arrays with vector::at on values it has not checked.
-        return Result<Mesh>::failure("malformed glTF (tinygltf: " + clean_message(e.what()) + ")");
+        return R::failure("malformed glTF (tinygltf: " + clean_message(e.what()) + ")");
     }
-    if (!loaded) return Result<Mesh>::failure(error.empty() ? "tinygltf failed" : clean_message(error));
-    return build(model, bytes.size());
+    if (!loaded) return R::failure(error.empty() ? "tinygltf failed" : clean_message(error));
+    return model;
+}
+
+Result<GltfGeometry> build_gltf(const tinygltf::Model& model, std::size_t file_size) {
+    using R = Result<GltfGeometry>;
+    Result<std::vector<int>> parent = parents(model);
+    if (!parent) return parent.status();
+    Result<std::vector<int>> roots = scene_roots(model, *parent);
+    if (!roots) return roots.status();
+
+    GltfGeometry geometry;
+    geometry.walk_parent.assign(model.nodes.size(), -1);
+    Builder builder(model, file_size);
+    // Depth-first with an explicit stack: node chains can be as deep as the file is long.
+    struct Visit {
+        int node;
+        int from;
+        glm::dmat4 parent_world;
+    };
+    std::vector<Visit> stack;
+    for (auto it = roots->rbegin(); it != roots->rend(); ++it)
+        stack.push_back({*it, -1, glm::dmat4(1.0)});
+    // Exporters do list non-root nodes as scene roots (Kenney's UniGLTF files list the child of a
+    // "tmpParent" node), so such a node starts from the identity, and a node already reached through
+    // another root is not instanced twice.
+    std::vector<bool> visited(model.nodes.size(), false);
+    while (!stack.empty()) {
+        const Visit visit = stack.back();
+        stack.pop_back();
+        const auto index = static_cast<std::size_t>(visit.node);
+        if (visited[index]) continue;
+        visited[index] = true;
+        geometry.walk_order.push_back(visit.node);
+        geometry.walk_parent[index] = visit.from;
+        const tinygltf::Node& node = model.nodes[index];
+        const glm::dmat4 world = visit.parent_world * local_transform(node);
+        if (node.mesh >= 0) {
+            if (static_cast<std::size_t>(node.mesh) >= model.meshes.size()) {
+                return R::failure("node " + std::to_string(visit.node) + " refers to missing mesh " +
+                                  std::to_string(node.mesh));
+            }
+            // glTF ignores the node transform of a skinned mesh (the joints place it); with the
+            // joints in their bind pose that leaves the raw POSITION data.
+            const glm::dmat4 transform = node.skin >= 0 ? glm::dmat4(1.0) : world;
+            if (Status status = builder.add_mesh(static_cast<std::size_t>(node.mesh), transform, visit.node);
+                !status) {
+                return status;
+            }
+        }
+        for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
+            stack.push_back({*it, visit.node, world});
+    }
+    if (builder.mesh().indices.empty()) return R::failure(no_triangles_reason(builder.saw_points_or_lines()));
+    geometry.mesh = std::move(builder.mesh());
+    geometry.blocks = std::move(builder.blocks());
+    geometry.parent = std::move(*parent);
+    return geometry;
+}
+
+Result<Mesh> load_gltf(const std::vector<unsigned char>& bytes, const std::filesystem::path& path) {
+    Result<tinygltf::Model> model = parse_gltf(bytes, path);
+    if (!model) return model.status();
+    Result<GltfGeometry> geometry = build_gltf(*model, bytes.size());
+    if (!geometry) return geometry.status();
+    return std::move(geometry->mesh);
 }
 
 } // namespace gust::detail

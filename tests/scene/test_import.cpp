@@ -2,6 +2,7 @@
 // files for transforms and accessors, and broken files that must fail with a clear message.
 #include "gust/scene/import.hpp"
 #include "gust/scene/primitives.hpp"
+#include "scene_test_support.hpp"
 
 #include <atomic>
 #include <cctype>
@@ -21,6 +22,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using gust::test::GltfWriter;
+using gust::test::kTriangle;
+using gust::test::triangle_primitive;
 using nlohmann::json;
 
 const fs::path kAssets = GUST_ASSETS_DIR;
@@ -128,92 +132,6 @@ class ImportTest : public testing::Test {
 std::string read_file(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string base64(const std::vector<unsigned char>& bytes) {
-    static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
-        std::uint32_t v = 0;
-        for (std::size_t k = 0; k < 3; ++k)
-            v = (v << 8) | (k < n ? bytes[i + k] : 0u);
-        for (std::size_t k = 0; k < 4; ++k) {
-            out += k <= n ? kDigits[(v >> (18 - 6 * k)) & 63u] : '=';
-        }
-    }
-    return out;
-}
-
-// Builds small glTF files with one embedded buffer.
-class GltfWriter {
-  public:
-    GltfWriter() {
-        doc_ = {{"asset", {{"version", "2.0"}}},
-                {"scenes", json::array({json::object({{"nodes", json::array()}})})},
-                {"nodes", json::array()},
-                {"meshes", json::array()},
-                {"accessors", json::array()},
-                {"bufferViews", json::array()}};
-    }
-
-    int add_view(const void* data, std::size_t size) {
-        while (bin_.size() % 4 != 0)
-            bin_.push_back(0);
-        const std::size_t offset = bin_.size();
-        bin_.resize(offset + size);
-        std::memcpy(bin_.data() + offset, data, size);
-        doc_["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}});
-        return static_cast<int>(doc_["bufferViews"].size()) - 1;
-    }
-
-    int add_positions(const std::vector<glm::vec3>& positions) {
-        const int view = add_view(positions.data(), positions.size() * sizeof(glm::vec3));
-        return add_accessor(
-            {{"bufferView", view}, {"componentType", 5126}, {"count", positions.size()}, {"type", "VEC3"}});
-    }
-
-    int add_indices(const std::vector<std::uint16_t>& indices) {
-        const int view = add_view(indices.data(), indices.size() * sizeof(std::uint16_t));
-        return add_accessor(
-            {{"bufferView", view}, {"componentType", 5123}, {"count", indices.size()}, {"type", "SCALAR"}});
-    }
-
-    int add_accessor(json accessor) {
-        doc_["accessors"].push_back(std::move(accessor));
-        return static_cast<int>(doc_["accessors"].size()) - 1;
-    }
-
-    int add_mesh(json primitives) {
-        doc_["meshes"].push_back({{"primitives", std::move(primitives)}});
-        return static_cast<int>(doc_["meshes"].size()) - 1;
-    }
-
-    int add_node(json node) {
-        doc_["nodes"].push_back(std::move(node));
-        return static_cast<int>(doc_["nodes"].size()) - 1;
-    }
-
-    void add_root(int node) { doc_["scenes"][0]["nodes"].push_back(node); }
-
-    json& doc() { return doc_; }
-
-    std::string text() {
-        json doc = doc_;
-        doc["buffers"] = json::array(
-            {{{"byteLength", bin_.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin_)}}});
-        return doc.dump();
-    }
-
-  private:
-    json doc_;
-    std::vector<unsigned char> bin_;
-};
-
-const std::vector<glm::vec3> kTriangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-
-json triangle_primitive(int positions) {
-    return json::array({{{"attributes", {{"POSITION", positions}}}}});
 }
 
 // ---------------------------------------------------------------------------------------------------

@@ -1,0 +1,57 @@
+// glTF animation playback on the CPU: node hierarchy, rigid node animation and linear-blend skinning.
+#pragma once
+
+#include "gust/gpu/result.hpp"
+#include "gust/scene/mesh.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace gust {
+
+/// A glTF mesh (static or skinned) whose posed vertices can be evaluated at any time of any of its
+/// animation clips (CPU linear-blend skinning). Immutable once loaded: copies share the data, and every
+/// const member may be called from several threads at once.
+class AnimatedMesh {
+  public:
+    /// Loads a .gltf or .glb file with everything load_mesh checks, plus skins (joint indices in range,
+    /// weights finite and non-negative) and animation clips (key times, value types and counts). On
+    /// failure the message is "<path>: <reason>"; it never throws.
+    static Result<AnimatedMesh> load(const std::filesystem::path& gltf_or_glb);
+
+    /// The triangles exactly as load_mesh returns them (file's scene space and units; skinned meshes as
+    /// raw POSITION data). pose() writes positions for the same vertices in the same order.
+    const Mesh& bind_pose() const;
+
+    /// The names of the file's animation clips in file order; unnamed clips are "clip<index>".
+    std::vector<std::string> clip_names() const;
+
+    /// The index of the first clip called `name` (as clip_names() gives it), if any.
+    std::optional<std::size_t> find_clip(const std::string& name) const;
+
+    /// The clip's length in seconds: its last key time (clips start at time 0). 0 for a clip index out
+    /// of range.
+    double clip_duration(std::size_t clip) const;
+
+    /// Whether any vertex follows joints of a skin (otherwise only rigid node animation moves it).
+    bool skinned() const;
+
+    /// Posed positions at time `t` (seconds) of `clip`, in the space of bind_pose(), written into `out`
+    /// (resized to bind_pose().positions.size()). With `loop`, t wraps into [0, duration); otherwise the
+    /// clip holds its first and last keys outside its range. A clip index out of range gives the rest
+    /// pose (nodes as the file places them), which for a file whose inverse bind matrices invert its
+    /// joints' placement equals bind_pose() up to rounding. Non-finite t is taken as 0.
+    void pose(std::size_t clip, double t, bool loop, std::vector<glm::vec3>& out) const;
+
+  private:
+    struct Data; ///< skeleton, skins, clips and per-vertex influences
+    explicit AnimatedMesh(std::shared_ptr<const Data> data) : data_(std::move(data)) {}
+    std::shared_ptr<const Data> data_;
+};
+
+} // namespace gust

@@ -1,0 +1,90 @@
+// Scene files (JSON, docs/scene-format.md): meshes with transforms, rigid keyframes and skinned clips,
+// emitters, ambient wind and the simulation domain. Loading checks every value and never throws.
+#pragma once
+
+#include "gust/gpu/result.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace gust {
+
+/// Places a mesh in the world: translate + Rz(rz)·Ry(ry)·Rx(rx)·(scale·p), rotations in degrees about
+/// the world axes, x first. Units are the scene's (metres for the wind).
+struct Transform {
+    glm::vec3 translate{0.0f};  ///< world units
+    glm::vec3 rotate_deg{0.0f}; ///< degrees about world x, y, z, applied x first
+    float scale = 1.0f;         ///< uniform, > 0
+    /// The matrix mapping mesh space to world space.
+    glm::mat4 matrix() const;
+};
+
+/// One key of a rigid object's motion.
+struct Keyframe {
+    double t = 0.0;      ///< seconds (frame · dt)
+    Transform transform; ///< the object's placement at t
+};
+
+/// A skinned clip to play (glTF meshes only): clip time = offset + speed · scene time.
+struct AnimationDesc {
+    std::string clip;    ///< clip name as AnimatedMesh::clip_names() gives it
+    double speed = 1.0;  ///< playback rate (1 = as authored; negative plays backwards)
+    bool loop = true;    ///< wrap at the clip's end; otherwise hold the last key
+    double offset = 0.0; ///< clip time at scene time 0, seconds
+};
+
+/// One mesh instance in the scene.
+struct SceneObject {
+    std::filesystem::path mesh;             ///< absolute (resolved relative to the scene file's folder)
+    bool is_static = false;                 ///< JSON "static": never moves, voxelized once
+    Transform transform;                    ///< used when there are no keyframes
+    std::vector<Keyframe> keyframes;        ///< strictly increasing t; empty for a fixed transform
+    std::optional<AnimationDesc> animation; ///< a skinned clip deforming the mesh, if any
+};
+
+/// A wind source. The solver defines each type's profile; these are its parameters.
+struct EmitterDesc {
+    std::string type;             ///< "directional", "omni", "vortex" or "motor"
+    glm::vec3 position{0.0f};     ///< world units (metres)
+    glm::vec3 direction{1, 0, 0}; ///< unit vector (normalised at load): flow or axis direction
+    float radius = 1.0f;          ///< metres, > 0
+    float strength = 0.0f;        ///< wind speed at the centre, m/s (negative reverses it)
+    float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p inside the radius, >= 0 (0 = uniform)
+};
+
+/// The simulated box and its resolution.
+struct DomainDesc {
+    glm::vec3 center{0.0f};            ///< world units (metres); min corner = center − cells·cell_size/2
+    glm::uvec3 cells{32, 16, 32};      ///< wind cells per axis, each 8..256
+    float cell_size = 1.0f;            ///< metres, > 0
+    std::uint32_t voxels_per_cell = 4; ///< voxels per wind cell per axis, 1..1024
+    std::uint32_t branching = 4;       ///< sparse tree branching per axis: 2, 4 or 8
+    std::uint32_t hysteresis = 8;      ///< frames a tree node stays refined after its last fragment
+};
+
+/// A whole scene file.
+struct SceneDesc {
+    std::filesystem::path file;        ///< the scene file as given to load_scene (for messages)
+    double dt = 0.02;                  ///< seconds per frame, > 0
+    DomainDesc domain;                 ///< the simulated box
+    glm::vec3 ambient_velocity{0.0f};  ///< m/s, world space, entering at the domain's faces
+    std::vector<SceneObject> objects;  ///< meshes, in file order
+    std::vector<EmitterDesc> emitters; ///< wind sources, in file order
+};
+
+/// Reads and checks a scene file. Mesh files must exist (they are not opened here: the mesh loaders
+/// report their own errors later). On failure the message is "<file>: <key path>: <reason>", e.g.
+/// "scene.json: objects[1].keyframes[2].t: keyframes must be in increasing time order (2.0 after 3.0)";
+/// it never throws. Safe to call from several threads at once.
+Result<SceneDesc> load_scene(const std::filesystem::path& file);
+
+/// World matrix of an object at time t (seconds): keyframes interpolate linearly in time per component
+/// (translate, rotate_deg, scale), holding the end values outside their range; without keyframes the
+/// object's transform.
+glm::mat4 object_matrix(const SceneObject& object, double t);
+
+} // namespace gust

@@ -1,0 +1,490 @@
+// Scene files: DESIGN.md's core example, the documented extensions and defaults, transform and
+// keyframe math, and every kind of bad file failing with its file, key path and reason.
+#include "gust/scene/scene_file.hpp"
+#include "scene_test_support.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// DESIGN.md, "Interfaces that others rely on", verbatim: this core must keep reading as written.
+constexpr const char* kDesignExample = R"({
+  "dt": 0.02,
+  "domain": { "center": [0, 8, 0], "cells": [32, 16, 32], "cell_size": 1.0,
+              "voxels_per_cell": 4, "branching": 4 },
+  "ambient": { "velocity": [4, 0, 0] },
+  "objects": [
+    { "mesh": "wall.obj", "static": true,
+      "transform": { "translate": [0, 0, 0], "rotate_deg": [0, 30, 0], "scale": 1.0 } },
+    { "mesh": "bunny.ply", "keyframes": [
+        { "t": 0.0, "translate": [-10, 2, 0], "rotate_deg": [0, 0, 0], "scale": 1.0 },
+        { "t": 2.0, "translate": [ 10, 2, 0], "rotate_deg": [0, 180, 0], "scale": 1.0 } ] }
+  ],
+  "emitters": [ { "type": "omni", "position": [0, 2, 5], "radius": 3, "strength": 8 } ]
+})";
+
+void expect_vec3(glm::vec3 actual, glm::vec3 expected, float tolerance = 0.0f) {
+    EXPECT_NEAR(actual.x, expected.x, tolerance);
+    EXPECT_NEAR(actual.y, expected.y, tolerance);
+    EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+void expect_matrix(const glm::mat4& actual, const glm::mat4& expected, float tolerance) {
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 4; ++r)
+            EXPECT_NEAR(actual[c][r], expected[c][r], tolerance) << "column " << c << " row " << r;
+    }
+}
+
+glm::vec3 apply(const glm::mat4& m, glm::vec3 p) {
+    return glm::vec3(m * glm::vec4(p, 1.0f));
+}
+
+// A folder with placeholder mesh files: load_scene checks only that they exist.
+class SceneFile : public testing::Test {
+  protected:
+    SceneFile() {
+        for (const char* name : {"wall.obj", "bunny.ply", "fox.glb", "man.GLTF"})
+            dir_.write(name, "placeholder");
+    }
+
+    gust::SceneDesc load_ok(const std::string& text) {
+        const gust::Result<gust::SceneDesc> scene = gust::load_scene(dir_.write("scene.json", text));
+        if (!scene.ok()) throw std::runtime_error(scene.message());
+        return *scene;
+    }
+
+    gust::test::TempDir dir_;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// The core format and its extensions
+
+TEST_F(SceneFile, readsTheDesignExampleAsWritten) {
+    const gust::SceneDesc scene = load_ok(kDesignExample);
+    EXPECT_EQ(scene.file, dir_.path() / "scene.json");
+    EXPECT_DOUBLE_EQ(scene.dt, 0.02);
+    expect_vec3(scene.domain.center, {0, 8, 0});
+    EXPECT_EQ(scene.domain.cells, glm::uvec3(32, 16, 32));
+    EXPECT_EQ(scene.domain.cell_size, 1.0f);
+    EXPECT_EQ(scene.domain.voxels_per_cell, 4u);
+    EXPECT_EQ(scene.domain.branching, 4u);
+    EXPECT_EQ(scene.domain.hysteresis, 8u) << "default";
+    expect_vec3(scene.ambient_velocity, {4, 0, 0});
+
+    ASSERT_EQ(scene.objects.size(), 2u);
+    const gust::SceneObject& wall = scene.objects[0];
+    EXPECT_EQ(wall.mesh, dir_.path() / "wall.obj");
+    EXPECT_TRUE(wall.mesh.is_absolute());
+    EXPECT_TRUE(wall.is_static);
+    expect_vec3(wall.transform.translate, {0, 0, 0});
+    expect_vec3(wall.transform.rotate_deg, {0, 30, 0});
+    EXPECT_EQ(wall.transform.scale, 1.0f);
+    EXPECT_TRUE(wall.keyframes.empty());
+    EXPECT_FALSE(wall.animation.has_value());
+
+    const gust::SceneObject& bunny = scene.objects[1];
+    EXPECT_EQ(bunny.mesh, dir_.path() / "bunny.ply");
+    EXPECT_FALSE(bunny.is_static);
+    ASSERT_EQ(bunny.keyframes.size(), 2u);
+    EXPECT_EQ(bunny.keyframes[0].t, 0.0);
+    expect_vec3(bunny.keyframes[0].transform.translate, {-10, 2, 0});
+    EXPECT_EQ(bunny.keyframes[1].t, 2.0);
+    expect_vec3(bunny.keyframes[1].transform.translate, {10, 2, 0});
+    expect_vec3(bunny.keyframes[1].transform.rotate_deg, {0, 180, 0});
+    EXPECT_EQ(bunny.keyframes[1].transform.scale, 1.0f);
+
+    ASSERT_EQ(scene.emitters.size(), 1u);
+    const gust::EmitterDesc& omni = scene.emitters[0];
+    EXPECT_EQ(omni.type, "omni");
+    expect_vec3(omni.position, {0, 2, 5});
+    EXPECT_EQ(omni.radius, 3.0f);
+    EXPECT_EQ(omni.strength, 8.0f);
+    expect_vec3(omni.direction, {1, 0, 0});
+    EXPECT_EQ(omni.falloff, 1.0f);
+}
+
+TEST_F(SceneFile, anEmptyObjectIsTheDefaultScene) {
+    const gust::SceneDesc scene = load_ok("{}");
+    const gust::DomainDesc defaults;
+    EXPECT_EQ(scene.dt, 0.02);
+    EXPECT_EQ(scene.domain.cells, defaults.cells);
+    EXPECT_EQ(scene.domain.cell_size, defaults.cell_size);
+    EXPECT_EQ(scene.domain.voxels_per_cell, 4u);
+    EXPECT_EQ(scene.domain.branching, 4u);
+    EXPECT_EQ(scene.domain.hysteresis, 8u);
+    expect_vec3(scene.ambient_velocity, {0, 0, 0});
+    EXPECT_TRUE(scene.objects.empty());
+    EXPECT_TRUE(scene.emitters.empty());
+}
+
+TEST_F(SceneFile, readsTheExtensions) {
+    const gust::SceneDesc scene = load_ok(R"({
+      "domain": { "hysteresis": 0, "branching": 8, "voxels_per_cell": 8, "cells": [8, 256, 16.0] },
+      "objects": [
+        { "mesh": "fox.glb", "animation": { "clip": "Walk", "speed": -1.5, "loop": false, "offset": 0.25 } },
+        { "mesh": "man.GLTF", "animation": { "clip": "clip0" } },
+        { "mesh": "sub/../fox.glb", "transform": { "scale": 0.01 } }
+      ],
+      "emitters": [
+        { "type": "directional", "direction": [0, 0, -2], "strength": -3.5 },
+        { "type": "vortex", "direction": [3, 4, 0], "falloff": 0, "radius": 0.5 },
+        { "type": "motor", "falloff": 2.5 }
+      ]
+    })");
+    EXPECT_EQ(scene.domain.hysteresis, 0u);
+    EXPECT_EQ(scene.domain.branching, 8u);
+    EXPECT_EQ(scene.domain.voxels_per_cell, 8u);
+    EXPECT_EQ(scene.domain.cells, glm::uvec3(8, 256, 16));
+    ASSERT_EQ(scene.objects.size(), 3u);
+    ASSERT_TRUE(scene.objects[0].animation.has_value());
+    EXPECT_EQ(scene.objects[0].animation->clip, "Walk");
+    EXPECT_EQ(scene.objects[0].animation->speed, -1.5);
+    EXPECT_FALSE(scene.objects[0].animation->loop);
+    EXPECT_EQ(scene.objects[0].animation->offset, 0.25);
+    ASSERT_TRUE(scene.objects[1].animation.has_value());
+    EXPECT_EQ(scene.objects[1].animation->speed, 1.0);
+    EXPECT_TRUE(scene.objects[1].animation->loop);
+    EXPECT_EQ(scene.objects[1].animation->offset, 0.0);
+    EXPECT_EQ(scene.objects[2].mesh, dir_.path() / "fox.glb") << "normalised";
+    EXPECT_EQ(scene.objects[2].transform.scale, 0.01f);
+    ASSERT_EQ(scene.emitters.size(), 3u);
+    expect_vec3(scene.emitters[0].direction, {0, 0, -1});
+    EXPECT_EQ(scene.emitters[0].strength, -3.5f);
+    expect_vec3(scene.emitters[1].direction, {0.6f, 0.8f, 0}, 1e-7f);
+    EXPECT_EQ(scene.emitters[1].falloff, 0.0f);
+    EXPECT_EQ(scene.emitters[1].radius, 0.5f);
+    EXPECT_EQ(scene.emitters[2].falloff, 2.5f);
+}
+
+TEST_F(SceneFile, resolvesAbsoluteMeshPathsAsGiven) {
+    const fs::path wall = dir_.path() / "wall.obj";
+    const gust::SceneDesc scene = load_ok(R"({"objects": [{"mesh": ")" + wall.string() + R"("}]})");
+    EXPECT_EQ(scene.objects[0].mesh, wall);
+}
+
+TEST_F(SceneFile, resolvesMeshPathsAgainstTheSceneFilesFolder) {
+    dir_.write("meshes/rock.obj", "placeholder");
+    const fs::path file =
+        dir_.write("levels/one/scene.json", R"({"objects": [{"mesh": "../../meshes/rock.obj"}]})");
+    const gust::Result<gust::SceneDesc> scene = gust::load_scene(file);
+    ASSERT_TRUE(scene.ok()) << scene.message();
+    EXPECT_EQ(scene->objects[0].mesh, dir_.path() / "meshes/rock.obj");
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Transforms and keyframes
+
+TEST(Transform, rotatesAboutWorldAxesXFirstThenYThenZ) {
+    gust::Transform transform;
+    // +y: Rx(90) takes it to +z, Ry(90) takes +z to +x, Rz(0) leaves it. Rotating y first would give +z.
+    transform.rotate_deg = {90, 90, 0};
+    expect_vec3(apply(transform.matrix(), {0, 1, 0}), {1, 0, 0}, 1e-6f);
+    // +x: Rx leaves it, Ry(90) takes it to -z, Rz(90) leaves -z.
+    transform.rotate_deg = {90, 90, 90};
+    expect_vec3(apply(transform.matrix(), {1, 0, 0}), {0, 0, -1}, 1e-6f);
+    // +z: Rx(90) to -y, Ry leaves it, Rz(90) takes -y to +x.
+    expect_vec3(apply(transform.matrix(), {0, 0, 1}), {1, 0, 0}, 1e-6f);
+}
+
+TEST(Transform, matchesTheHandComputedMatrixTranslateRzRyRxScale) {
+    gust::Transform transform;
+    transform.translate = {1, -2, 3};
+    transform.rotate_deg = {30, -45, 60};
+    transform.scale = 2.5f;
+    const double x = glm::radians(30.0);
+    const double y = glm::radians(-45.0);
+    const double z = glm::radians(60.0);
+    // Column-major rotations about the world axes.
+    const glm::dmat3 rx(1, 0, 0, 0, std::cos(x), std::sin(x), 0, -std::sin(x), std::cos(x));
+    const glm::dmat3 ry(std::cos(y), 0, -std::sin(y), 0, 1, 0, std::sin(y), 0, std::cos(y));
+    const glm::dmat3 rz(std::cos(z), std::sin(z), 0, -std::sin(z), std::cos(z), 0, 0, 0, 1);
+    const glm::dmat3 linear = rz * ry * rx * 2.5;
+    glm::mat4 expected{glm::mat3(linear)};
+    expected[3] = glm::vec4(1, -2, 3, 1);
+    expect_matrix(transform.matrix(), expected, 1e-6f);
+}
+
+TEST(Transform, quarterTurnsLeaveNoResidue) {
+    gust::Transform transform;
+    transform.rotate_deg = {0, 90, 0};
+    const glm::mat4 m = transform.matrix();
+    EXPECT_LT(std::abs(m[0][0]), 1e-15f);
+    EXPECT_LT(std::abs(m[2][2]), 1e-15f);
+}
+
+gust::SceneObject keyed_object() {
+    gust::SceneObject object;
+    object.keyframes.resize(3);
+    object.keyframes[0].t = 1.0;
+    object.keyframes[0].transform.translate = {0, 0, 0};
+    object.keyframes[1].t = 2.0;
+    object.keyframes[1].transform.translate = {10, 0, 0};
+    object.keyframes[1].transform.rotate_deg = {0, 90, 0};
+    object.keyframes[1].transform.scale = 3.0f;
+    object.keyframes[2].t = 4.0;
+    object.keyframes[2].transform.translate = {10, 4, 0};
+    object.keyframes[2].transform.rotate_deg = {0, 270, 0};
+    return object;
+}
+
+TEST(ObjectMatrix, interpolatesEachComponentLinearlyInTime) {
+    const gust::SceneObject object = keyed_object();
+    gust::Transform expected;
+    expected.translate = {2.5f, 0, 0};
+    expected.rotate_deg = {0, 22.5f, 0};
+    expected.scale = 1.5f;
+    expect_matrix(gust::object_matrix(object, 1.25), expected.matrix(), 1e-5f);
+    // Degrees interpolate as numbers: 90 to 270 passes through 180, not the short way through 0.
+    expected.translate = {10, 2, 0};
+    expected.rotate_deg = {0, 180, 0};
+    expected.scale = 2.0f;
+    expect_matrix(gust::object_matrix(object, 3.0), expected.matrix(), 1e-5f);
+}
+
+TEST(ObjectMatrix, isExactlyTheKeyAtEachKeyTime) {
+    const gust::SceneObject object = keyed_object();
+    for (const gust::Keyframe& key : object.keyframes)
+        EXPECT_EQ(gust::object_matrix(object, key.t), key.transform.matrix()) << key.t;
+}
+
+TEST(ObjectMatrix, holdsTheEndKeysOutsideTheirRange) {
+    const gust::SceneObject object = keyed_object();
+    EXPECT_EQ(gust::object_matrix(object, -5.0), object.keyframes[0].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 0.999), object.keyframes[0].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 4.001), object.keyframes[2].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 1e9), object.keyframes[2].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, std::nan("")), object.keyframes[0].transform.matrix());
+}
+
+TEST(ObjectMatrix, aSingleKeyframeHoldsForAllTime) {
+    gust::SceneObject object;
+    object.keyframes.resize(1);
+    object.keyframes[0].t = 3.0;
+    object.keyframes[0].transform.translate = {1, 2, 3};
+    for (double t : {-1.0, 0.0, 3.0, 7.5})
+        EXPECT_EQ(gust::object_matrix(object, t), object.keyframes[0].transform.matrix()) << t;
+}
+
+TEST(ObjectMatrix, usesTheTransformWithoutKeyframes) {
+    gust::SceneObject object;
+    object.transform.translate = {4, 5, 6};
+    object.transform.rotate_deg = {10, 20, 30};
+    object.transform.scale = 0.5f;
+    EXPECT_EQ(gust::object_matrix(object, 0.0), object.transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 99.0), object.transform.matrix());
+}
+
+TEST_F(SceneFile, designExampleBunnyCrossesTheWindAtHalfTime) {
+    const gust::SceneDesc scene = load_ok(kDesignExample);
+    // t = 1 s: halfway from (-10,2,0) to (10,2,0), turned 90 degrees about y.
+    const glm::mat4 m = gust::object_matrix(scene.objects[1], 1.0);
+    expect_vec3(apply(m, {0, 0, 0}), {0, 2, 0}, 1e-5f);
+    expect_vec3(apply(m, {1, 0, 0}), {0, 2, -1}, 1e-5f);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Bad files
+
+struct BadScene {
+    const char* name;
+    std::string text;
+    std::string message; ///< expected after "<file>: "; "$DIR" stands for the scene's folder
+};
+
+std::ostream& operator<<(std::ostream& out, const BadScene& bad) {
+    return out << bad.name;
+}
+
+class RejectsBadScene : public testing::TestWithParam<BadScene> {};
+
+TEST_P(RejectsBadScene, withFileKeyPathAndReason) {
+    gust::test::TempDir dir;
+    for (const char* name : {"wall.obj", "bunny.ply", "fox.glb"})
+        dir.write(name, "placeholder");
+    fs::create_directories(dir.path() / "folder.obj");
+    const fs::path file = dir.write("scene.json", GetParam().text);
+    const gust::Result<gust::SceneDesc> scene = gust::load_scene(file);
+    ASSERT_FALSE(scene.ok());
+    std::string expected = GetParam().message;
+    if (const std::size_t at = expected.find("$DIR"); at != std::string::npos) {
+        expected.replace(at, 4, dir.path().string());
+    }
+    const std::string prefix = file.string() + ": ";
+    ASSERT_EQ(scene.message().rfind(prefix, 0), 0u) << scene.message();
+    EXPECT_EQ(scene.message().substr(prefix.size(), expected.size()), expected) << scene.message();
+}
+
+std::string deep_nesting() {
+    std::string text = R"({"objects": )";
+    for (int i = 0; i < 100; ++i)
+        text += "[";
+    for (int i = 0; i < 100; ++i)
+        text += "]";
+    return text + "}";
+}
+
+// clang-format off
+INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
+    BadScene{"MalformedJson", "{\"dt\": 0.02,\n  \"domain\": }",
+             "malformed JSON at line 2, column 13: syntax error while parsing value - unexpected '}'"},
+    BadScene{"EmptyFile", "", "empty file"},
+    BadScene{"OnlyWhitespace", "\n\n  ", "malformed JSON at line 3, column 3: syntax error while parsing value - unexpected end of input"},
+    BadScene{"TrailingText", "{} x", "malformed JSON at line 1, column 4: syntax error"},
+    BadScene{"NumberOverflowingDouble", "{\"dt\":\n 1e400}",
+             "malformed JSON at line 2, column 6: number overflow parsing '1e400'"},
+    BadScene{"DuplicateKey", R"({"dt": 0.1, "dt": 0.2})", "dt: duplicate key"},
+    BadScene{"DuplicateNestedKey", R"({"objects": [{"mesh": "wall.obj"}, {"mesh": "wall.obj", "mesh": "bunny.ply"}]})",
+             "objects[1].mesh: duplicate key"},
+    BadScene{"DeepNesting", deep_nesting(), "objects[0][0][0]"},
+    BadScene{"TopLevelArray", "[]", "the top level must be a JSON object (found array)"},
+    BadScene{"UnknownTopLevelKey", R"({"solver": {}})",
+             "solver: unknown key (expected one of: dt, domain, ambient, objects, emitters)"},
+    BadScene{"UnknownObjectKey", R"({"objects": [{"mesh": "wall.obj", "colour": "red"}]})",
+             "objects[0].colour: unknown key (expected one of: mesh, static, transform, keyframes, animation)"},
+    BadScene{"UnknownDomainKey", R"({"domain": {"size": 3}})", "domain.size: unknown key"},
+    BadScene{"UnknownTransformKey", R"({"objects": [{"mesh": "wall.obj", "transform": {"rotate": [0, 1, 0]}}]})",
+             "objects[0].transform.rotate: unknown key (expected one of: translate, rotate_deg, scale)"},
+    BadScene{"UnknownKeyframeKey", R"({"objects": [{"mesh": "wall.obj", "keyframes": [{"t": 0, "time": 1}]}]})",
+             "objects[0].keyframes[0].time: unknown key"},
+    BadScene{"UnknownEmitterKey", R"({"emitters": [{"type": "omni", "power": 1}]})", "emitters[0].power: unknown key"},
+    BadScene{"UnknownAnimationKey", R"({"objects": [{"mesh": "fox.glb", "animation": {"clip": "Walk", "rate": 2}}]})",
+             "objects[0].animation.rate: unknown key (expected one of: clip, speed, loop, offset)"},
+    BadScene{"UnknownAmbientKey", R"({"ambient": {"speed": 1}})", "ambient.speed: unknown key"},
+    BadScene{"DtAsString", R"({"dt": "0.02"})", "dt: expected a number (found string)"},
+    BadScene{"ZeroDt", R"({"dt": 0})", "dt: must be greater than 0 (found 0.0)"},
+    BadScene{"NegativeDt", R"({"dt": -0.5})", "dt: must be greater than 0 (found -0.5)"},
+    BadScene{"DomainNotObject", R"({"domain": [1]})", "domain: expected an object (found array)"},
+    BadScene{"CellsTooMany", R"({"domain": {"cells": [300, 16, 16]}})",
+             "domain.cells[0]: must be an integer from 8 to 256 (found 300.0)"},
+    BadScene{"CellsTooFew", R"({"domain": {"cells": [16, 7, 16]}})",
+             "domain.cells[1]: must be an integer from 8 to 256 (found 7.0)"},
+    BadScene{"CellsFractional", R"({"domain": {"cells": [16, 16, 16.5]}})",
+             "domain.cells[2]: must be an integer from 8 to 256 (found 16.5)"},
+    BadScene{"CellsWrongLength", R"({"domain": {"cells": [16, 16]}})",
+             "domain.cells: expected an array of 3 integers (found 2 items)"},
+    BadScene{"ZeroCellSize", R"({"domain": {"cell_size": 0}})", "domain.cell_size: must be greater than 0 (found 0.0)"},
+    BadScene{"ZeroVoxelsPerCell", R"({"domain": {"voxels_per_cell": 0}})",
+             "domain.voxels_per_cell: must be an integer from 1 to 1024 (found 0.0)"},
+    BadScene{"BranchingThree", R"({"domain": {"branching": 3}})", "domain.branching: must be 2, 4 or 8 (found 3.0)"},
+    BadScene{"BranchingSixteen", R"({"domain": {"branching": 16}})", "domain.branching: must be 2, 4 or 8 (found 16.0)"},
+    BadScene{"NegativeHysteresis", R"({"domain": {"hysteresis": -1}})",
+             "domain.hysteresis: must be an integer from 0 to 4294967295 (found -1.0)"},
+    BadScene{"CenterTooShort", R"({"domain": {"center": [0, 1]}})",
+             "domain.center: expected an array of 3 numbers (found 2 items)"},
+    BadScene{"CenterItemString", R"({"domain": {"center": [0, "1", 2]}})",
+             "domain.center[1]: expected a number (found string)"},
+    BadScene{"AmbientVelocityNull", R"({"ambient": {"velocity": null}})",
+             "ambient.velocity: expected an array of 3 numbers (found null)"},
+    BadScene{"ObjectsNotArray", R"({"objects": {"mesh": "wall.obj"}})", "objects: expected an array (found object)"},
+    BadScene{"ObjectNotObject", R"({"objects": ["wall.obj"]})", "objects[0]: expected an object (found string)"},
+    BadScene{"MissingMesh", R"({"objects": [{"static": true}]})", "objects[0].mesh: missing required key"},
+    BadScene{"EmptyMeshPath", R"({"objects": [{"mesh": ""}]})", "objects[0].mesh: must not be empty"},
+    BadScene{"MeshNotFound", R"({"objects": [{"mesh": "wall.obj"}, {"mesh": "missing.obj"}]})",
+             "objects[1].mesh: file not found: $DIR/missing.obj"},
+    BadScene{"MeshIsADirectory", R"({"objects": [{"mesh": "folder.obj"}]})",
+             "objects[0].mesh: is a directory, not a mesh file: $DIR/folder.obj"},
+    BadScene{"StaticAsNumber", R"({"objects": [{"mesh": "wall.obj", "static": 1}]})",
+             "objects[0].static: expected true or false (found number)"},
+    BadScene{"FloatOverflow", R"({"objects": [{"mesh": "wall.obj", "transform": {"translate": [0, 1e39, 0]}}]})",
+             "objects[0].transform.translate[1]: number 1e+39 is too large for a 32-bit float"},
+    BadScene{"ZeroScale", R"({"objects": [{"mesh": "wall.obj", "transform": {"scale": 0}}]})",
+             "objects[0].transform.scale: must be greater than 0 (found 0.0)"},
+    BadScene{"NegativeKeyframeScale",
+             R"({"objects": [{"mesh": "wall.obj", "keyframes": [{"t": 0}, {"t": 1, "scale": -2}]}]})",
+             "objects[0].keyframes[1].scale: must be greater than 0 (found -2.0)"},
+    BadScene{"KeyframesOutOfOrder", R"({"objects": [{"mesh": "wall.obj"}, {"mesh": "bunny.ply", "keyframes": [
+                 {"t": 0.0}, {"t": 3.0}, {"t": 2.0}]}]})",
+             "objects[1].keyframes[2].t: keyframes must be in increasing time order (2.0 after 3.0)"},
+    BadScene{"KeyframesAtTheSameTime", R"({"objects": [{"mesh": "wall.obj", "keyframes": [{"t": 1}, {"t": 1}]}]})",
+             "objects[0].keyframes[1].t: keyframes must be in increasing time order (1.0 after 1.0)"},
+    BadScene{"KeyframeWithoutTime", R"({"objects": [{"mesh": "wall.obj", "keyframes": [{"translate": [0, 0, 0]}]}]})",
+             "objects[0].keyframes[0].t: missing required key"},
+    BadScene{"NoKeyframes", R"({"objects": [{"mesh": "wall.obj", "keyframes": []}]})",
+             "objects[0].keyframes: needs at least one keyframe"},
+    BadScene{"TransformAndKeyframes",
+             R"({"objects": [{"mesh": "wall.obj", "transform": {}, "keyframes": [{"t": 0}]}]})",
+             "objects[0].keyframes: an object has either a transform or keyframes, not both"},
+    BadScene{"StaticWithKeyframes", R"({"objects": [{"mesh": "wall.obj", "static": true, "keyframes": [{"t": 0}]}]})",
+             "objects[0].keyframes: a static object cannot have keyframes"},
+    BadScene{"StaticAnimated", R"({"objects": [{"mesh": "fox.glb", "static": true, "animation": {"clip": "Walk"}}]})",
+             "objects[0].animation: a static object cannot be animated"},
+    BadScene{"AnimationOnPly", R"({"objects": [{"mesh": "bunny.ply", "animation": {"clip": "Walk"}}]})",
+             "objects[0].animation: skinned clips need a glTF mesh (.gltf or .glb), not bunny.ply"},
+    BadScene{"AnimationWithoutClip", R"({"objects": [{"mesh": "fox.glb", "animation": {"speed": 2}}]})",
+             "objects[0].animation.clip: missing required key"},
+    BadScene{"AnimationSpeedString", R"({"objects": [{"mesh": "fox.glb", "animation": {"clip": "Walk", "speed": "fast"}}]})",
+             "objects[0].animation.speed: expected a number (found string)"},
+    BadScene{"AnimationLoopString", R"({"objects": [{"mesh": "fox.glb", "animation": {"clip": "Walk", "loop": "yes"}}]})",
+             "objects[0].animation.loop: expected true or false (found string)"},
+    BadScene{"EmitterWithoutType", R"({"emitters": [{"position": [0, 0, 0]}]})", "emitters[0].type: missing required key"},
+    BadScene{"UnknownEmitterType", R"({"emitters": [{"type": "omni"}, {"type": "fan"}]})",
+             "emitters[1].type: unknown emitter type 'fan' (expected directional, omni, vortex or motor)"},
+    BadScene{"ZeroEmitterDirection", R"({"emitters": [{"type": "directional", "direction": [0, 0, 0]}]})",
+             "emitters[0].direction: must not be the zero vector"},
+    BadScene{"ZeroEmitterRadius", R"({"emitters": [{"type": "omni", "radius": 0}]})",
+             "emitters[0].radius: must be greater than 0 (found 0.0)"},
+    BadScene{"NegativeFalloff", R"({"emitters": [{"type": "omni", "falloff": -1}]})",
+             "emitters[0].falloff: must not be negative (found -1.0)"},
+    BadScene{"EmitterStrengthOverflow", R"({"emitters": [{"type": "omni", "strength": -4e38}]})",
+             "emitters[0].strength: number -4e+38 is too large for a 32-bit float"}),
+    [](const testing::TestParamInfo<BadScene>& param) { return std::string(param.param.name); });
+// clang-format on
+
+TEST(LoadScene, rejectsMissingFile) {
+    gust::test::TempDir dir;
+    const gust::Result<gust::SceneDesc> scene = gust::load_scene(dir.path() / "absent.json");
+    ASSERT_FALSE(scene.ok());
+    EXPECT_EQ(scene.message(), (dir.path() / "absent.json").string() + ": file not found");
+}
+
+TEST(LoadScene, rejectsDirectory) {
+    gust::test::TempDir dir;
+    const gust::Result<gust::SceneDesc> scene = gust::load_scene(dir.path());
+    ASSERT_FALSE(scene.ok());
+    EXPECT_EQ(scene.message(), dir.path().string() + ": is a directory, not a scene file");
+}
+
+TEST(LoadScene, survivesEveryTruncationOfTheDesignExample) {
+    gust::test::TempDir dir;
+    dir.write("wall.obj", "placeholder");
+    dir.write("bunny.ply", "placeholder");
+    const std::string text = kDesignExample;
+    for (std::size_t n = 0; n < text.size(); ++n) {
+        const fs::path file = dir.write("scene.json", text.substr(0, n));
+        const gust::Result<gust::SceneDesc> scene = gust::load_scene(file);
+        ASSERT_FALSE(scene.ok()) << n;
+        EXPECT_EQ(scene.message().rfind(file.string() + ": ", 0), 0u) << scene.message();
+    }
+}
+
+TEST(LoadScene, survivesRandomCorruptionOfTheDesignExample) {
+    gust::test::TempDir dir;
+    dir.write("wall.obj", "placeholder");
+    dir.write("bunny.ply", "placeholder");
+    const std::string text = kDesignExample;
+    const std::string alphabet = "{}[],:\"0123456789.-+eE \n\ttruefalsnul\\";
+    std::mt19937 random(11);
+    std::uniform_int_distribution<std::size_t> offset(0, text.size() - 1);
+    std::uniform_int_distribution<std::size_t> pick(0, alphabet.size() - 1);
+    for (int round = 0; round < 500; ++round) {
+        std::string bytes = text;
+        for (int k = 0; k < 1 + round % 4; ++k)
+            bytes[offset(random)] = alphabet[pick(random)];
+        const fs::path file = dir.write("scene.json", bytes);
+        const gust::Result<gust::SceneDesc> scene = gust::load_scene(file);
+        if (!scene.ok()) {
+            EXPECT_EQ(scene.message().rfind(file.string() + ": ", 0), 0u) << scene.message();
+        }
+    }
+}
+
+} // namespace
