@@ -137,16 +137,6 @@ std::string fmt_ratio(double ratio) {
     return text;
 }
 
-/// Mesh-space view of an imported mesh, as the voxelizer takes it.
-gust::MeshView view_of(const gust::Mesh& mesh) {
-    gust::MeshView view;
-    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
-    view.vertex_count = mesh.positions.size();
-    view.indices = mesh.indices.data();
-    view.index_count = mesh.indices.size();
-    return view;
-}
-
 /// Loads an asset with a message that says where it was looked for, so a missing file is obvious.
 gust::Result<gust::Mesh> load_asset(const std::filesystem::path& assets, const std::string& relative) {
     const std::filesystem::path path = assets / relative;
@@ -159,7 +149,7 @@ gust::Result<gust::Mesh> load_asset(const std::filesystem::path& assets, const s
 /// Eight copies of `mesh`, each centred in one octant of a cube twice its largest extent: the seed's
 /// 7.2M-triangle XYZRGB dragon is not in assets/, so eight 871k-triangle dragons stand in for it.
 std::vector<glm::mat4> octant_models(const gust::Mesh& mesh) {
-    const auto [lo, hi] = gust::mesh_bounds(view_of(mesh));
+    const auto [lo, hi] = gust::mesh_bounds(gust::view_of(mesh));
     const glm::vec3 centre = 0.5f * (lo + hi);
     const glm::vec3 extent = hi - lo;
     const float cell = std::max({extent.x, extent.y, extent.z});
@@ -455,7 +445,7 @@ gust::Status write_block(const std::filesystem::path& path, const std::string& b
 /// Measures every resolution of one scene, printing progress to stderr as each cell starts and ends.
 gust::Status bench_scene(gust::Voxelizer& voxelizer, const Scene& scene, const Options& options,
                          std::vector<Row>& rows) {
-    auto uploaded = voxelizer.upload(view_of(scene.mesh));
+    auto uploaded = voxelizer.upload(gust::view_of(scene.mesh));
     if (!uploaded) return gust::Status::failure(scene.label + ": upload failed: " + uploaded.message());
     std::vector<gust::GpuInstance> instances;
     for (const glm::mat4& model : scene.models)

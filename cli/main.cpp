@@ -38,15 +38,6 @@ bool parse_vec3(const std::string& text, glm::vec3& out) {
     return in.eof() && std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.z);
 }
 
-gust::MeshView view_of(const gust::Mesh& mesh) {
-    gust::MeshView view;
-    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
-    view.vertex_count = mesh.positions.size();
-    view.indices = mesh.indices.data();
-    view.index_count = mesh.indices.size();
-    return view;
-}
-
 std::unique_ptr<gust::gpu::Context> make_context(const std::string& device, bool validation,
                                                  std::string& error) {
     gust::gpu::ContextDesc desc;
@@ -98,7 +89,7 @@ int run_voxelize(const VoxelizeArgs& args) {
         if (!std::isfinite(*args.size) || *args.size <= 0.0f) return fail("--size must be finite and > 0");
         grid.voxel_size = *args.size / float(args.res);
     } else {
-        const auto [lo, hi] = gust::mesh_bounds(view_of(*mesh));
+        const auto [lo, hi] = gust::mesh_bounds(gust::view_of(*mesh));
         grid = gust::grid_around(lo, hi, args.res);
     }
     if (gust::Status s = gust::validate_grid(grid); !s) return fail(s.message());
@@ -112,7 +103,7 @@ int run_voxelize(const VoxelizeArgs& args) {
     ms["device"] = ms_since(start);
 
     start = Clock::now();
-    auto gpu_mesh = (*voxelizer)->upload(view_of(*mesh));
+    auto gpu_mesh = (*voxelizer)->upload(gust::view_of(*mesh));
     if (!gpu_mesh) return fail(args.mesh + ": " + gpu_mesh.message());
     ms["upload"] = ms_since(start);
 

@@ -22,15 +22,6 @@ int fail(const std::string& message) {
     return 1;
 }
 
-MeshView view_of(const Mesh& mesh) {
-    MeshView view;
-    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
-    view.vertex_count = mesh.positions.size();
-    view.indices = mesh.indices.data();
-    view.index_count = mesh.indices.size();
-    return view;
-}
-
 std::string frame_file(std::uint64_t frame) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame_%04llu.vdb", static_cast<unsigned long long>(frame));

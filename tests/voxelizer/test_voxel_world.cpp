@@ -15,15 +15,6 @@
 namespace gust::test {
 namespace {
 
-MeshView view_of(const Mesh& mesh) {
-    MeshView view;
-    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
-    view.vertex_count = mesh.positions.size();
-    view.indices = mesh.indices.data();
-    view.index_count = mesh.indices.size();
-    return view;
-}
-
 using Param = std::tuple<std::string, std::uint32_t>; // scene file, branching
 
 class WorldMatchesScratch : public GpuTestWithParam<Param> {};

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <glm/glm.hpp>
+
+#include <gust/voxelizer/grid.hpp>
 #include <string>
 #include <vector>
 
@@ -16,5 +18,15 @@ struct Mesh {
     std::vector<std::uint32_t> indices; ///< three per triangle
     std::size_t triangle_count() const { return indices.size() / 3; }
 };
+
+/// A view borrowing `mesh`'s arrays (valid while the mesh lives unchanged), for the voxelizer.
+inline MeshView view_of(const Mesh& mesh) {
+    MeshView view;
+    view.positions = reinterpret_cast<const float*>(mesh.positions.data());
+    view.vertex_count = mesh.positions.size();
+    view.indices = mesh.indices.data();
+    view.index_count = mesh.indices.size();
+    return view;
+}
 
 } // namespace gust
