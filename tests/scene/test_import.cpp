@@ -360,6 +360,7 @@ INSTANTIATE_TEST_SUITE_P(
         Broken{"glTF2/wrongTypes/badUint.gltf", "/index must be a non-negative integer"},
         Broken{"glTF2/draco/2CylinderEngine.gltf",
                "required extension KHR_draco_mesh_compression is not supported"},
+        Broken{"glTF/BoxTextured-glTF/BoxTextured.gltf", "glTF 1.0 is not supported"},
         Broken{"invalid/empty.ply", "empty file"}, Broken{"invalid/empty.obj", "empty file"},
         Broken{"invalid/malformed.obj", "face index"},
         Broken{"invalid/OutOfMemory.off",
