@@ -1,26 +1,21 @@
 // Reproduces the seed's first table (voxelization time against grid resolution for the 7.2M-triangle
 // XYZRGB dragon) on this machine, beside OpenVDB's mesh-to-volume on the same triangles, grid and cores,
 // with the memory each representation of the result takes.
+#include "bench_common.hpp"
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
-#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gust/gpu/context.hpp>
-#include <gust/scene/import.hpp>
+#include <gust/scene/mesh.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
 #include <iostream>
-#include <iterator>
 #include <limits>
 #include <memory>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
-#include <sched.h>
 #include <span>
 #include <sstream>
 #include <string>
@@ -30,10 +25,30 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using gust::bench::Clock;
+using gust::bench::command_line;
+using gust::bench::cpu_model;
+using gust::bench::failed_cell;
+using gust::bench::fmt_ms;
+using gust::bench::fmt_ratio;
+using gust::bench::grouped;
+using gust::bench::load_asset;
+using gust::bench::load_average;
+using gust::bench::ms_since;
+using gust::bench::RatioBelowTenth;
+using gust::bench::RunInfo;
+using gust::bench::usable_cores;
+using gust::bench::utc_now;
 
-constexpr const char* kBegin = "<!-- bench:voxelize:begin -->";
-constexpr const char* kEnd = "<!-- bench:voxelize:end -->";
+/// Names this tool in its error and Vulkan messages.
+constexpr const char* kTool = "gust_bench_voxelize";
+/// Names this bench's block in the results file (`<!-- bench:voxelize:begin -->`).
+constexpr const char* kBlock = "voxelize";
+
+/// Prints a fatal error under this tool's name and gives the exit status.
+int fail(const std::string& message) {
+    return gust::bench::fail(kTool, message);
+}
 
 /// The seed's first table: seconds per voxelization of the XYZRGB dragon on an RTX 2070 Super, in ms.
 constexpr std::pair<std::uint32_t, double> kSeedMs[] = {
@@ -100,51 +115,6 @@ struct Row {
     std::uint64_t unique = 0; ///< voxels both paths produced (raster's when they differ)
     std::string agreement;    ///< "yes", "no (...)" or "n/a"
 };
-
-/// Milliseconds since `start`, the unit every column uses.
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-/// Prints a fatal error the way the other gust tools do and gives the exit status.
-int fail(const std::string& message) {
-    std::cerr << "gust_bench_voxelize: error: " << message << "\n";
-    return 1;
-}
-
-/// Groups digits by thousands so that byte and voxel counts read at a glance.
-std::string grouped(std::uint64_t n) {
-    const std::string digits = std::to_string(n);
-    std::string out;
-    for (std::size_t i = 0; i < digits.size(); ++i) {
-        if (i && (digits.size() - i) % 3 == 0) out += ',';
-        out += digits[i];
-    }
-    return out;
-}
-
-/// Formats milliseconds with about three significant digits.
-std::string fmt_ms(double ms) {
-    char text[32];
-    std::snprintf(text, sizeof(text), ms < 10.0 ? "%.2f" : ms < 1000.0 ? "%.1f" : "%.0f", ms);
-    return text;
-}
-
-/// Formats a speed ratio, the number the issue's 10x goal is stated in.
-std::string fmt_ratio(double ratio) {
-    char text[32];
-    std::snprintf(text, sizeof(text), ratio < 10.0 ? "%.2fx" : "%.1fx", ratio);
-    return text;
-}
-
-/// Loads an asset with a message that says where it was looked for, so a missing file is obvious.
-gust::Result<gust::Mesh> load_asset(const std::filesystem::path& assets, const std::string& relative) {
-    const std::filesystem::path path = assets / relative;
-    if (!std::filesystem::exists(path))
-        return gust::Result<gust::Mesh>::failure("asset not found: " + path.string() +
-                                                 " (pass --assets DIR to point at gust's assets folder)");
-    return gust::load_mesh(path);
-}
 
 /// Eight copies of `mesh`, each centred in one octant of a cube twice its largest extent: the seed's
 /// 7.2M-triangle XYZRGB dragon is not in assets/, so eight 871k-triangle dragons stand in for it.
@@ -255,68 +225,6 @@ double seed_ms(std::uint32_t res) {
     return -1.0;
 }
 
-/// Cores this process may run on (what TBB and lavapipe share), not the machine's total.
-int usable_cores() {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    if (sched_getaffinity(0, sizeof(set), &set) != 0) return 0;
-    return CPU_COUNT(&set);
-}
-
-/// The CPU model line of /proc/cpuinfo, since lavapipe's speed is the CPU's.
-std::string cpu_model() {
-    std::ifstream in("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(in, line))
-        if (line.rfind("model name", 0) == 0) {
-            const auto colon = line.find(':');
-            if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
-        }
-    return "unknown";
-}
-
-/// UTC date and time now, so that a results block says when it was measured.
-std::string utc_now() {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char text[64];
-    std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M UTC", &tm);
-    return text;
-}
-
-/// The 1-minute load average, since other processes on the same cores slow every column down.
-std::string load_average() {
-    std::ifstream in("/proc/loadavg");
-    std::string first;
-    return in >> first ? first : std::string("unknown");
-}
-
-/// What the run looked like from outside: how it was started, when, and how busy the machine was.
-struct RunInfo {
-    std::string command;
-    std::string started;    ///< UTC
-    std::string load_start; ///< 1-minute load average when the run started
-    Clock::time_point start;
-};
-
-/// The command line as typed, so the block says how to reproduce it.
-std::string command_line(int argc, char** argv) {
-    std::string line;
-    for (int i = 0; i < argc; ++i) {
-        if (i) line += ' ';
-        const std::string arg = argv[i];
-        line += arg.find_first_of(" \t'\"") == std::string::npos ? arg : "'" + arg + "'";
-    }
-    return line;
-}
-
-/// A table cell for a failed measurement pointing at its note, so long messages stay out of the table.
-std::string failed_cell(std::vector<std::string>& notes, const std::string& what, const std::string& error) {
-    notes.push_back(what + ": " + error);
-    return "failed (note " + std::to_string(notes.size()) + ")";
-}
-
 /// The Markdown body of the results block: heading, method, machine, tables, notes and the seed comparison.
 std::string render(const std::vector<Row>& rows, const Options& options, const gust::gpu::DeviceInfo& device,
                    const RunInfo& run) {
@@ -349,7 +257,8 @@ std::string render(const std::vector<Row>& rows, const Options& options, const g
             return fmt_ms(t.wall_ms) + " | " + (t.gpu_ms < 0.0 ? std::string("n/a") : fmt_ms(t.gpu_ms));
         };
         const auto ratio = [&](const GustTiming& t) {
-            return t.ok() && row.vdb.ok() ? fmt_ratio(row.vdb.ms / t.wall_ms) : std::string("n/a");
+            return t.ok() && row.vdb.ok() ? fmt_ratio(row.vdb.ms / t.wall_ms, RatioBelowTenth::TwoDecimals)
+                                          : std::string("n/a");
         };
         const double seed = row.seed_mesh ? seed_ms(row.res) : -1.0;
         out << "| " << row.mesh << " | " << grouped(row.triangles) << " | " << row.res << "^3 | " << row.runs
@@ -406,40 +315,14 @@ std::string render(const std::vector<Row>& rows, const Options& options, const g
                                      : ", a different device, so these numbers are not comparable")
             << " in absolute terms";
         if (row.vdb.ok())
-            out << "; on the same cores OpenVDB took " << fmt_ratio(row.vdb.ms / row.raster.wall_ms)
-                << " the raster time and " << fmt_ratio(row.vdb.ms / row.compute.wall_ms)
+            out << "; on the same cores OpenVDB took "
+                << fmt_ratio(row.vdb.ms / row.raster.wall_ms, RatioBelowTenth::TwoDecimals)
+                << " the raster time and "
+                << fmt_ratio(row.vdb.ms / row.compute.wall_ms, RatioBelowTenth::TwoDecimals)
                 << " the compute time (the goal is at least 10x)";
         out << ".\n";
     }
     return out.str();
-}
-
-/// Puts `body` between the markers in the file at `path` (appending the block when the markers are
-/// absent), leaving the rest of the file byte for byte as it was.
-gust::Status write_block(const std::filesystem::path& path, const std::string& body) {
-    std::string text;
-    if (std::filesystem::exists(path)) {
-        std::ifstream in(path, std::ios::binary);
-        if (!in) return gust::Status::failure(path.string() + ": cannot read");
-        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
-    const std::string block = std::string(kBegin) + "\n" + body + kEnd;
-    const auto begin = text.find(kBegin);
-    const auto end = begin == std::string::npos ? std::string::npos : text.find(kEnd, begin);
-    if (begin != std::string::npos && end == std::string::npos)
-        return gust::Status::failure(path.string() + ": has " + kBegin + " but no " + kEnd + " after it");
-    if (begin != std::string::npos) {
-        text.replace(begin, end + std::strlen(kEnd) - begin, block);
-    } else {
-        if (!text.empty()) text += text.back() == '\n' ? "\n" : "\n\n";
-        text += block + "\n";
-    }
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out) return gust::Status::failure(path.string() + ": cannot write");
-    out << text;
-    out.close();
-    if (!out) return gust::Status::failure(path.string() + ": write failed");
-    return {};
 }
 
 /// Measures every resolution of one scene, printing progress to stderr as each cell starts and ends.
@@ -525,8 +408,7 @@ int main(int argc, char** argv) {
     gust::gpu::ContextDesc desc;
     desc.device = options.device;
     desc.on_message = [](gust::gpu::Severity severity, const std::string& message) {
-        if (severity != gust::gpu::Severity::Info)
-            std::cerr << "gust_bench_voxelize: vulkan: " << message << "\n";
+        if (severity != gust::gpu::Severity::Info) std::cerr << kTool << ": vulkan: " << message << "\n";
     };
     auto ctx = gust::gpu::Context::create(desc);
     if (!ctx) return fail("cannot create a Vulkan context: " + ctx.message());
@@ -553,7 +435,8 @@ int main(int argc, char** argv) {
     const std::string body = render(rows, options, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
-        if (gust::Status s = write_block(options.write, body); !s) return fail(s.message());
+        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s)
+            return fail(s.message());
         std::cerr << "wrote the voxelize block of " << options.write << "\n";
     }
     for (const Row& row : rows)
