@@ -145,4 +145,20 @@ class TempDir {
     std::filesystem::path path_;
 };
 
+// DESIGN.md, "Interfaces that others rely on", verbatim: this core must keep reading as written.
+inline constexpr const char* kDesignExample = R"({
+  "dt": 0.02,
+  "domain": { "center": [0, 8, 0], "cells": [32, 16, 32], "cell_size": 1.0,
+              "voxels_per_cell": 4, "branching": 4 },
+  "ambient": { "velocity": [4, 0, 0] },
+  "objects": [
+    { "mesh": "wall.obj", "static": true,
+      "transform": { "translate": [0, 0, 0], "rotate_deg": [0, 30, 0], "scale": 1.0 } },
+    { "mesh": "bunny.ply", "keyframes": [
+        { "t": 0.0, "translate": [-10, 2, 0], "rotate_deg": [0, 0, 0], "scale": 1.0 },
+        { "t": 2.0, "translate": [ 10, 2, 0], "rotate_deg": [0, 180, 0], "scale": 1.0 } ] }
+  ],
+  "emitters": [ { "type": "omni", "position": [0, 2, 5], "radius": 3, "strength": 8 } ]
+})";
+
 } // namespace gust::test

@@ -19,6 +19,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using gust::test::kDesignExample;
 
 const fs::path kAssets = GUST_ASSETS_DIR;
 
@@ -106,20 +107,7 @@ class SceneRuntimeTest : public testing::Test {
 TEST_F(SceneRuntimeTest, loadsTheDesignExampleWithRealMeshes) {
     copy(kAssets / "scenes/wall.obj", "wall.obj");
     copy(kAssets / "scans/bunny.ply", "bunny.ply");
-    const gust::SceneDesc desc = scene_ok(scene(R"({
-      "dt": 0.02,
-      "domain": { "center": [0, 8, 0], "cells": [32, 16, 32], "cell_size": 1.0,
-                  "voxels_per_cell": 4, "branching": 4 },
-      "ambient": { "velocity": [4, 0, 0] },
-      "objects": [
-        { "mesh": "wall.obj", "static": true,
-          "transform": { "translate": [0, 0, 0], "rotate_deg": [0, 30, 0], "scale": 1.0 } },
-        { "mesh": "bunny.ply", "keyframes": [
-            { "t": 0.0, "translate": [-10, 2, 0], "rotate_deg": [0, 0, 0], "scale": 1.0 },
-            { "t": 2.0, "translate": [ 10, 2, 0], "rotate_deg": [0, 180, 0], "scale": 1.0 } ] }
-      ],
-      "emitters": [ { "type": "omni", "position": [0, 2, 5], "radius": 3, "strength": 8 } ]
-    })"));
+    const gust::SceneDesc desc = scene_ok(scene(kDesignExample));
     gust::SceneRuntime runtime = runtime_ok(desc);
     ASSERT_EQ(runtime.object_count(), 2u);
     EXPECT_EQ(runtime.mesh(0).triangle_count(), 12u);
