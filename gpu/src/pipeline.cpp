@@ -16,6 +16,20 @@ Result<VkShaderModule> make_module(Context& ctx, std::span<const std::uint32_t> 
     return module;
 }
 
+/// Specialization info mapping constants[i] to constant_id i (entries owned by the caller).
+VkSpecializationInfo specialization(std::span<const std::uint32_t> constants,
+                                    std::vector<VkSpecializationMapEntry>& entries) {
+    entries.clear();
+    for (std::uint32_t i = 0; i < constants.size(); ++i)
+        entries.push_back({i, i * std::uint32_t(sizeof(std::uint32_t)), sizeof(std::uint32_t)});
+    VkSpecializationInfo info{};
+    info.mapEntryCount = std::uint32_t(entries.size());
+    info.pMapEntries = entries.data();
+    info.dataSize = constants.size_bytes();
+    info.pData = constants.data();
+    return info;
+}
+
 } // namespace
 
 Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
@@ -30,7 +44,8 @@ Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
 }
 
 Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> spirv,
-                                   std::uint32_t push_constant_bytes) {
+                                   std::uint32_t push_constant_bytes,
+                                   std::span<const std::uint32_t> constants) {
     Pipeline p;
     p.ctx_ = &ctx;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
@@ -42,6 +57,9 @@ Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> 
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     info.stage.module = *module;
     info.stage.pName = "main";
+    std::vector<VkSpecializationMapEntry> entries;
+    const VkSpecializationInfo spec = specialization(constants, entries);
+    info.stage.pSpecializationInfo = constants.empty() ? nullptr : &spec;
     info.layout = p.layout_;
     VkResult r =
         ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
@@ -59,6 +77,8 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
 
     std::vector<VkPipelineShaderStageCreateInfo> stages;
     std::vector<VkShaderModule> modules;
+    std::vector<VkSpecializationMapEntry> entries;
+    const VkSpecializationInfo spec = specialization(desc.constants, entries);
     auto add = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) -> Status {
         if (code.empty()) return {};
         auto m = make_module(ctx, code);
@@ -68,6 +88,7 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
         s.stage = stage;
         s.module = *m;
         s.pName = "main";
+        s.pSpecializationInfo = desc.constants.empty() ? nullptr : &spec;
         stages.push_back(s);
         return {};
     };

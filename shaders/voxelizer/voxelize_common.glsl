@@ -12,6 +12,9 @@ layout(buffer_reference, scalar) buffer LargeList { uvec2 v[]; };
 
 layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
 
+// Pipelines made for calls without a frame time compile every velocity step out.
+layout(constant_id = 0) const bool kVelocities = false;
+
 vec3 load_position(uint64_t positions, uint index) {
     Positions p = Positions(positions);
     return vec3(p.v[3u * index], p.v[3u * index + 1u], p.v[3u * index + 2u]);
@@ -28,7 +31,7 @@ vec3 load_grid_vertex(uint tri, uint corner) {
 /// as motion vectors are made: this frame's world position minus last frame's, over the frame time.
 vec3 load_vertex_velocity(uint tri, uint corner) {
     InstanceRef inst = InstanceRef(pc.instance);
-    if (pc.velocities == 0ul || inst.i.inv_dt == 0.0) return vec3(0.0);
+    if (!kVelocities) return vec3(0.0);
     uint index = Indices(inst.i.indices).v[3u * tri + corner];
     vec3 now = (inst.i.model * vec4(load_position(inst.i.positions, index), 1.0)).xyz;
     vec3 before = (inst.i.prev_model * vec4(load_position(inst.i.prev_positions, index), 1.0)).xyz;
@@ -52,7 +55,7 @@ void flush_voxels() {
     for (uint i = 0u; i < pending_count; ++i) {
         if (slot + i >= pc.capacity) break;
         Fragments(pc.fragments).v[slot + i] = pending[i];
-        if (pc.velocities != 0ul) Velocities(pc.velocities).v[slot + i] = pending_velocity[i];
+        if (kVelocities) Velocities(pc.velocities).v[slot + i] = pending_velocity[i];
     }
     pending_count = 0u;
 }
@@ -61,7 +64,8 @@ void flush_voxels() {
 /// invocation ends).
 void emit_voxel(uvec3 ijk, vec3 velocity) {
     pending[pending_count] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
-    pending_velocity[pending_count] = uvec2(packHalf2x16(velocity.xy), packHalf2x16(vec2(velocity.z, 0.0)));
+    if (kVelocities)
+        pending_velocity[pending_count] = uvec2(packHalf2x16(velocity.xy), packHalf2x16(vec2(velocity.z, 0.0)));
     if (++pending_count == kPendingCapacity) flush_voxels();
 }
 
@@ -126,7 +130,7 @@ void voxelize_column(Setup s, int x, int y) {
     ivec2 layers = column_layers(s.n, s.a, s.w_min, s.w_max, float(x), float(y));
     int k0 = max(layers.x, 0);
     int k1 = min(layers.y, int(pc.res) - 1);
-    vec3 velocity = pc.velocities != 0ul ? column_velocity(s, x, y) : vec3(0.0);
+    vec3 velocity = kVelocities ? column_velocity(s, x, y) : vec3(0.0);
     for (int k = k0; k <= k1; ++k) {
         vec3 centre = vec3(float(x) + 0.5, float(y) + 0.5, float(k) + 0.5);
         if (tri_box_overlap(centre, vec3(0.5), s.a, s.b, s.c))

@@ -105,23 +105,28 @@ std::pair<glm::vec3, glm::vec3> mesh_bounds(const MeshView& mesh) {
 
 Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const VoxelizerDesc& desc) {
     std::unique_ptr<Voxelizer> v(new Voxelizer(ctx));
-    gpu::GraphicsPipelineDesc raster;
-    raster.vertex = words(voxelize_vert);
-    raster.geometry = words(voxelize_geom);
-    raster.fragment = words(voxelize_frag);
-    raster.push_constant_bytes = sizeof(VoxelizePush);
-    auto r = gpu::Pipeline::graphics(ctx, raster);
-    if (!r) return r.status();
-    v->raster_ = std::move(*r);
-    auto small = gpu::Pipeline::compute(ctx, words(voxelize_tri_comp), sizeof(VoxelizePush));
-    if (!small) return small.status();
-    v->compute_small_ = std::move(*small);
+    // Index 1 of each pass writes velocities; index 0 compiles them out (kVelocities).
+    for (std::uint32_t with_velocity = 0; with_velocity < 2; ++with_velocity) {
+        const std::uint32_t constants[] = {with_velocity};
+        gpu::GraphicsPipelineDesc raster;
+        raster.vertex = words(voxelize_vert);
+        raster.geometry = words(voxelize_geom);
+        raster.fragment = words(voxelize_frag);
+        raster.push_constant_bytes = sizeof(VoxelizePush);
+        raster.constants = constants;
+        auto r = gpu::Pipeline::graphics(ctx, raster);
+        if (!r) return r.status();
+        v->raster_[with_velocity] = std::move(*r);
+        auto small = gpu::Pipeline::compute(ctx, words(voxelize_tri_comp), sizeof(VoxelizePush), constants);
+        if (!small) return small.status();
+        v->compute_small_[with_velocity] = std::move(*small);
+        auto large = gpu::Pipeline::compute(ctx, words(voxelize_large_comp), sizeof(VoxelizePush), constants);
+        if (!large) return large.status();
+        v->compute_large_[with_velocity] = std::move(*large);
+    }
     auto args = gpu::Pipeline::compute(ctx, words(voxelize_args_comp), sizeof(VoxelizePush));
     if (!args) return args.status();
     v->compute_args_ = std::move(*args);
-    auto large = gpu::Pipeline::compute(ctx, words(voxelize_large_comp), sizeof(VoxelizePush));
-    if (!large) return large.status();
-    v->compute_large_ = std::move(*large);
     auto profiler = gpu::Profiler::create(ctx);
     if (!profiler) return profiler.status();
     v->profiler_ = std::move(*profiler);
@@ -316,8 +321,9 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                 gpu::upload(ctx_, instances_, records.data(), records.size() * sizeof(VoxelizeInstance));
             !s)
             return s;
+        const std::size_t with_velocity = inv_dt_ > 0.0f ? 1 : 0;
         VoxelizePush push{};
-        push.velocities = inv_dt_ > 0.0f ? velocities_.address() : 0;
+        push.velocities = with_velocity ? velocities_.address() : 0;
         push.fragments = fragments_.address();
         push.counters = counters_.address();
         push.large_list = large_list_.address();
@@ -345,7 +351,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                     if (methods[i] != VoxelizeMethod::Raster || mesh.triangles_ == 0) continue;
                     push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
                     push.triangle_count = mesh.triangles_;
-                    raster_.bind(cmd, &push, sizeof(push));
+                    raster_[with_velocity].bind(cmd, &push, sizeof(push));
                     vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
                 }
                 vk.vkCmdEndRendering(cmd);
@@ -365,7 +371,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                 for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
                     push.first_triangle = first;
                     push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
-                    compute_small_.bind(cmd, &push, sizeof(push));
+                    compute_small_[with_velocity].bind(cmd, &push, sizeof(push));
                     vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize,
                                      1, 1);
                 }
@@ -373,7 +379,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                 compute_args_.bind(cmd, &push, sizeof(push));
                 vk.vkCmdDispatch(cmd, 1, 1, 1);
                 gpu::barrier(ctx_, cmd);
-                compute_large_.bind(cmd, &push, sizeof(push));
+                compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
                 vk.vkCmdDispatchIndirect(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_dispatch));
                 gpu::barrier(ctx_, cmd);
             }

@@ -14,6 +14,8 @@ struct GraphicsPipelineDesc {
     std::span<const std::uint32_t> geometry; ///< optional (empty: no geometry stage)
     std::span<const std::uint32_t> fragment; ///< SPIR-V words
     std::uint32_t push_constant_bytes = 0;
+    /// Specialization constants for every stage: value i goes to constant_id i.
+    std::span<const std::uint32_t> constants;
     /// Request VK_EXT_conservative_rasterization overestimation (ignored when the device lacks it).
     bool conservative = false;
 };
@@ -22,9 +24,11 @@ struct GraphicsPipelineDesc {
 class Pipeline {
   public:
     Pipeline() = default;
-    /// A compute pipeline with `push_constant_bytes` of push constants (entry point "main").
+    /// A compute pipeline with `push_constant_bytes` of push constants (entry point "main");
+    /// `constants[i]` specializes constant_id i.
     static Result<Pipeline> compute(Context& ctx, std::span<const std::uint32_t> spirv,
-                                    std::uint32_t push_constant_bytes);
+                                    std::uint32_t push_constant_bytes,
+                                    std::span<const std::uint32_t> constants = {});
     /// A graphics pipeline with no vertex input, no attachments and dynamic viewport and scissor.
     static Result<Pipeline> graphics(Context& ctx, const GraphicsPipelineDesc& desc);
     ~Pipeline();

@@ -118,10 +118,10 @@ class Voxelizer {
     Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
 
     gpu::Context& ctx_;
-    gpu::Pipeline raster_;
-    gpu::Pipeline compute_small_;
+    gpu::Pipeline raster_[2]; ///< [0]: without velocities, [1]: with
+    gpu::Pipeline compute_small_[2];
     gpu::Pipeline compute_args_;
-    gpu::Pipeline compute_large_;
+    gpu::Pipeline compute_large_[2];
     gpu::Profiler profiler_;
     gpu::Buffer fragments_;
     gpu::Buffer counters_;
