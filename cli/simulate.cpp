@@ -11,6 +11,7 @@
 #include <gust/scene/scene_runtime.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 namespace gust::cli {
@@ -66,24 +67,36 @@ int run_simulate(const SimulateArgs& args) {
     auto world = VoxelWorld::create(**ctx, world_desc);
     if (!world) return fail(world.message());
 
-    // One device mesh per object: deforming objects need their own vertex buffers.
+    // Objects showing the same mesh share one device copy (and one `auto` measurement); deforming
+    // objects get their own, since their vertex buffers change every frame.
     const std::size_t count = runtime->object_count();
-    std::vector<GpuMesh> meshes;
-    meshes.reserve(count);
+    std::vector<GpuMesh> uploaded;
+    uploaded.reserve(count);
+    std::vector<std::size_t> slot(count);
+    std::map<const Mesh*, std::size_t> shared;
     for (std::size_t i = 0; i < count; ++i) {
-        auto mesh = (*world)->upload(view_of(runtime->mesh(i)));
+        const Mesh& source = runtime->mesh(i);
+        if (!runtime->deforms(i))
+            if (const auto it = shared.find(&source); it != shared.end()) {
+                slot[i] = it->second;
+                continue;
+            }
+        auto mesh = (*world)->upload(view_of(source));
         if (!mesh) return fail(scene->objects[i].mesh.string() + ": " + mesh.message());
-        meshes.push_back(std::move(*mesh));
+        slot[i] = uploaded.size();
+        if (!runtime->deforms(i)) shared.emplace(&source, slot[i]);
+        uploaded.push_back(std::move(*mesh));
     }
+    const auto mesh_of = [&](std::size_t object) -> GpuMesh& { return uploaded[slot[object]]; };
     const double dt = scene->dt;
     std::vector<GpuInstance> statics;
     for (std::size_t i = 0; i < count; ++i)
-        if (scene->objects[i].is_static) statics.push_back({&meshes[i], runtime->model(i, 0.0)});
+        if (scene->objects[i].is_static) statics.push_back({&mesh_of(i), runtime->model(i, 0.0)});
     (*world)->set_static(statics);
     // The pose one frame before the first, so that frame 0's velocities are those of the motion.
     for (std::size_t i = 0; i < count; ++i)
         if (runtime->deforms(i))
-            if (Status s = (*world)->update_positions(meshes[i], runtime->positions(i, -dt)); !s)
+            if (Status s = (*world)->update_positions(mesh_of(i), runtime->positions(i, -dt)); !s)
                 return fail(s.message());
 
     std::cerr << "gust: simulating " << args.frames << " frames of " << args.scene << " (" << grid->res
@@ -95,9 +108,9 @@ int run_simulate(const SimulateArgs& args) {
         for (std::size_t i = 0; i < count; ++i) {
             if (scene->objects[i].is_static) continue;
             if (runtime->deforms(i))
-                if (Status s = (*world)->update_positions(meshes[i], runtime->positions(i, t)); !s)
+                if (Status s = (*world)->update_positions(mesh_of(i), runtime->positions(i, t)); !s)
                     return fail(s.message());
-            GpuInstance inst{&meshes[i], runtime->model(i, t)};
+            GpuInstance inst{&mesh_of(i), runtime->model(i, t)};
             inst.prev_model = runtime->model(i, t - dt);
             dynamic.push_back(inst);
         }
