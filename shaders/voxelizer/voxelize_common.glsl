@@ -52,6 +52,7 @@ uint pending_count = 0u;
 void flush_voxels() {
     if (pending_count == 0u) return;
     uint slot = atomicAdd(Counters(pc.counters).c.fragments, pending_count);
+    if (slot > 0xffffffffu - pending_count) atomicOr(Counters(pc.counters).c.wrapped, 1u);
     for (uint i = 0u; i < pending_count; ++i) {
         if (slot + i >= pc.capacity) break;
         Fragments(pc.fragments).v[slot + i] = pending[i];

@@ -30,7 +30,7 @@ struct VoxelizeCounters {
     uint large_items; ///< (triangle, tile) items queued for the current instance; may exceed the capacity
     uint large_peak;  ///< the most items any instance queued, which tells the host to grow the list
     DispatchArgs large_dispatch; ///< workgroups of the large pass, written by voxelize_args.comp
-    uint pad;
+    uint wrapped; ///< nonzero when a counter passed 2^32 - 1 (the call fails instead of wrapping silently)
 };
 
 /// One instance of a call, in a buffer (push constants hold its address).
@@ -50,7 +50,7 @@ struct VoxelizePush {
     GUST_ADDRESS instance;  ///< VoxelizeInstance
     GUST_ADDRESS fragments; ///< uint[capacity] packed voxel keys (pack_voxel)
     GUST_ADDRESS
-        velocities; ///< uvec2[capacity] surface velocity per fragment (half x, y, z; m/s, world); 0: none
+    velocities; ///< uvec2[capacity] surface velocity per fragment (half x, y, z; m/s, world); 0: none
     GUST_ADDRESS counters;   ///< VoxelizeCounters
     GUST_ADDRESS large_list; ///< uvec2[large_capacity] (triangle, tile) items for the large pass
     uint res;                ///< voxels per axis

@@ -22,6 +22,7 @@ void main() {
     if (columns > kLargeTriangleColumns) {
         uint tiles = (columns + kTileColumns - 1u) / kTileColumns;
         uint slot = atomicAdd(Counters(pc.counters).c.large_items, tiles);
+        if (slot > 0xffffffffu - tiles) atomicOr(Counters(pc.counters).c.wrapped, 1u);
         for (uint i = 0u; i < tiles && slot + i < pc.large_capacity; ++i)
             LargeList(pc.large_list).v[slot + i] = uvec2(t, i);
         return;

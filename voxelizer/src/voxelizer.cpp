@@ -391,6 +391,10 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
         stats.rejected = counters.rejected;
         stats.fragments = counters.fragments;
         stats.ms = profiler_.read();
+        if (counters.wrapped)
+            return Result<VoxelizeStats>::failure("the fragment list would pass 2^32 entries (too many "
+                                                  "voxels per triangle at this resolution); "
+                                                  "lower the resolution or split the scene");
         const bool large_overflow = counters.large_peak > large_capacity_;
         if (counters.fragments <= capacity_ && !large_overflow) break;
         // Grow with headroom so that a scene growing slowly does not redo every frame.
