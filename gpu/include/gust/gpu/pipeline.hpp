@@ -16,8 +16,6 @@ struct GraphicsPipelineDesc {
     std::uint32_t push_constant_bytes = 0;
     /// Specialization constants for every stage: value i goes to constant_id i.
     std::span<const std::uint32_t> constants;
-    /// Request VK_EXT_conservative_rasterization overestimation (ignored when the device lacks it).
-    bool conservative = false;
 };
 
 /// A pipeline and its layout. Move-only.
