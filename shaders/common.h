@@ -13,6 +13,7 @@
 #define GUST_INLINE inline
 #define GUST_CONST inline constexpr
 #define GUST_ADDRESS std::uint64_t
+#define GUST_OUT(type) type&
 #else
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_buffer_reference : require
@@ -22,6 +23,7 @@
 #define GUST_INLINE
 #define GUST_CONST const
 #define GUST_ADDRESS uint64_t
+#define GUST_OUT(type) out type
 #endif
 
 #endif

@@ -70,6 +70,10 @@ class SparseTree {
     /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree).
     Result<std::vector<std::uint32_t>> leaf_voxels() const;
 
+    /// Device address of the node pool (uvec2 per node, layout in shaders/tree/tree_io.h).
+    VkDeviceAddress node_address() const { return nodes_.address(); }
+    /// Device address of the leaf mask pool.
+    VkDeviceAddress mask_address() const { return masks_.address(); }
     std::uint32_t depth() const { return levels_; }
     std::uint32_t branching() const { return 1u << log2_b_; }
     std::uint32_t node_capacity() const { return node_blocks_; }

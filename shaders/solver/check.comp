@@ -1,0 +1,23 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// One thread after each V-cycle (or block of Jacobi iterations): records the residual and, once it is
+// within tolerance of the divergence before projection, zeroes the live dispatches so the remaining
+// recorded work does nothing.
+#include "solver_common.glsl"
+
+layout(local_size_x = 1) in;
+
+void main() {
+    StateRef st = state();
+    if (st.s.done != 0u) return;
+    float residual = uintBitsToFloat(st.s.residual_scratch);
+    st.s.residual = st.s.residual_scratch;
+    st.s.residual_scratch = 0u;
+    if (residual <= sb().b.tolerance * uintBitsToFloat(st.s.divergence_before)) {
+        st.s.done = 1u;
+        DispatchRef live = DispatchRef(sb().b.dispatch);
+        for (uint s = 0u; s < kDispatchSlots; ++s) live.v[s] = LevelDispatch(0u, 0u, 0u);
+    } else {
+        st.s.checks += 1u;
+    }
+}

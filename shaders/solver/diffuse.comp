@@ -1,0 +1,16 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per face: one Jacobi iteration of implicit viscosity (α = pc.param) from face field pc.parity into
+// face field pc.iterations.
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    if (i >= faces_total(n)) return;
+    uint axis;
+    ivec3 f = face_from_index(n, i, axis);
+    store_face(pc.iterations, i, diffuse_face(pc.parity, axis, f, pc.param));
+}

@@ -1,0 +1,15 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per face, in place: emitters (closing pc.param of the gap each) and the ambient wind on the domain's faces.
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    if (i >= faces_total(n)) return;
+    uint axis;
+    ivec3 f = face_from_index(n, i, axis);
+    store_face(kFieldVelocity, i, force_face(axis, f, pc.param));
+}

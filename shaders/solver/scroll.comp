@@ -1,0 +1,19 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per face: the field moved by pc.shift cells (new face f is old face f + shift) into tmp; faces with
+// no old counterpart take the ambient wind.
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    if (i >= faces_total(n)) return;
+    uint axis;
+    ivec3 f = face_from_index(n, i, axis);
+    ivec3 src = f + pc.shift;
+    ivec3 m = n + axis_unit(axis);
+    bool inside = all(greaterThanEqual(src, ivec3(0))) && all(lessThan(src, m));
+    store_face(kFieldTmp, i, inside ? load_face(kFieldVelocity, face_index(n, axis, src)) : grid_ambient()[axis]);
+}

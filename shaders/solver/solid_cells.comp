@@ -1,0 +1,90 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per wind cell: gathers the cell's voxels from the sparse tree's leaves, and stores its solid
+// fraction and its open voxel set (cell_fluid in solver_io.h) for the face pass.
+#include "../tree/tree_io.h"
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+uint b_log2() { return sb().b.tree_log2_branching; }
+
+/// Node of `level` holding tree voxel v, or kNone when the path stops earlier.
+const uint kNone = 0xffffffffu;
+uint node_at(ivec3 v, uint level) {
+    uint levels = sb().b.tree_levels;
+    uint children = 1u << (3u * b_log2());
+    uint node = 0u;
+    for (uint l = 0u; l < level; ++l) {
+        uint block = NodesRef(sb().b.tree_nodes).v[node].x;
+        if (block == 0u) return kNone;
+        node = block * children + child_slot(uvec3(v), l, levels, b_log2());
+    }
+    return node;
+}
+
+bool in_tree(ivec3 v) {
+    int res = 1 << int(sb().b.tree_levels * b_log2());
+    return all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, ivec3(res)));
+}
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    if (i >= n.x * n.y * n.z) return;
+    ivec3 c = cell_from_index(n, i);
+    uint v = sb().b.voxels_per_cell;
+    uint levels = sb().b.tree_levels;
+    WordsRef flags = WordsRef(sb().b.cell_flags);
+    FloatsRef solid = FloatsRef(sb().b.cell_solid);
+    flags.v[i] = 0u;
+    solid.v[i] = 0.0;
+    if (levels == 0u) return;
+    ivec3 lo = sb().b.voxel_offset + c * int(v);
+    // Cheap exit: the shallowest level whose nodes are at least a cell wide; the cell's corners lie
+    // in at most eight such nodes, and when none exists the cell is empty.
+    uint coarse = levels - 1u;
+    while (coarse > 0u && (1u << ((levels - coarse) * b_log2())) < v) --coarse;
+    bool any_node = false;
+    for (int k = 0; k < 8 && !any_node; ++k) {
+        ivec3 corner = lo + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1) * int(v - 1u);
+        any_node = in_tree(corner) && node_at(corner, coarse) != kNone && NodesRef(sb().b.tree_nodes).v[node_at(corner, coarse)].x != 0u;
+    }
+    if (!any_node) return;
+
+    uint words = sb().b.mask_words;
+    uint stride = sb().b.mask_stride;
+    CellBits occupied = bits_none();
+    ivec3 cached_brick = ivec3(-1);
+    uint block = 0u;
+    for (uint z = 0u; z < v; ++z)
+        for (uint y = 0u; y < v; ++y)
+            for (uint x = 0u; x < v; ++x) {
+                ivec3 voxel = lo + ivec3(x, y, z);
+                if (!in_tree(voxel)) continue;
+                ivec3 brick = voxel >> int(b_log2());
+                if (brick != cached_brick) {
+                    cached_brick = brick;
+                    uint node = node_at(voxel, levels - 1u);
+                    block = node == kNone ? 0u : NodesRef(sb().b.tree_nodes).v[node].x;
+                }
+                if (block == 0u) continue;
+                uint bit = child_slot(uvec3(voxel), levels - 1u, levels, b_log2());
+                uint base = block * stride + bit / 32u;
+                uint word = WordsRef(sb().b.tree_masks).v[base] | WordsRef(sb().b.tree_masks).v[base + words];
+                if ((word >> (bit % 32u) & 1u) != 0u) {
+                    uint j = x + v * (y + v * z);
+                    occupied.w[j / 32u] |= 1u << (j % 32u);
+                }
+            }
+    uint count = bits_count(occupied);
+    if (count == 0u) return;
+    CellBits faces[6];
+    load_face_masks(faces);
+    CellBits fluid = cell_fluid(occupied, v, faces);
+    uint cw = sb().b.cell_words;
+    for (uint k = 0u; k < cw; ++k) WordsRef(sb().b.cell_fluid).v[uint(i) * cw + k] = fluid.w[k];
+    flags.v[i] = 1u;
+    solid.v[i] = float(count) / float(v * v * v);
+    atomicAdd(state().s.cut_cells, 1u);
+}

@@ -1,0 +1,25 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per moving fragment: adds its surface velocity to its wind cell's fixed-point sum.
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+void main() {
+    int i = thread_index();
+    if (uint(i) >= state().s.fragments) return;
+    uint key = WordsRef(sb().b.fragments).v[i];
+    ivec3 voxel = ivec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u) - sb().b.voxel_offset;
+    if (any(lessThan(voxel, ivec3(0)))) return;
+    ivec3 c = voxel / int(sb().b.voxels_per_cell);
+    if (!inside_cells(sb().b.dims, c)) return;
+    uvec2 packed = UVec2Ref(sb().b.fragment_motion).v[i];
+    vec3 velocity = vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x);
+    ivec3 fixed_point = ivec3(round(clamp(velocity, vec3(-kMaxFragmentSpeed), vec3(kMaxFragmentSpeed)) * kVelocityScale));
+    int cell = cell_index(sb().b.dims, c);
+    IVec4Ref motion = IVec4Ref(sb().b.cell_motion);
+    atomicAdd(motion.v[cell].x, fixed_point.x);
+    atomicAdd(motion.v[cell].y, fixed_point.y);
+    atomicAdd(motion.v[cell].z, fixed_point.z);
+    atomicAdd(motion.v[cell].w, 1);
+}

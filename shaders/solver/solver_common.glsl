@@ -1,0 +1,76 @@
+// Buffers, accessors and helpers shared by the solver passes; then the shared kernels.
+#extension GL_EXT_control_flow_attributes : enable
+#include "solver_io.h"
+
+layout(buffer_reference, scalar) readonly buffer BindingsRef { SolverBindings b; };
+layout(buffer_reference, scalar) coherent buffer FloatsRef { float v[]; };
+layout(buffer_reference, scalar) coherent buffer WordsRef { uint v[]; };
+layout(buffer_reference, scalar) buffer Vec4Ref { vec4 v[]; };
+layout(buffer_reference, scalar) buffer IVec4Ref { ivec4 v[]; };
+layout(buffer_reference, scalar) readonly buffer UVec2Ref { uvec2 v[]; };
+layout(buffer_reference, scalar) readonly buffer NodesRef { uvec2 v[]; };
+layout(buffer_reference, scalar) readonly buffer EmittersRef { GpuEmitter v[]; };
+layout(buffer_reference, scalar) buffer StateRef { SolverState s; };
+layout(buffer_reference, scalar) buffer DispatchRef { LevelDispatch v[]; };
+
+layout(push_constant, scalar) uniform Push { SolverPush pc; };
+
+BindingsRef sb() { return BindingsRef(pc.bindings); }
+StateRef state() { return StateRef(sb().b.state); }
+
+/// Linear thread index over a 2D grid of workgroups (rows of at most 65,535).
+int thread_index() {
+    return int((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kSolverGroupSize + gl_LocalInvocationID.x);
+}
+
+ivec3 grid_dims() { return sb().b.dims; }
+float grid_h() { return sb().b.h; }
+vec3 grid_origin() { return sb().b.origin; }
+vec3 grid_ambient() { return sb().b.ambient; }
+uint grid_open_sides() { return sb().b.open_sides; }
+GridLevel load_level(uint l) { return sb().b.level[l]; }
+uint emitter_count() { return sb().b.emitter_count; }
+GpuEmitter load_emitter(uint i) { return EmittersRef(sb().b.emitters).v[i]; }
+
+uint64_t face_field(uint field) {
+    if (field == kFieldVelocity) return sb().b.velocity;
+    if (field == kFieldTmp) return sb().b.velocity_tmp;
+    if (field == kFieldBack) return sb().b.velocity_back;
+    return sb().b.solid_velocity;
+}
+uint64_t cell_field(uint field) {
+    if (field == kCellPressure) return sb().b.pressure;
+    if (field == kCellRhs) return sb().b.rhs;
+    if (field == kCellResidual) return sb().b.residual;
+    return sb().b.pressure_tmp;
+}
+float load_face(uint field, int index) { return FloatsRef(face_field(field)).v[index]; }
+float load_weight(int index) { return FloatsRef(sb().b.weights).v[index]; }
+float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
+vec4 load_vorticity(int index) { return Vec4Ref(sb().b.vorticity).v[index]; }
+
+void store_face(uint field, int index, float value) { FloatsRef(face_field(field)).v[index] = value; }
+void store_cell(uint field, int index, float value) { FloatsRef(cell_field(field)).v[index] = value; }
+
+// Workgroup maximum of |value|s, folded into a global counter by one thread per group (non-negative
+// floats order like their bits). Every thread of the group must call begin and end.
+shared uint group_max;
+void group_max_begin() {
+    if (gl_LocalInvocationIndex == 0u) group_max = 0u;
+    barrier();
+}
+void group_max_add(float value) { atomicMax(group_max, floatBitsToUint(abs(value))); }
+/// The group's maximum (float bits) on thread 0, after all threads added theirs.
+bool group_max_end(out uint bits) {
+    barrier();
+    bits = group_max;
+    return gl_LocalInvocationIndex == 0u;
+}
+
+/// A cell's six face layers (−x,+x,−y,+y,−z,+z), made once on the CPU.
+void load_face_masks(out CellBits faces[6]) {
+    for (uint s = 0u; s < 6u; ++s)
+        for (uint k = 0u; k < kCellWords; ++k) faces[s].w[k] = sb().b.face_mask[s * kCellWords + k];
+}
+
+#include "solver_kernels.h"

@@ -1,0 +1,424 @@
+// Layouts and pure per-cell functions shared by the wind-solver shaders and solver/ (DESIGN.md
+// "Wind solver"). The grid is a MAC grid of dims.x x dims.y x dims.z cells of size h: pressure at cell
+// centres, velocity component a on the faces normal to axis a. All face values of one field live in
+// one array: the x faces ((nx+1)·ny·nz, x fastest), then the y faces, then the z faces.
+#ifndef GUST_SOLVER_IO_H
+#define GUST_SOLVER_IO_H
+
+#include "../common.h"
+
+GUST_NAMESPACE_BEGIN
+
+GUST_CONST uint kSolverGroupSize = 64;
+/// Multigrid levels at most (the finest included).
+GUST_CONST uint kMaxGridLevels = 10;
+/// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3.
+GUST_CONST uint kCellWords = 16;
+GUST_CONST uint kMaxVoxelsPerCell = 8;
+GUST_CONST uint kMaxEmitters = 64;
+/// Fragment velocities are summed per cell as fixed point with this many steps per m/s, clamped to
+/// ±kMaxFragmentSpeed, so 32-bit integer atomics suffice (no float-atomic feature needed).
+GUST_CONST float kVelocityScale = 256.0f;
+GUST_CONST float kMaxFragmentSpeed = 256.0f;
+
+/// Damping of the Jacobi baseline: plain Jacobi never damps the checkerboard mode of a closed pocket
+/// (its iteration matrix has eigenvalue −1 there), 6/7 does and is the best smoother for 3D Laplacians.
+GUST_CONST float kJacobiWeight = 0.857f;
+
+GUST_CONST uint kEmitterDirectional = 0u;
+GUST_CONST uint kEmitterOmni = 1u;
+GUST_CONST uint kEmitterVortex = 2u;
+GUST_CONST uint kEmitterCapsule = 3u; ///< motor with a capsule profile
+GUST_CONST uint kEmitterCone = 4u;    ///< motor with a cone profile
+
+/// A wind source as the shaders see it (solver/wind_solver.hpp documents each type's profile).
+struct GpuEmitter {
+    vec3 position;  ///< metres, world (a motor's start)
+    uint type;      ///< kEmitter*
+    vec3 direction; ///< unit: flow (directional, motor) or axis (vortex)
+    float radius;   ///< metres, > 0
+    float strength; ///< target speed at the centre, m/s (negative reverses)
+    float falloff;  ///< exponent p of (1 - d/radius)^p
+    float extent;   ///< motors: metres along `direction`
+    float pad;
+};
+
+/// One level of the pressure hierarchy (level 0 is the wind grid).
+struct GridLevel {
+    ivec3 dims;   ///< cells per axis
+    uint cells;   ///< offset of this level in the per-cell arrays
+    ivec3 factor; ///< fine cells per coarse cell per axis towards the next level (1 or 2)
+    uint faces;   ///< offset of this level in the weight array
+    vec3 inv_h2;  ///< 1 / h_a^2 per axis, 1/m^2
+    uint pad;
+};
+
+/// Indirect dispatch arguments (VkDispatchIndirectCommand).
+struct LevelDispatch {
+    uint x, y, z;
+};
+
+/// Counters the passes write; the CPU reads them after the step.
+struct SolverState {
+    uint divergence_before; ///< float bits of max |weighted divergence| before projection, 1/s
+    uint divergence_after;  ///< float bits of the same after projection
+    uint residual;          ///< float bits of max |residual| at the last convergence check, 1/s
+    uint residual_scratch;  ///< float bits of max |residual| being gathered
+    uint checks;            ///< convergence checks run that found the solve unfinished
+    uint done;              ///< 1 once the residual met the tolerance
+    uint cut_cells;         ///< cells holding solid voxels
+    uint fluid_cells;       ///< cells with at least one open face
+    LevelDispatch fragments_dispatch; ///< over the moving surfaces' fragments
+    uint fragments;         ///< moving fragments read this step
+};
+
+/// Slots of the dispatch buffer: one per multigrid level, the coarsest solve, then a full copy that
+/// live slots are reset from (converged solves zero the live ones).
+GUST_CONST uint kCoarseSlot = kMaxGridLevels;
+GUST_CONST uint kDispatchSlots = kMaxGridLevels + 1u;
+
+GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face()
+GUST_CONST uint kFieldTmp = 1u;
+GUST_CONST uint kFieldBack = 2u;
+GUST_CONST uint kFieldSolid = 3u;
+GUST_CONST uint kCellPressure = 0u; ///< cell fields for load_cell()
+GUST_CONST uint kCellRhs = 1u;
+GUST_CONST uint kCellResidual = 2u;
+GUST_CONST uint kCellPressureTmp = 3u;
+
+/// Addresses and parameters of one step, in a buffer of their own (push constants stay small).
+struct SolverBindings {
+    GUST_ADDRESS velocity;        ///< float[faces]: the air's face-normal velocity, m/s
+    GUST_ADDRESS velocity_tmp;    ///< float[faces]: advection output
+    GUST_ADDRESS velocity_back;   ///< float[faces]: MacCormack's backward pass
+    GUST_ADDRESS weights;         ///< float[]: open fraction per face (level 0), coarse weights after
+    GUST_ADDRESS solid_velocity;  ///< float[faces]: solid's normal velocity per face, m/s
+    GUST_ADDRESS pressure;        ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
+    GUST_ADDRESS pressure_tmp;    ///< float[cells]: Jacobi's second buffer
+    GUST_ADDRESS rhs;             ///< float[]: right-hand side per cell, all levels (1/s)
+    GUST_ADDRESS residual;        ///< float[]: residual per cell, all levels (1/s)
+    GUST_ADDRESS cell_solid;      ///< float[cells]: fraction of the cell's voxels that are occupied
+    GUST_ADDRESS cell_fluid;      ///< uint[cells * kCellWords]: the cell's open voxels (see cell_fluid)
+    GUST_ADDRESS cell_flags;      ///< uint[cells]: 1 when the cell holds solid voxels
+    GUST_ADDRESS cell_motion;     ///< ivec4[cells]: fixed-point fragment velocity sums and count
+    GUST_ADDRESS vorticity;       ///< vec4[cells]: curl (1/s) and its length
+    GUST_ADDRESS emitters;        ///< GpuEmitter[emitter_count]
+    GUST_ADDRESS state;           ///< SolverState
+    GUST_ADDRESS dispatch;        ///< LevelDispatch[2 * kDispatchSlots]: live, then full
+    GUST_ADDRESS tree_nodes;      ///< the sparse tree's node pool (uvec2 per node), 0 without solids
+    GUST_ADDRESS tree_masks;      ///< the sparse tree's leaf masks
+    GUST_ADDRESS fragments;       ///< packed voxel keys of moving surfaces, 0 without
+    GUST_ADDRESS fragment_count;  ///< uint
+    GUST_ADDRESS fragment_motion; ///< uvec2 half-float velocities per fragment
+    ivec3 dims;                   ///< wind cells per axis
+    float h;                      ///< cell size, m
+    vec3 origin;                  ///< world position of the grid's min corner, m
+    uint voxels_per_cell;         ///< tree voxels per cell per axis (1..8)
+    vec3 ambient;                 ///< m/s, world
+    uint emitter_count;
+    ivec3 voxel_offset;           ///< tree voxel of the grid's min corner
+    uint fragment_capacity;
+    uint tree_levels;             ///< 0 without a tree
+    uint tree_log2_branching;
+    uint open_sides;              ///< bit s (−x,+x,−y,+y,−z,+z) set: the side is open (φ = 0)
+    uint levels;                  ///< multigrid levels in use
+    uint mask_words;              ///< words of a leaf layer in the tree's mask blocks
+    uint mask_stride;             ///< words per tree mask block
+    uint cell_words;              ///< words per cell in cell_fluid
+    float tolerance;              ///< relative residual the solve stops at
+    float vorticity_strength;     ///< ε of vorticity confinement
+    GridLevel level[kMaxGridLevels];
+    uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
+};
+
+/// Push constants of every solver pass.
+struct SolverPush {
+    GUST_ADDRESS bindings; ///< SolverBindings
+    float dt;              ///< seconds
+    uint level;            ///< multigrid level the pass works on
+    uint parity;           ///< red-black colour, or which field a pass reads
+    uint iterations;       ///< sweeps (coarsest solve) or a pass-specific count
+    float param;           ///< pass-specific value
+    uint pad;
+    ivec3 shift;           ///< scroll: cells the field moves by
+    uint pad2;
+};
+
+// ---- Grid indexing ----------------------------------------------------------------------------------
+
+GUST_INLINE ivec3 axis_unit(uint axis) {
+    return ivec3(axis == 0u ? 1 : 0, axis == 1u ? 1 : 0, axis == 2u ? 1 : 0);
+}
+
+GUST_INLINE int face_count(ivec3 n, uint axis) {
+    ivec3 m = n + axis_unit(axis);
+    return m.x * m.y * m.z;
+}
+
+/// Offset of the first face normal to `axis` in a face array of a grid of n cells.
+GUST_INLINE int face_base(ivec3 n, uint axis) {
+    int base = 0;
+    if (axis > 0u) base += face_count(n, 0u);
+    if (axis > 1u) base += face_count(n, 1u);
+    return base;
+}
+
+GUST_INLINE int faces_total(ivec3 n) {
+    return face_count(n, 0u) + face_count(n, 1u) + face_count(n, 2u);
+}
+
+/// Index of face f (the face on the low side of cell f along `axis`; f[axis] in 0..n[axis]).
+GUST_INLINE int face_index(ivec3 n, uint axis, ivec3 f) {
+    ivec3 m = n + axis_unit(axis);
+    return face_base(n, axis) + f.x + m.x * (f.y + m.y * f.z);
+}
+
+GUST_INLINE int cell_index(ivec3 n, ivec3 c) {
+    return c.x + n.x * (c.y + n.y * c.z);
+}
+
+GUST_INLINE bool inside_cells(ivec3 n, ivec3 c) {
+    return c.x >= 0 && c.y >= 0 && c.z >= 0 && c.x < n.x && c.y < n.y && c.z < n.z;
+}
+
+/// The face a linear index names (inverse of face_index); the axis through `axis`.
+GUST_INLINE ivec3 face_from_index(ivec3 n, int index, GUST_OUT(uint) axis) {
+    axis = 0u;
+    if (index >= face_base(n, 1u)) axis = 1u;
+    if (index >= face_base(n, 2u)) axis = 2u;
+    int i = index - face_base(n, axis);
+    ivec3 m = n + axis_unit(axis);
+    return ivec3(i % m.x, (i / m.x) % m.y, i / (m.x * m.y));
+}
+
+GUST_INLINE ivec3 cell_from_index(ivec3 n, int index) {
+    return ivec3(index % n.x, (index / n.x) % n.y, index / (n.x * n.y));
+}
+
+/// Side bit (−x,+x,−y,+y,−z,+z) of boundary face f, or 6 for an interior face.
+GUST_INLINE uint boundary_side(ivec3 n, uint axis, ivec3 f) {
+    int k = f[axis];
+    if (k == 0) return 2u * axis;
+    if (k == n[axis]) return 2u * axis + 1u;
+    return 6u;
+}
+
+/// Sides through which the ambient wind enters are held at it (fixed velocity); the others are open
+/// (φ = 0), so air leaves through them. A side parallel to the wind counts as open.
+GUST_INLINE uint open_sides_for(vec3 ambient) {
+    uint bits = 0u;
+    for (uint a = 0u; a < 3u; ++a) {
+        if (!(ambient[a] > 0.0f)) bits |= 1u << (2u * a);      // low side: inflow only when wind goes +a
+        if (!(ambient[a] < 0.0f)) bits |= 1u << (2u * a + 1u); // high side: inflow only when wind goes −a
+    }
+    return bits;
+}
+
+// ---- Cell voxel sets (a cell's voxels, bit x + v·(y + v·z) for v voxels per cell) ---------------------
+
+struct CellBits {
+    uint w[kCellWords];
+};
+
+GUST_INLINE CellBits bits_none() {
+    CellBits r;
+    for (uint i = 0u; i < kCellWords; ++i) r.w[i] = 0u;
+    return r;
+}
+
+/// Every voxel of a cell of v^3 voxels.
+GUST_INLINE CellBits bits_all(uint v) {
+    CellBits r = bits_none();
+    uint n = v * v * v;
+    for (uint i = 0u; i < kCellWords; ++i) {
+        uint lo = i * 32u;
+        if (n >= lo + 32u) r.w[i] = 0xffffffffu;
+        else if (n > lo) r.w[i] = (1u << (n - lo)) - 1u;
+    }
+    return r;
+}
+
+GUST_INLINE bool bits_get(CellBits b, uint i) {
+    return (b.w[i / 32u] >> (i % 32u) & 1u) != 0u;
+}
+
+GUST_INLINE uint bits_count(CellBits b) {
+    uint c = 0u;
+    for (uint i = 0u; i < kCellWords; ++i) c += uint(bitCount(b.w[i]));
+    return c;
+}
+
+GUST_INLINE bool bits_equal(CellBits a, CellBits b) {
+    bool same = true;
+    for (uint i = 0u; i < kCellWords; ++i) same = same && a.w[i] == b.w[i];
+    return same;
+}
+
+GUST_INLINE CellBits bits_and(CellBits a, CellBits b) {
+    for (uint i = 0u; i < kCellWords; ++i) a.w[i] &= b.w[i];
+    return a;
+}
+
+GUST_INLINE CellBits bits_and_not(CellBits a, CellBits b) {
+    for (uint i = 0u; i < kCellWords; ++i) a.w[i] &= ~b.w[i];
+    return a;
+}
+
+GUST_INLINE CellBits bits_or(CellBits a, CellBits b) {
+    for (uint i = 0u; i < kCellWords; ++i) a.w[i] |= b.w[i];
+    return a;
+}
+
+/// Bits moved up by s positions (towards higher indices).
+GUST_INLINE CellBits bits_up(CellBits a, uint s) {
+    CellBits r = bits_none();
+    uint words = s / 32u, bits = s % 32u;
+    for (uint i = kCellWords; i-- > words;) {
+        uint j = i - words;
+        r.w[i] = a.w[j] << bits;
+        if (bits != 0u && j > 0u) r.w[i] |= a.w[j - 1u] >> (32u - bits);
+    }
+    return r;
+}
+
+/// Bits moved down by s positions.
+GUST_INLINE CellBits bits_down(CellBits a, uint s) {
+    CellBits r = bits_none();
+    uint words = s / 32u, bits = s % 32u;
+    for (uint i = 0u; i + words < kCellWords; ++i) {
+        uint j = i + words;
+        r.w[i] = a.w[j] >> bits;
+        if (bits != 0u && j + 1u < kCellWords) r.w[i] |= a.w[j + 1u] << (32u - bits);
+    }
+    return r;
+}
+
+/// The voxels of a cell (v per axis) whose coordinate along `axis` equals `layer`.
+GUST_INLINE CellBits bits_layer(uint axis, uint layer, uint v) {
+    CellBits r = bits_none();
+    for (uint z = 0u; z < v; ++z)
+        for (uint y = 0u; y < v; ++y)
+            for (uint x = 0u; x < v; ++x) {
+                uint c = axis == 0u ? x : (axis == 1u ? y : z);
+                if (c != layer) continue;
+                uint i = x + v * (y + v * z);
+                r.w[i / 32u] |= 1u << (i % 32u);
+            }
+    return r;
+}
+
+/// `set` grown by one voxel across each face (6-connectivity), kept inside the cell. `faces` are
+/// bits_layer(axis, 0 or v-1) for −x,+x,−y,+y,−z,+z.
+GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
+    CellBits r = set;
+    uint stride = 1u;
+    for (uint a = 0u; a < 3u; ++a) {
+        r = bits_or(r, bits_up(bits_and_not(set, faces[2u * a + 1u]), stride));
+        r = bits_or(r, bits_down(bits_and_not(set, faces[2u * a]), stride));
+        stride *= v;
+    }
+    return r;
+}
+
+/// The open voxels of a cell that its pressure stands for: the largest 6-connected component of its
+/// free voxels (the first found on a tie). One pressure per cell cannot stand for two sides of a wall,
+/// so faces open only into this component; then any chain of open faces is a chain of free voxels,
+/// and a watertight surface, however thin, lets no air through.
+GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
+    CellBits free_voxels = bits_and_not(bits_all(v), occupied);
+    CellBits remaining = free_voxels;
+    CellBits best = bits_none();
+    uint best_count = 0u;
+    uint n = v * v * v;
+    for (uint seeds = 0u; seeds < n; ++seeds) {
+        uint first = n;
+        for (uint i = 0u; i < kCellWords && first == n; ++i)
+            if (remaining.w[i] != 0u) first = i * 32u + uint(findLSB(remaining.w[i]));
+        if (first == n) break;
+        CellBits component = bits_none();
+        component.w[first / 32u] = 1u << (first % 32u);
+        for (uint step = 0u; step < n; ++step) {
+            CellBits grown = bits_and(bits_dilate(component, v, faces), free_voxels);
+            if (bits_equal(grown, component)) break;
+            component = grown;
+        }
+        uint count = bits_count(component);
+        if (count > best_count) {
+            best = component;
+            best_count = count;
+        }
+        remaining = bits_and_not(remaining, component);
+    }
+    return best;
+}
+
+/// Open fraction of the face between cells `low` and `high` along `axis` (their fluid voxel sets):
+/// the share of voxel pairs across the face that are both open.
+GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
+    CellBits a = bits_and(low, faces[2u * axis + 1u]);
+    CellBits b = bits_and(high, faces[2u * axis]);
+    uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
+    uint open = bits_count(bits_and(bits_down(a, shift), b));
+    return float(open) / float(v * v);
+}
+
+// ---- Emitters ------------------------------------------------------------------------------------------
+
+/// (1 - d/r)^p inside the radius, 0 outside (p = 0: uniform).
+GUST_INLINE float emitter_falloff(float d, float radius, float p) {
+    if (!(d < radius)) return 0.0f;
+    float x = 1.0f - d / radius;
+    return p == 0.0f ? 1.0f : pow(x, p);
+}
+
+/// The velocity an emitter drives the air towards at world point x, m/s (zero outside its reach).
+/// Directional: `direction` inside a sphere. Omni: radial, outwards for positive strength (push) and
+/// inwards for negative (pull). Vortex: around the axis through `position` along `direction`
+/// (right-handed for positive strength), falloff by distance from the centre. Capsule motor: along
+/// `direction` within `radius` of the segment of `length` from `position`. Cone motor: along the
+/// segment, within a radius growing from 0 at `position` to `radius` at its end.
+GUST_INLINE vec3 emitter_velocity(GpuEmitter e, vec3 x) {
+    vec3 d = x - e.position;
+    float dist = length(d);
+    if (e.type == kEmitterDirectional)
+        return e.direction * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
+    if (e.type == kEmitterOmni) {
+        if (dist < 1e-6f) return vec3(0.0f);
+        return d / dist * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
+    }
+    if (e.type == kEmitterVortex) {
+        vec3 around = cross(e.direction, d);
+        float r = length(around);
+        if (r < 1e-6f) return vec3(0.0f);
+        return around / r * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
+    }
+    float along = clamp(dot(d, e.direction), 0.0f, e.extent);
+    float off = length(d - e.direction * along);
+    float radius = e.radius;
+    if (e.type == kEmitterCone) {
+        if (dot(d, e.direction) < 0.0f) return vec3(0.0f);
+        radius = e.extent > 0.0f ? e.radius * along / e.extent : e.radius;
+        if (!(radius > 0.0f)) return vec3(0.0f);
+    }
+    return e.direction * (e.strength * emitter_falloff(off, radius, e.falloff));
+}
+
+/// Moves one face velocity component towards an emitter's: an emitter speeds air up along its
+/// direction to its strength, and never slows air already going faster that way. `rate` is the
+/// share of the gap closed this step, 1 - exp(−dt/τ).
+GUST_INLINE float emitter_drive(float u, float target, float rate) {
+    if (target > 0.0f && u < target) return u + (target - u) * rate;
+    if (target < 0.0f && u > target) return u + (target - u) * rate;
+    return u;
+}
+
+GUST_NAMESPACE_END
+
+#ifdef __cplusplus
+static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
+static_assert(sizeof(gust::shaderio::GridLevel) == 48);
+static_assert(sizeof(gust::shaderio::SolverPush) == 48);
+static_assert(sizeof(gust::shaderio::SolverState) == 48);
+#endif
+
+#endif

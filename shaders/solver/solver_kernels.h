@@ -1,0 +1,316 @@
+// Per-face and per-cell kernels of the wind solver, written once for the shaders and for the CPU
+// version (solver/src/cpu_wind.cpp). Not a standalone header: the includer first defines the
+// accessors below, as GLSL functions over device buffers or as C++ members over host arrays (the C++
+// side includes this inside a struct).
+//
+//   ivec3 grid_dims();  float grid_h();  vec3 grid_origin();  vec3 grid_ambient();  uint grid_open_sides();
+//   float load_face(uint field, int index);    kField* arrays, level-0 face indices
+//   float load_weight(int index);              weight array (level offsets included)
+//   float load_cell(uint field, int index);    kCell* arrays (level offsets included)
+//   vec4 load_vorticity(int index);            level-0 cells
+//   GridLevel load_level(uint level);
+//   uint emitter_count();  GpuEmitter load_emitter(uint i);
+
+// ---- Sampling the staggered grid ------------------------------------------------------------------
+
+/// Centre of face f normal to `axis`, in cell units from the grid's min corner.
+GUST_INLINE vec3 face_position(uint axis, ivec3 f) {
+    return vec3(f) + vec3(0.5f) - 0.5f * vec3(axis_unit(axis));
+}
+
+/// The lattice cell of component `axis` holding p (cell units): corners i0..i1 and weights t.
+GUST_INLINE void component_lattice(uint axis, vec3 p, GUST_OUT(ivec3) i0, GUST_OUT(ivec3) i1, GUST_OUT(vec3) t) {
+    ivec3 m = grid_dims() + axis_unit(axis);
+    vec3 q = p - vec3(0.5f) + 0.5f * vec3(axis_unit(axis));
+    q = clamp(q, vec3(0.0f), vec3(m - ivec3(1)));
+    i0 = min(ivec3(floor(q)), max(m - ivec3(2), ivec3(0)));
+    i1 = min(i0 + ivec3(1), m - ivec3(1));
+    t = q - vec3(i0);
+}
+
+GUST_INLINE bool inside_grid(vec3 p) {
+    vec3 n = vec3(grid_dims());
+    return p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= n.x && p.y <= n.y && p.z <= n.z;
+}
+
+/// Component `axis` of face field `field` at p, trilinear; the ambient wind outside the grid.
+GUST_INLINE float sample_component(uint field, uint axis, vec3 p) {
+    if (!inside_grid(p)) return grid_ambient()[axis];
+    ivec3 i0, i1;
+    vec3 t;
+    component_lattice(axis, p, i0, i1, t);
+    ivec3 n = grid_dims();
+    float c000 = load_face(field, face_index(n, axis, ivec3(i0.x, i0.y, i0.z)));
+    float c100 = load_face(field, face_index(n, axis, ivec3(i1.x, i0.y, i0.z)));
+    float c010 = load_face(field, face_index(n, axis, ivec3(i0.x, i1.y, i0.z)));
+    float c110 = load_face(field, face_index(n, axis, ivec3(i1.x, i1.y, i0.z)));
+    float c001 = load_face(field, face_index(n, axis, ivec3(i0.x, i0.y, i1.z)));
+    float c101 = load_face(field, face_index(n, axis, ivec3(i1.x, i0.y, i1.z)));
+    float c011 = load_face(field, face_index(n, axis, ivec3(i0.x, i1.y, i1.z)));
+    float c111 = load_face(field, face_index(n, axis, ivec3(i1.x, i1.y, i1.z)));
+    float c00 = mix(c000, c100, t.x), c10 = mix(c010, c110, t.x);
+    float c01 = mix(c001, c101, t.x), c11 = mix(c011, c111, t.x);
+    return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+}
+
+/// Smallest and largest of the eight lattice values around p (MacCormack's clamp).
+GUST_INLINE vec2 component_range(uint field, uint axis, vec3 p) {
+    if (!inside_grid(p)) return vec2(grid_ambient()[axis]);
+    ivec3 i0, i1;
+    vec3 t;
+    component_lattice(axis, p, i0, i1, t);
+    ivec3 n = grid_dims();
+    vec2 r = vec2(3.4e38f, -3.4e38f);
+    for (int k = 0; k < 8; ++k) {
+        ivec3 c = ivec3((k & 1) != 0 ? i1.x : i0.x, (k & 2) != 0 ? i1.y : i0.y, (k & 4) != 0 ? i1.z : i0.z);
+        float v = load_face(field, face_index(n, axis, c));
+        r = vec2(min(r.x, v), max(r.y, v));
+    }
+    return r;
+}
+
+GUST_INLINE vec3 sample_velocity(uint field, vec3 p) {
+    return vec3(sample_component(field, 0u, p), sample_component(field, 1u, p), sample_component(field, 2u, p));
+}
+
+// ---- Advection (Stam 1999; MacCormack after Selle et al. 2008) ---------------------------------------
+
+/// Where the air at x (cell units) was dt seconds ago (dt < 0: where it will be), midpoint rule.
+GUST_INLINE vec3 trace(vec3 x, float dt) {
+    float s = dt / grid_h();
+    vec3 mid = x - 0.5f * s * sample_velocity(kFieldVelocity, x);
+    return x - s * sample_velocity(kFieldVelocity, mid);
+}
+
+/// Semi-Lagrangian: face f of `field` carried by the velocity field over dt.
+GUST_INLINE float advect_face(uint field, uint axis, ivec3 f, float dt) {
+    return sample_component(field, axis, trace(face_position(axis, f), dt));
+}
+
+/// MacCormack's correction of the forward result (kFieldTmp) by the error the backward pass
+/// (kFieldBack) found, clamped to the values the forward pass interpolated (stays bounded).
+GUST_INLINE float maccormack_face(uint axis, ivec3 f, float dt) {
+    int i = face_index(grid_dims(), axis, f);
+    float corrected = load_face(kFieldTmp, i) + 0.5f * (load_face(kFieldVelocity, i) - load_face(kFieldBack, i));
+    vec2 range = component_range(kFieldVelocity, axis, trace(face_position(axis, f), dt));
+    return clamp(corrected, range.x, range.y);
+}
+
+// ---- Forces -----------------------------------------------------------------------------------------------
+
+/// Face f after the emitters (closing `rate` of the gap each) and, on the domain's faces, the ambient
+/// wind (which the projection then keeps on inflow sides and corrects on open ones).
+GUST_INLINE float force_face(uint axis, ivec3 f, float rate) {
+    if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
+    float u = load_face(kFieldVelocity, face_index(grid_dims(), axis, f));
+    vec3 x = grid_origin() + face_position(axis, f) * grid_h();
+    for (uint e = 0u; e < emitter_count(); ++e) u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
+    return u;
+}
+
+GUST_INLINE vec3 cell_velocity(uint field, ivec3 c) {
+    ivec3 n = grid_dims();
+    vec3 v = vec3(0.0f);
+    for (uint a = 0u; a < 3u; ++a)
+        v[a] = 0.5f * (load_face(field, face_index(n, a, c)) + load_face(field, face_index(n, a, c + axis_unit(a))));
+    return v;
+}
+
+/// Curl of the cell-centred velocity by central differences (one-sided at the domain's faces), and
+/// its length.
+GUST_INLINE vec4 cell_vorticity(ivec3 c) {
+    ivec3 n = grid_dims();
+    vec3 d[3]; // d[a] = ∂v/∂x_a
+    for (uint a = 0u; a < 3u; ++a) {
+        ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
+        ivec3 lo = max(c - axis_unit(a), ivec3(0));
+        float span = float(hi[a] - lo[a]) * grid_h();
+        d[a] = span > 0.0f ? (cell_velocity(kFieldVelocity, hi) - cell_velocity(kFieldVelocity, lo)) / span : vec3(0.0f);
+    }
+    vec3 w = vec3(d[1].z - d[2].y, d[2].x - d[0].z, d[0].y - d[1].x);
+    return vec4(w, length(w));
+}
+
+/// Vorticity confinement (Fedkiw et al. 2001) force at cell c, per unit mass: ε h (N × ω), N the unit
+/// gradient of |ω|.
+GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
+    ivec3 n = grid_dims();
+    vec3 g = vec3(0.0f);
+    for (uint a = 0u; a < 3u; ++a) {
+        ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
+        ivec3 lo = max(c - axis_unit(a), ivec3(0));
+        float span = float(hi[a] - lo[a]) * grid_h();
+        g[a] = span > 0.0f ? (load_vorticity(cell_index(n, hi)).w - load_vorticity(cell_index(n, lo)).w) / span : 0.0f;
+    }
+    float len = length(g);
+    if (!(len > 1e-12f)) return vec3(0.0f);
+    return epsilon * grid_h() * cross(g / len, vec3(load_vorticity(cell_index(n, c))));
+}
+
+/// Face f after vorticity confinement. The step is limited to the local CFL time (h / speed), so a
+/// large dt cannot make the force overshoot.
+GUST_INLINE float confine_face(uint axis, ivec3 f, float dt, float epsilon) {
+    ivec3 n = grid_dims();
+    float u = load_face(kFieldVelocity, face_index(n, axis, f));
+    if (boundary_side(n, axis, f) != 6u) return u;
+    ivec3 a = f - axis_unit(axis);
+    float speed = max(length(cell_velocity(kFieldVelocity, a)), length(cell_velocity(kFieldVelocity, f)));
+    float step = speed > 0.0f ? min(dt, grid_h() / speed) : dt;
+    return u + step * 0.5f * (confinement_force(a, epsilon)[axis] + confinement_force(f, epsilon)[axis]);
+}
+
+/// One Jacobi iteration of implicit viscosity (u − α∇²u·h² = u0 with α = ν dt / h^2): face f from the
+/// iterate in `field`; u0 is kFieldVelocity, the ambient wind beyond the domain.
+GUST_INLINE float diffuse_face(uint field, uint axis, ivec3 f, float alpha) {
+    ivec3 n = grid_dims();
+    ivec3 m = n + axis_unit(axis);
+    float sum = 0.0f;
+    for (uint a = 0u; a < 3u; ++a)
+        for (int s = -1; s <= 1; s += 2) {
+            ivec3 g = f + s * axis_unit(a);
+            bool inside = g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
+            sum += inside ? load_face(field, face_index(n, axis, g)) : grid_ambient()[axis];
+        }
+    return (load_face(kFieldVelocity, face_index(n, axis, f)) + alpha * sum) / (1.0f + 6.0f * alpha);
+}
+
+// ---- Projection with face weights (Batty, Bertails and Bridson 2007) -------------------------------------
+
+/// Volume flux per unit area through face f: the open part carries the air, the closed part moves
+/// with the solid (free slip: only normal velocities meet).
+GUST_INLINE float face_flux(uint axis, ivec3 f) {
+    int i = face_index(grid_dims(), axis, f);
+    float open = load_weight(i);
+    return open * load_face(kFieldVelocity, i) + (1.0f - open) * load_face(kFieldSolid, i);
+}
+
+/// The solver's divergence of cell c (1/s): net outward flux over the cell's volume.
+GUST_INLINE float cell_divergence(ivec3 c) {
+    float net = 0.0f;
+    for (uint a = 0u; a < 3u; ++a) net += face_flux(a, c + axis_unit(a)) - face_flux(a, c);
+    return net / grid_h();
+}
+
+/// The weighted Laplacian at cell c of level l, split into the diagonal and the neighbours' sum:
+/// (Lφ)_c = off − diag·φ_c. Open domain sides hold φ = 0 beyond them; inflow sides add nothing.
+GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, GUST_OUT(float) diag, GUST_OUT(float) off) {
+    GridLevel level = load_level(l);
+    uint open = grid_open_sides();
+    diag = 0.0f;
+    off = 0.0f;
+    for (uint a = 0u; a < 3u; ++a)
+        for (uint s = 0u; s < 2u; ++s) {
+            ivec3 f = s == 0u ? c : c + axis_unit(a);
+            ivec3 nb = s == 0u ? c - axis_unit(a) : c + axis_unit(a);
+            float w = load_weight(int(level.faces) + face_index(level.dims, a, f)) * level.inv_h2[a];
+            if (w == 0.0f) continue;
+            if (inside_cells(level.dims, nb)) {
+                diag += w;
+                off += w * load_cell(field, int(level.cells) + cell_index(level.dims, nb));
+            } else if ((open >> (2u * a + s) & 1u) != 0u) {
+                diag += w;
+            }
+        }
+}
+
+/// Gauss–Seidel / Jacobi update of φ at cell c of level l from the values in `field`.
+GUST_INLINE float relax_cell(uint l, ivec3 c, uint field) {
+    float diag, off;
+    cell_operator(l, c, field, diag, off);
+    if (!(diag > 0.0f)) return 0.0f;
+    GridLevel level = load_level(l);
+    return (off - load_cell(kCellRhs, int(level.cells) + cell_index(level.dims, c))) / diag;
+}
+
+/// Damped Jacobi update of φ at level-0 cell c from the values in `field`.
+GUST_INLINE float jacobi_cell(ivec3 c, uint field) {
+    float old = load_cell(field, cell_index(grid_dims(), c));
+    return mix(old, relax_cell(0u, c, field), kJacobiWeight);
+}
+
+/// Residual b − Lφ at cell c of level l (φ in kCellPressure); 0 where no face is open.
+GUST_INLINE float residual_cell(uint l, ivec3 c) {
+    float diag, off;
+    cell_operator(l, c, kCellPressure, diag, off);
+    if (!(diag > 0.0f)) return 0.0f;
+    GridLevel level = load_level(l);
+    int i = int(level.cells) + cell_index(level.dims, c);
+    return load_cell(kCellRhs, i) - (off - diag * load_cell(kCellPressure, i));
+}
+
+/// Right-hand side of coarse cell C of level l (> 0): the mean residual of its children.
+GUST_INLINE float restrict_cell(uint l, ivec3 C) {
+    GridLevel fine = load_level(l - 1u);
+    ivec3 k = fine.factor;
+    float sum = 0.0f;
+    for (int z = 0; z < k.z; ++z)
+        for (int y = 0; y < k.y; ++y)
+            for (int x = 0; x < k.x; ++x) {
+                ivec3 c = C * k + ivec3(x, y, z);
+                if (inside_cells(fine.dims, c)) sum += load_cell(kCellResidual, int(fine.cells) + cell_index(fine.dims, c));
+            }
+    return sum / float(k.x * k.y * k.z);
+}
+
+/// Weight of face F (normal to `axis`) of coarse level l: the mean weight of the fine faces it covers.
+GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
+    GridLevel fine = load_level(l - 1u);
+    ivec3 k = fine.factor;
+    ivec3 span = k;
+    span[axis] = 1;
+    ivec3 m = fine.dims + axis_unit(axis);
+    float sum = 0.0f;
+    for (int z = 0; z < span.z; ++z)
+        for (int y = 0; y < span.y; ++y)
+            for (int x = 0; x < span.x; ++x) {
+                ivec3 f = F * k + ivec3(x, y, z);
+                f[axis] = min(F[axis] * k[axis], fine.dims[axis]);
+                if (f.x < m.x && f.y < m.y && f.z < m.z)
+                    sum += load_weight(int(fine.faces) + face_index(fine.dims, axis, f));
+            }
+    return sum / float(span.x * span.y * span.z);
+}
+
+/// Correction for fine cell c of level l from level l + 1 (cell-centred trilinear interpolation).
+GUST_INLINE float prolong_cell(uint l, ivec3 c) {
+    GridLevel fine = load_level(l);
+    GridLevel coarse = load_level(l + 1u);
+    ivec3 k = fine.factor;
+    ivec3 parent = c / k;
+    ivec3 toward = ivec3(0);
+    for (uint a = 0u; a < 3u; ++a)
+        if (k[a] == 2) toward[a] = (c[a] & 1) != 0 ? 1 : -1;
+    float sum = 0.0f;
+    for (int corner = 0; corner < 8; ++corner) {
+        ivec3 pick = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        float w = 1.0f;
+        bool used = true;
+        for (uint a = 0u; a < 3u; ++a) {
+            if (toward[a] == 0) {
+                used = used && pick[a] == 0;
+            } else {
+                w *= pick[a] == 0 ? 0.75f : 0.25f;
+            }
+        }
+        if (!used) continue;
+        ivec3 q = parent + pick * toward;
+        if (inside_cells(coarse.dims, q)) sum += w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, q));
+    }
+    return sum;
+}
+
+/// Face f after the pressure gradient: closed faces move with the solid; inflow sides keep the
+/// ambient wind; φ is 0 beyond open sides.
+GUST_INLINE float project_face(uint axis, ivec3 f) {
+    ivec3 n = grid_dims();
+    int i = face_index(n, axis, f);
+    float open = load_weight(i);
+    if (open == 0.0f) return load_face(kFieldSolid, i);
+    float u = load_face(kFieldVelocity, i);
+    uint side = boundary_side(n, axis, f);
+    if (side != 6u && (grid_open_sides() >> side & 1u) == 0u) return u;
+    ivec3 lo = f - axis_unit(axis);
+    float p_lo = inside_cells(n, lo) ? load_cell(kCellPressure, cell_index(n, lo)) : 0.0f;
+    float p_hi = inside_cells(n, f) ? load_cell(kCellPressure, cell_index(n, f)) : 0.0f;
+    return u - (p_hi - p_lo) / grid_h();
+}

@@ -1,0 +1,147 @@
+// The wind: Stam's stable fluids on a MAC grid around a focus point, with the sparse voxel tree as
+// its solid boundary (DESIGN.md "Wind solver", docs/solver.md).
+#pragma once
+
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/pipeline.hpp>
+#include <gust/gpu/profiler.hpp>
+#include <gust/voxelizer/sparse_tree.hpp>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace gust {
+
+/// How velocities are carried by the flow.
+enum class Advection {
+    None,           ///< skipped (tests, pure projection)
+    SemiLagrangian, ///< Stam 1999, midpoint backtrace
+    MacCormack      ///< second order, clamped to the interpolated values (Selle et al. 2008)
+};
+
+/// How the pressure equation is solved.
+enum class PressureSolver {
+    Multigrid, ///< geometric V-cycles, red-black Gauss–Seidel smoothing
+    Jacobi     ///< the baseline
+};
+
+/// Wind-source profiles (see emitter_velocity in shaders/solver/solver_io.h).
+enum class EmitterType { Directional, Omni, Vortex, CapsuleMotor, ConeMotor };
+
+/// A wind source. The air within reach is sped up along the emitter's flow towards `strength` with a
+/// response time (SolverDesc::emitter_response); air already faster that way is left alone.
+struct Emitter {
+    EmitterType type = EmitterType::Omni;
+    glm::vec3 position{0.0f};     ///< metres, world: centre, or a motor's start
+    glm::vec3 direction{1, 0, 0}; ///< unit: flow (directional, motors) or axis (vortex)
+    float radius = 1.0f;          ///< metres, > 0
+    float strength = 0.0f;        ///< m/s at the centre (negative reverses: pull, clockwise, suck)
+    float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p, >= 0 (0: uniform)
+    float length = 0.0f;          ///< motors: metres along `direction`, >= 0
+};
+
+/// Grid and numerics of a solver.
+struct SolverDesc {
+    glm::uvec3 cells{32, 16, 32};      ///< wind cells per axis, each 8..256
+    float cell_size = 1.0f;            ///< metres, > 0
+    glm::vec3 origin{0.0f};            ///< world position of the grid's min corner, metres
+    std::uint32_t voxels_per_cell = 4; ///< tree voxels per cell per axis, 1..8
+    Advection advection = Advection::MacCormack;
+    PressureSolver pressure = PressureSolver::Multigrid;
+    /// The solve stops when max |residual| <= tolerance · max |divergence before projection|.
+    float tolerance = 1e-5f;
+    std::uint32_t max_cycles = 20;       ///< multigrid V-cycles per step at most
+    std::uint32_t max_iterations = 4000; ///< Jacobi iterations per step at most
+    std::uint32_t smoothing = 2;         ///< Gauss–Seidel sweeps before and after each coarse correction
+    float vorticity = 0.2f;              ///< confinement strength ε (0: off)
+    float viscosity = 0.0f;              ///< kinematic viscosity, m^2/s (0: off)
+    float emitter_response = 0.1f;       ///< seconds for an emitter to close 63% of the gap, > 0
+};
+
+/// Where the solid boundary comes from: a tree over a voxel grid of cell_size / voxels_per_cell
+/// voxels, and the moving surfaces' fragments with their velocities (as the voxelizer leaves them).
+struct SolidSource {
+    const SparseTree* tree = nullptr;          ///< null: no solids
+    glm::ivec3 voxel_offset{0};                ///< tree voxel at the wind grid's min corner
+    VkDeviceAddress fragments = 0;             ///< packed voxel keys of moving surfaces (0: none)
+    VkDeviceAddress fragment_count = 0;        ///< uint counter
+    VkDeviceAddress fragment_velocities = 0;   ///< uvec2 half-float velocity per fragment, m/s
+    std::uint64_t fragment_capacity = 0;
+};
+
+/// What one step did.
+struct WindStats {
+    double divergence_before = 0.0; ///< max |divergence| before projection, 1/s
+    double divergence_after = 0.0;  ///< the same after, 1/s
+    double residual = 0.0;          ///< max |residual| at the last check, 1/s
+    std::uint32_t cycles = 0;       ///< V-cycles (multigrid) or iterations (Jacobi) run
+    bool converged = false;         ///< the tolerance was met
+    std::uint32_t cut_cells = 0;    ///< cells holding solid voxels
+    std::uint32_t fluid_cells = 0;  ///< cells with an open face
+    std::uint32_t moving_fragments = 0;
+    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (when timed)
+};
+
+/// Fails on a grid or setting out of range (the message names it).
+Status validate(const SolverDesc& desc);
+/// Fails on non-finite or out-of-range emitter parameters (the message names emitter and field).
+Status validate(std::span<const Emitter> emitters);
+
+/// The solver. Thread-compatible; the Context must outlive it.
+class WindSolver {
+  public:
+    /// Starts with the air at rest.
+    static Result<std::unique_ptr<WindSolver>> create(gpu::Context& ctx, const SolverDesc& desc);
+
+    /// Ambient wind, m/s: enters through the domain's upwind faces, fills new cells when scrolling.
+    Status set_ambient(glm::vec3 velocity);
+    /// Replaces the emitters (at most 64). Rejected whole when any is invalid.
+    Status set_emitters(std::span<const Emitter> emitters);
+    /// Moves the grid by whole cells (origin += cells · cell_size): overlapping faces keep their
+    /// values, the others take the ambient wind. Blocks.
+    Status scroll(glm::ivec3 cells);
+    /// One step of dt seconds (finite, in (0, 10]): solid boundary, advection, emitters, vorticity
+    /// confinement, viscosity, projection. Blocks until the GPU is done.
+    Result<WindStats> step(float dt, const SolidSource* solid = nullptr);
+
+    /// Face velocities (m/s) in the layout of shaders/solver/solver_io.h: x faces, then y, then z.
+    Status set_velocity(std::span<const float> faces);
+    Result<std::vector<float>> read_velocity() const;
+    /// Open fraction per face (1 open, 0 closed), as of the last step.
+    Result<std::vector<float>> read_open_fraction() const;
+    /// Solid's normal velocity per face (m/s), as of the last step.
+    Result<std::vector<float>> read_solid_velocity() const;
+    /// Pressure per cell, Pa (air density 1.2 kg/m^3), of the last step.
+    Result<std::vector<float>> read_pressure() const;
+    /// Fraction of each cell's voxels that are solid, of the last step.
+    Result<std::vector<float>> read_solid_fraction() const;
+
+    const SolverDesc& desc() const { return desc_; }
+    glm::vec3 origin() const { return origin_; }
+    glm::vec3 ambient() const { return ambient_; }
+    std::size_t face_count() const;
+    std::size_t cell_count() const;
+    std::uint32_t levels() const { return levels_; }
+
+    ~WindSolver();
+
+  private:
+    explicit WindSolver(gpu::Context& ctx);
+    struct Impl;
+    gpu::Context& ctx_;
+    SolverDesc desc_;
+    glm::vec3 origin_{0.0f};
+    glm::vec3 ambient_{0.0f};
+    std::uint32_t levels_ = 1;
+    float last_dt_ = 0.0f;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// Cell-centred velocity (m/s) from face velocities: the mean of each cell's two faces per axis.
+std::vector<glm::vec3> cell_velocities(glm::uvec3 cells, std::span<const float> faces);
+
+} // namespace gust

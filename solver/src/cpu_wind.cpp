@@ -1,0 +1,370 @@
+#include "solver_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <gust/solver/cpu_wind.hpp>
+
+namespace gust {
+
+namespace shaderio {
+
+/// The kernels over host arrays: the accessors solver_kernels.h asks for, then the kernels themselves.
+struct HostKernels {
+    glm::ivec3 dims;
+    float h = 1.0f;
+    glm::vec3 origin{0.0f}, ambient{0.0f};
+    uint open_sides = 0;
+    std::vector<GridLevel> levels;
+    std::vector<GpuEmitter> emitters;
+    std::vector<float> face[4]; ///< kField*
+    std::vector<float> weights;
+    std::vector<float> cell[4]; ///< kCell*
+    std::vector<vec4> vorticity;
+
+    ivec3 grid_dims() const { return dims; }
+    float grid_h() const { return h; }
+    vec3 grid_origin() const { return origin; }
+    vec3 grid_ambient() const { return ambient; }
+    uint grid_open_sides() const { return open_sides; }
+    float load_face(uint field, int index) const { return face[field][std::size_t(index)]; }
+    float load_weight(int index) const { return weights[std::size_t(index)]; }
+    float load_cell(uint field, int index) const { return cell[field][std::size_t(index)]; }
+    vec4 load_vorticity(int index) const { return vorticity[std::size_t(index)]; }
+    GridLevel load_level(uint l) const { return levels[l]; }
+    uint emitter_count() const { return uint(emitters.size()); }
+    GpuEmitter load_emitter(uint i) const { return emitters[i]; }
+
+#include "solver/solver_kernels.h"
+};
+
+} // namespace shaderio
+
+using shaderio::CellBits;
+using shaderio::GridLevel;
+using shaderio::kCellWords;
+
+struct CpuWind::Impl {
+    SolverDesc desc;
+    shaderio::HostKernels k;
+    std::vector<float> solid_fraction;
+    std::vector<std::uint8_t> cut;
+    std::vector<CellBits> fluid;
+    std::uint32_t face_mask[6 * kCellWords];
+    float last_dt = 0.0f;
+
+    std::size_t faces() const { return std::size_t(shaderio::faces_total(k.dims)); }
+    std::size_t cells() const { return std::size_t(k.dims.x) * k.dims.y * k.dims.z; }
+
+    template <typename F> void each_face(F&& f) {
+        for (int i = 0; i < int(faces()); ++i) {
+            std::uint32_t axis;
+            const glm::ivec3 at = shaderio::face_from_index(k.dims, i, axis);
+            f(i, axis, at);
+        }
+    }
+    template <typename F> void each_cell(const GridLevel& level, F&& f) {
+        const int n = level.dims.x * level.dims.y * level.dims.z;
+        for (int i = 0; i < n; ++i) f(i, shaderio::cell_from_index(level.dims, i));
+    }
+
+    void solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells);
+    void coarse_weights();
+    void smooth(std::uint32_t l);
+    float max_residual();
+};
+
+CpuWind::~CpuWind() = default;
+
+Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
+    if (Status s = validate(desc); !s) return s;
+    std::unique_ptr<CpuWind> wind(new CpuWind());
+    wind->impl_ = std::make_unique<Impl>();
+    Impl& m = *wind->impl_;
+    m.desc = desc;
+    m.k.dims = glm::ivec3(desc.cells);
+    m.k.h = desc.cell_size;
+    m.k.origin = desc.origin;
+    m.k.levels = detail::build_levels(desc.cells, desc.cell_size);
+    const GridLevel& last = m.k.levels.back();
+    const std::size_t all_cells = last.cells + std::size_t(last.dims.x) * last.dims.y * last.dims.z;
+    const std::size_t all_faces = last.faces + std::size_t(shaderio::faces_total(last.dims));
+    for (auto& f : m.k.face) f.assign(m.faces(), 0.0f);
+    m.k.weights.assign(all_faces, 1.0f);
+    for (auto& c : m.k.cell) c.assign(all_cells, 0.0f);
+    m.k.vorticity.assign(m.cells(), glm::vec4(0.0f));
+    m.solid_fraction.assign(m.cells(), 0.0f);
+    m.cut.assign(m.cells(), 0);
+    m.fluid.assign(m.cells(), shaderio::bits_none());
+    detail::face_masks(desc.voxels_per_cell, m.face_mask);
+    return wind;
+}
+
+Status CpuWind::set_ambient(glm::vec3 velocity) {
+    if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
+        return Status::failure("ambient wind must be finite");
+    impl_->k.ambient = velocity;
+    return Status{};
+}
+
+Status CpuWind::set_emitters(std::span<const Emitter> emitters) {
+    if (Status s = validate(emitters); !s) return s;
+    impl_->k.emitters.clear();
+    for (const Emitter& e : emitters) impl_->k.emitters.push_back(detail::to_gpu(e));
+    return Status{};
+}
+
+Status CpuWind::set_velocity(std::span<const float> faces) {
+    if (faces.size() != impl_->faces()) return Status::failure("wrong number of face velocities");
+    impl_->k.face[shaderio::kFieldVelocity].assign(faces.begin(), faces.end());
+    return Status{};
+}
+
+Status CpuWind::scroll(glm::ivec3 cells) {
+    Impl& m = *impl_;
+    std::vector<float> moved(m.faces());
+    m.each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
+        const glm::ivec3 src = f + cells;
+        const glm::ivec3 lattice = m.k.dims + shaderio::axis_unit(axis);
+        const bool inside = glm::all(glm::greaterThanEqual(src, glm::ivec3(0))) && glm::all(glm::lessThan(src, lattice));
+        moved[std::size_t(i)] = inside ? m.k.face[0][std::size_t(shaderio::face_index(m.k.dims, axis, src))] : m.k.ambient[axis];
+    });
+    m.k.face[0] = std::move(moved);
+    m.k.origin += glm::vec3(cells) * m.desc.cell_size;
+    return Status{};
+}
+
+const std::vector<float>& CpuWind::velocity() const { return impl_->k.face[shaderio::kFieldVelocity]; }
+const std::vector<float>& CpuWind::solid_velocity() const { return impl_->k.face[shaderio::kFieldSolid]; }
+const std::vector<float>& CpuWind::solid_fraction() const { return impl_->solid_fraction; }
+const std::vector<float>& CpuWind::open_fraction() const {
+    return impl_->k.weights;
+}
+std::vector<float> CpuWind::pressure() const {
+    const float scale = impl_->last_dt > 0.0f ? detail::kAirDensity / impl_->last_dt : 0.0f;
+    std::vector<float> p(impl_->k.cell[shaderio::kCellPressure].begin(),
+                         impl_->k.cell[shaderio::kCellPressure].begin() + std::ptrdiff_t(impl_->cells()));
+    for (float& v : p) v *= scale;
+    return p;
+}
+
+void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) {
+    const std::uint32_t v = desc.voxels_per_cell;
+    const glm::ivec3 voxels = k.dims * int(v);
+    CellBits faces_layers[6];
+    for (std::uint32_t s = 0; s < 6; ++s) std::copy(face_mask + s * kCellWords, face_mask + (s + 1) * kCellWords, faces_layers[s].w);
+    std::vector<glm::ivec4> motion(cells(), glm::ivec4(0));
+    cut_cells = 0;
+    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        cut[std::size_t(i)] = 0;
+        solid_fraction[std::size_t(i)] = 0.0f;
+        if (!solid || solid->occupied.empty()) return;
+        CellBits occupied = shaderio::bits_none();
+        for (std::uint32_t z = 0; z < v; ++z)
+            for (std::uint32_t y = 0; y < v; ++y)
+                for (std::uint32_t x = 0; x < v; ++x) {
+                    const glm::ivec3 p = c * int(v) + glm::ivec3(x, y, z);
+                    if (!solid->occupied[std::size_t(p.x) + std::size_t(voxels.x) * (std::size_t(p.y) + std::size_t(voxels.y) * p.z)]) continue;
+                    const std::uint32_t j = x + v * (y + v * z);
+                    occupied.w[j / 32] |= 1u << (j % 32);
+                }
+        const std::uint32_t count = shaderio::bits_count(occupied);
+        if (count == 0) return;
+        fluid[std::size_t(i)] = shaderio::cell_fluid(occupied, v, faces_layers);
+        cut[std::size_t(i)] = 1;
+        solid_fraction[std::size_t(i)] = float(count) / float(v * v * v);
+        ++cut_cells;
+    });
+    if (solid)
+        for (const auto& [voxel, velocity] : solid->fragments) {
+            if (glm::any(glm::lessThan(voxel, glm::ivec3(0)))) continue;
+            const glm::ivec3 c = voxel / int(v);
+            if (!shaderio::inside_cells(k.dims, c)) continue;
+            const glm::vec3 clamped = glm::clamp(velocity, glm::vec3(-shaderio::kMaxFragmentSpeed), glm::vec3(shaderio::kMaxFragmentSpeed));
+            const glm::ivec3 fixed_point(glm::round(clamped * shaderio::kVelocityScale));
+            motion[std::size_t(shaderio::cell_index(k.dims, c))] += glm::ivec4(fixed_point, 1);
+        }
+    auto fluid_of = [&](glm::ivec3 c) {
+        if (!shaderio::inside_cells(k.dims, c)) return shaderio::bits_all(v);
+        const std::size_t i = std::size_t(shaderio::cell_index(k.dims, c));
+        return cut[i] ? fluid[i] : shaderio::bits_all(v);
+    };
+    auto motion_of = [&](glm::ivec3 c) {
+        return shaderio::inside_cells(k.dims, c) ? motion[std::size_t(shaderio::cell_index(k.dims, c))] : glm::ivec4(0);
+    };
+    auto is_cut = [&](glm::ivec3 c) {
+        return shaderio::inside_cells(k.dims, c) && cut[std::size_t(shaderio::cell_index(k.dims, c))];
+    };
+    each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
+        const glm::ivec3 lo = f - shaderio::axis_unit(axis);
+        float open = 1.0f;
+        if (is_cut(lo) || is_cut(f)) open = shaderio::face_open_fraction(fluid_of(lo), fluid_of(f), axis, v, faces_layers);
+        k.weights[std::size_t(i)] = open;
+        const glm::ivec4 m = motion_of(lo) + motion_of(f);
+        k.face[shaderio::kFieldSolid][std::size_t(i)] = m.w > 0 ? float(m[int(axis)]) / (shaderio::kVelocityScale * float(m.w)) : 0.0f;
+    });
+}
+
+void CpuWind::Impl::coarse_weights() {
+    for (std::uint32_t l = 1; l < k.levels.size(); ++l) {
+        const GridLevel& level = k.levels[l];
+        for (int i = 0; i < shaderio::faces_total(level.dims); ++i) {
+            std::uint32_t axis;
+            const glm::ivec3 f = shaderio::face_from_index(level.dims, i, axis);
+            k.weights[level.faces + std::size_t(i)] = k.coarse_weight(l, axis, f);
+        }
+    }
+}
+
+void CpuWind::Impl::smooth(std::uint32_t l) {
+    const GridLevel& level = k.levels[l];
+    for (std::uint32_t s = 0; s < desc.smoothing; ++s)
+        for (std::uint32_t colour = 0; colour < 2; ++colour)
+            each_cell(level, [&](int i, glm::ivec3 c) {
+                if (std::uint32_t(c.x + c.y + c.z) % 2 != colour) return;
+                k.cell[shaderio::kCellPressure][level.cells + std::size_t(i)] = k.relax_cell(l, c, shaderio::kCellPressure);
+            });
+}
+
+float CpuWind::Impl::max_residual() {
+    float worst = 0.0f;
+    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        const float r = k.residual_cell(0, c);
+        k.cell[shaderio::kCellResidual][std::size_t(i)] = r;
+        worst = std::max(worst, std::abs(r));
+    });
+    return worst;
+}
+
+Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
+    if (Status s = detail::validate_dt(dt); !s) return s;
+    Impl& m = *impl_;
+    auto& k = m.k;
+    const SolverDesc& desc = m.desc;
+    k.open_sides = shaderio::open_sides_for(k.ambient);
+    if (solid) {
+        const glm::ivec3 voxels = k.dims * int(desc.voxels_per_cell);
+        if (!solid->occupied.empty() && solid->occupied.size() != std::size_t(voxels.x) * voxels.y * voxels.z)
+            return Status::failure("CpuSolid::occupied must hold one byte per voxel of the grid");
+    }
+    WindStats stats;
+    m.solid_pass(solid, stats.cut_cells);
+    if (solid) stats.moving_fragments = std::uint32_t(solid->fragments.size());
+    m.coarse_weights();
+
+    std::vector<float>& u = k.face[shaderio::kFieldVelocity];
+    std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
+    std::vector<float>& back = k.face[shaderio::kFieldBack];
+    if (desc.advection != Advection::None) {
+        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt); });
+        if (desc.advection == Advection::MacCormack) {
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { back[std::size_t(i)] = k.advect_face(shaderio::kFieldTmp, a, f, -dt); });
+            std::vector<float> out(m.faces());
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { out[std::size_t(i)] = k.maccormack_face(a, f, dt); });
+            tmp = std::move(out);
+        }
+        u = tmp;
+    }
+    const float rate = detail::emitter_rate(dt, desc.emitter_response);
+    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { u[std::size_t(i)] = k.force_face(a, f, rate); });
+    if (desc.vorticity > 0.0f) {
+        m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) { k.vorticity[std::size_t(i)] = k.cell_vorticity(c); });
+        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { tmp[std::size_t(i)] = k.confine_face(a, f, dt, desc.vorticity); });
+        u = tmp;
+    }
+    if (desc.viscosity > 0.0f) {
+        const float alpha = desc.viscosity * dt / (desc.cell_size * desc.cell_size);
+        std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
+        for (std::uint32_t it = 0; it < detail::kViscosityIterations; ++it) {
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { k.face[to][std::size_t(i)] = k.diffuse_face(from, a, f, alpha); });
+            from = to;
+            to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
+        }
+        u = k.face[from];
+    }
+
+    // Projection, in the GPU's order of passes and checks.
+    std::vector<float>& phi = k.cell[shaderio::kCellPressure];
+    std::vector<float>& rhs = k.cell[shaderio::kCellRhs];
+    float before = 0.0f;
+    m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        float diag, off;
+        k.cell_operator(0, c, shaderio::kCellPressure, diag, off);
+        const float d = diag > 0.0f ? k.cell_divergence(c) : 0.0f;
+        rhs[std::size_t(i)] = d;
+        phi[std::size_t(i)] = 0.0f;
+        before = std::max(before, std::abs(d));
+        if (diag > 0.0f) ++stats.fluid_cells;
+    });
+    const float goal = desc.tolerance * before;
+    float residual = before;
+    std::uint32_t checks = 0;
+    bool done = residual <= goal;
+    if (!done) ++checks;
+    const std::uint32_t levels = std::uint32_t(k.levels.size());
+    if (desc.pressure == PressureSolver::Multigrid) {
+        for (std::uint32_t cycle = 0; cycle < desc.max_cycles && !done; ++cycle) {
+            for (std::uint32_t l = 0; l + 1 < levels; ++l) {
+                m.smooth(l);
+                const GridLevel& level = k.levels[l];
+                m.each_cell(level, [&](int i, glm::ivec3 c) {
+                    k.cell[shaderio::kCellResidual][level.cells + std::size_t(i)] = k.residual_cell(l, c);
+                });
+                const GridLevel& coarse = k.levels[l + 1];
+                m.each_cell(coarse, [&](int i, glm::ivec3 c) {
+                    rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(l + 1, c);
+                    phi[coarse.cells + std::size_t(i)] = 0.0f;
+                });
+            }
+            const GridLevel& coarsest = k.levels[levels - 1];
+            for (std::uint32_t sweep = 0; sweep < 2 * detail::kCoarseSweeps; ++sweep)
+                m.each_cell(coarsest, [&](int i, glm::ivec3 c) {
+                    if (std::uint32_t(c.x + c.y + c.z) % 2 == sweep % 2)
+                        phi[coarsest.cells + std::size_t(i)] = k.relax_cell(levels - 1, c, shaderio::kCellPressure);
+                });
+            for (std::uint32_t l = levels - 1; l-- > 0;) {
+                const GridLevel& level = k.levels[l];
+                std::vector<float> add(std::size_t(level.dims.x) * level.dims.y * level.dims.z);
+                m.each_cell(level, [&](int i, glm::ivec3 c) { add[std::size_t(i)] = k.prolong_cell(l, c); });
+                for (std::size_t i = 0; i < add.size(); ++i) phi[level.cells + i] += add[i];
+                m.smooth(l);
+            }
+            residual = m.max_residual();
+            done = residual <= goal;
+            if (!done) ++checks;
+        }
+        stats.cycles = std::min(checks, desc.max_cycles);
+    } else {
+        std::vector<float>& other = k.cell[shaderio::kCellPressureTmp];
+        const std::uint32_t blocks = (desc.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+        for (std::uint32_t block = 0; block < blocks && !done; ++block) {
+            for (std::uint32_t it = 0; it < detail::kJacobiBlock; ++it) {
+                const std::uint32_t from = (it & 1) ? shaderio::kCellPressureTmp : shaderio::kCellPressure;
+                std::vector<float>& to = (it & 1) ? phi : other;
+                std::vector<float> next(m.cells());
+                m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
+                std::copy(next.begin(), next.end(), to.begin());
+            }
+            residual = m.max_residual();
+            done = residual <= goal;
+            if (!done) ++checks;
+        }
+        stats.cycles = std::min(checks, blocks) * detail::kJacobiBlock;
+    }
+    stats.residual = residual;
+    stats.converged = done;
+    stats.divergence_before = before;
+    std::vector<float> projected(m.faces());
+    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { projected[std::size_t(i)] = k.project_face(a, f); });
+    u = std::move(projected);
+    float after = 0.0f;
+    m.each_cell(k.levels[0], [&](int, glm::ivec3 c) {
+        float diag, off;
+        k.cell_operator(0, c, shaderio::kCellPressure, diag, off);
+        if (diag > 0.0f) after = std::max(after, std::abs(k.cell_divergence(c)));
+    });
+    stats.divergence_after = after;
+    m.last_dt = dt;
+    return stats;
+}
+
+} // namespace gust

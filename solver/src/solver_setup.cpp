@@ -1,0 +1,150 @@
+#include "solver_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace gust {
+
+using shaderio::GridLevel;
+using shaderio::kCellWords;
+
+namespace detail {
+
+std::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size) {
+    std::vector<GridLevel> levels;
+    glm::ivec3 dims(cells);
+    glm::vec3 h(cell_size);
+    std::uint32_t cell_offset = 0, face_offset = 0;
+    for (;;) {
+        GridLevel level{};
+        level.dims = dims;
+        level.cells = cell_offset;
+        level.faces = face_offset;
+        level.inv_h2 = 1.0f / (h * h);
+        level.factor = glm::ivec3(1);
+        cell_offset += std::uint32_t(dims.x * dims.y * dims.z);
+        face_offset += std::uint32_t(shaderio::faces_total(dims));
+        const bool last = std::max({dims.x, dims.y, dims.z}) <= 4 || levels.size() + 1 == shaderio::kMaxGridLevels;
+        if (!last) {
+            for (int a = 0; a < 3; ++a)
+                if (dims[a] > 1) {
+                    level.factor[a] = 2;
+                    dims[a] = (dims[a] + 1) / 2;
+                    h[a] *= 2.0f;
+                }
+        }
+        levels.push_back(level);
+        if (last) break;
+    }
+    return levels;
+}
+
+void face_masks(std::uint32_t v, std::uint32_t* out) {
+    for (std::uint32_t s = 0; s < 6; ++s) {
+        const shaderio::CellBits layer = shaderio::bits_layer(s / 2, (s & 1) == 0 ? 0 : v - 1, v);
+        std::copy(layer.w, layer.w + kCellWords, out + s * kCellWords);
+    }
+}
+
+std::uint32_t cell_words(std::uint32_t v) { return (v * v * v + 31) / 32; }
+
+shaderio::GpuEmitter to_gpu(const Emitter& e) {
+    shaderio::GpuEmitter g{};
+    g.position = e.position;
+    g.direction = e.direction;
+    g.radius = e.radius;
+    g.strength = e.strength;
+    g.falloff = e.falloff;
+    g.extent = e.length;
+    switch (e.type) {
+    case EmitterType::Directional: g.type = shaderio::kEmitterDirectional; break;
+    case EmitterType::Omni: g.type = shaderio::kEmitterOmni; break;
+    case EmitterType::Vortex: g.type = shaderio::kEmitterVortex; break;
+    case EmitterType::CapsuleMotor: g.type = shaderio::kEmitterCapsule; break;
+    case EmitterType::ConeMotor: g.type = shaderio::kEmitterCone; break;
+    }
+    return g;
+}
+
+float emitter_rate(float dt, float response) { return 1.0f - std::exp(-dt / response); }
+
+Status validate_dt(float dt) {
+    if (!std::isfinite(dt) || !(dt > 0.0f) || dt > 10.0f)
+        return Status::failure("dt must be a finite number of seconds in (0, 10], got " + std::to_string(dt));
+    return Status{};
+}
+
+} // namespace detail
+
+namespace {
+bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+} // namespace
+
+Status validate(const SolverDesc& desc) {
+    for (int a = 0; a < 3; ++a)
+        if (desc.cells[a] < 8 || desc.cells[a] > 256)
+            return Status::failure("wind cells per axis must be in 8..256, got " + std::to_string(desc.cells.x) + " x " +
+                                   std::to_string(desc.cells.y) + " x " + std::to_string(desc.cells.z));
+    if (!std::isfinite(desc.cell_size) || !(desc.cell_size > 0.0f))
+        return Status::failure("cell_size must be a positive number of metres");
+    if (!finite(desc.origin)) return Status::failure("origin must be finite");
+    if (desc.voxels_per_cell < 1 || desc.voxels_per_cell > shaderio::kMaxVoxelsPerCell)
+        return Status::failure("voxels_per_cell must be in 1..8, got " + std::to_string(desc.voxels_per_cell));
+    if (!std::isfinite(desc.tolerance) || !(desc.tolerance > 0.0f) || desc.tolerance >= 1.0f)
+        return Status::failure("tolerance must be in (0, 1)");
+    if (desc.max_cycles < 1 || desc.max_cycles > 1000) return Status::failure("max_cycles must be in 1..1000");
+    if (desc.max_iterations < 1 || desc.max_iterations > 1000000)
+        return Status::failure("max_iterations must be in 1..1000000");
+    if (desc.smoothing < 1 || desc.smoothing > 16) return Status::failure("smoothing must be in 1..16");
+    if (!std::isfinite(desc.vorticity) || desc.vorticity < 0.0f || desc.vorticity > 10.0f)
+        return Status::failure("vorticity must be in [0, 10]");
+    if (!std::isfinite(desc.viscosity) || desc.viscosity < 0.0f)
+        return Status::failure("viscosity must be a non-negative number of m^2/s");
+    if (!std::isfinite(desc.emitter_response) || !(desc.emitter_response > 0.0f))
+        return Status::failure("emitter_response must be a positive number of seconds");
+    return Status{};
+}
+
+Status validate(std::span<const Emitter> emitters) {
+    if (emitters.size() > shaderio::kMaxEmitters)
+        return Status::failure("at most " + std::to_string(shaderio::kMaxEmitters) + " emitters, got " +
+                               std::to_string(emitters.size()));
+    for (std::size_t i = 0; i < emitters.size(); ++i) {
+        const Emitter& e = emitters[i];
+        const std::string at = "emitter " + std::to_string(i) + ": ";
+        if (!finite(e.position)) return Status::failure(at + "position must be finite");
+        if (!finite(e.direction) || std::abs(glm::length(e.direction) - 1.0f) > 1e-3f)
+            return Status::failure(at + "direction must be a finite unit vector");
+        if (!std::isfinite(e.radius) || !(e.radius > 0.0f)) return Status::failure(at + "radius must be finite and > 0");
+        if (!std::isfinite(e.strength) || std::abs(e.strength) > 1e4f)
+            return Status::failure(at + "strength must be finite, within ±10000 m/s");
+        if (!std::isfinite(e.falloff) || e.falloff < 0.0f || e.falloff > 64.0f)
+            return Status::failure(at + "falloff must be finite, in [0, 64]");
+        if (!std::isfinite(e.length) || e.length < 0.0f) return Status::failure(at + "length must be finite and >= 0");
+        const bool motor = e.type == EmitterType::CapsuleMotor || e.type == EmitterType::ConeMotor;
+        if (e.type == EmitterType::ConeMotor && !(e.length > 0.0f))
+            return Status::failure(at + "a cone motor needs a length > 0");
+        if (!motor && e.length != 0.0f) return Status::failure(at + "only motors have a length");
+    }
+    return Status{};
+}
+
+std::vector<glm::vec3> cell_velocities(glm::uvec3 cells, std::span<const float> faces) {
+    const glm::ivec3 n(cells);
+    std::vector<glm::vec3> out(std::size_t(n.x) * n.y * n.z);
+    if (faces.size() != std::size_t(shaderio::faces_total(n))) return {};
+    for (int z = 0; z < n.z; ++z)
+        for (int y = 0; y < n.y; ++y)
+            for (int x = 0; x < n.x; ++x) {
+                const glm::ivec3 c(x, y, z);
+                glm::vec3 v;
+                for (std::uint32_t a = 0; a < 3; ++a)
+                    v[a] = 0.5f * (faces[shaderio::face_index(n, a, c)] +
+                                   faces[shaderio::face_index(n, a, c + shaderio::axis_unit(a))]);
+                out[shaderio::cell_index(n, c)] = v;
+            }
+    return out;
+}
+
+} // namespace gust

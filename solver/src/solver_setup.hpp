@@ -1,0 +1,29 @@
+// Set-up shared by the GPU solver and its CPU version: the multigrid hierarchy, face layers, emitters.
+#pragma once
+
+#include "solver/solver_io.h"
+
+#include <gust/solver/wind_solver.hpp>
+#include <vector>
+
+namespace gust::detail {
+
+/// Levels from the wind grid down to at most 4 cells per axis; an axis already at one cell stays.
+std::vector<shaderio::GridLevel> build_levels(glm::uvec3 cells, float cell_size);
+/// The six face layers of a cell of v^3 voxels (−x,+x,−y,+y,−z,+z), kCellWords words each.
+void face_masks(std::uint32_t v, std::uint32_t* out);
+std::uint32_t cell_words(std::uint32_t v);
+shaderio::GpuEmitter to_gpu(const Emitter& e);
+/// Share of an emitter's gap closed in dt seconds.
+float emitter_rate(float dt, float response);
+/// Jacobi iterations between convergence checks.
+inline constexpr std::uint32_t kJacobiBlock = 8;
+/// Red-black sweeps of the coarsest solve.
+inline constexpr std::uint32_t kCoarseSweeps = 32;
+/// Jacobi iterations of implicit viscosity.
+inline constexpr std::uint32_t kViscosityIterations = 4;
+/// Air density for reporting pressure, kg/m^3.
+inline constexpr float kAirDensity = 1.2f;
+Status validate_dt(float dt);
+
+} // namespace gust::detail

@@ -1,0 +1,454 @@
+#include "solver_setup.hpp"
+#include "tree/tree_io.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <gust/solver/wind_solver.hpp>
+
+namespace gust {
+
+namespace {
+#include "gust_shaders/advect_comp.h"
+#include "gust_shaders/check_comp.h"
+#include "gust_shaders/coarse_solve_comp.h"
+#include "gust_shaders/coarse_weights_comp.h"
+#include "gust_shaders/confine_comp.h"
+#include "gust_shaders/diffuse_comp.h"
+#include "gust_shaders/divergence_comp.h"
+#include "gust_shaders/forces_comp.h"
+#include "gust_shaders/fragment_args_comp.h"
+#include "gust_shaders/project_comp.h"
+#include "gust_shaders/prolong_comp.h"
+#include "gust_shaders/relax_comp.h"
+#include "gust_shaders/residual_comp.h"
+#include "gust_shaders/restrict_comp.h"
+#include "gust_shaders/scroll_comp.h"
+#include "gust_shaders/solid_cells_comp.h"
+#include "gust_shaders/solid_faces_comp.h"
+#include "gust_shaders/solid_motion_comp.h"
+#include "gust_shaders/vorticity_comp.h"
+
+using shaderio::GridLevel;
+using shaderio::kCellWords;
+using shaderio::kDispatchSlots;
+using shaderio::LevelDispatch;
+using shaderio::SolverBindings;
+using shaderio::SolverPush;
+using shaderio::SolverState;
+
+template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) {
+    return {a, N};
+}
+
+LevelDispatch groups_for(std::uint64_t items) {
+    const std::uint64_t groups = (items + shaderio::kSolverGroupSize - 1) / shaderio::kSolverGroupSize;
+    return {std::uint32_t(std::min<std::uint64_t>(groups, 65535)), std::uint32_t((groups + 65534) / 65535), 1};
+}
+
+float from_bits(std::uint32_t bits) { return std::bit_cast<float>(bits); }
+
+} // namespace
+
+struct WindSolver::Impl {
+    gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces, vorticity,
+        confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, project, scroll;
+    gpu::Buffer velocity, velocity_tmp, velocity_back, weights, solid_velocity, pressure, pressure_tmp, rhs,
+        residual_buf, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf, emitters, state, dispatch,
+        bindings;
+    gpu::Profiler profiler;
+    std::vector<GridLevel> levels;
+    std::uint32_t emitter_count = 0;
+    SolverBindings b{};
+};
+
+WindSolver::WindSolver(gpu::Context& ctx) : ctx_(ctx) {}
+WindSolver::~WindSolver() = default;
+
+std::size_t WindSolver::face_count() const { return std::size_t(shaderio::faces_total(glm::ivec3(desc_.cells))); }
+std::size_t WindSolver::cell_count() const {
+    return std::size_t(desc_.cells.x) * desc_.cells.y * desc_.cells.z;
+}
+
+Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const SolverDesc& desc) {
+    if (Status s = validate(desc); !s) return s;
+    std::unique_ptr<WindSolver> solver(new WindSolver(ctx));
+    solver->desc_ = desc;
+    solver->origin_ = desc.origin;
+    solver->impl_ = std::make_unique<Impl>();
+    Impl& m = *solver->impl_;
+    m.levels = detail::build_levels(desc.cells, desc.cell_size);
+    solver->levels_ = std::uint32_t(m.levels.size());
+
+    struct Stage {
+        gpu::Pipeline* pipeline;
+        std::span<const std::uint32_t> code;
+    };
+    const Stage stages[] = {
+        {&m.solid_cells, words(solid_cells_comp)},   {&m.fragment_args, words(fragment_args_comp)},
+        {&m.solid_motion, words(solid_motion_comp)}, {&m.solid_faces, words(solid_faces_comp)},
+        {&m.coarse_weights, words(coarse_weights_comp)}, {&m.advect, words(advect_comp)},
+        {&m.forces, words(forces_comp)},             {&m.vorticity, words(vorticity_comp)},
+        {&m.confine, words(confine_comp)},           {&m.diffuse, words(diffuse_comp)},
+        {&m.divergence, words(divergence_comp)},     {&m.relax, words(relax_comp)},
+        {&m.residual, words(residual_comp)},         {&m.restrict_, words(restrict_comp)},
+        {&m.prolong, words(prolong_comp)},           {&m.coarse_solve, words(coarse_solve_comp)},
+        {&m.check, words(check_comp)},               {&m.project, words(project_comp)},
+        {&m.scroll, words(scroll_comp)}};
+    for (const Stage& stage : stages) {
+        auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(SolverPush));
+        if (!pipeline) return pipeline.status();
+        *stage.pipeline = std::move(*pipeline);
+    }
+
+    const GridLevel& last = m.levels.back();
+    const std::uint64_t all_cells = last.cells + std::uint64_t(last.dims.x) * last.dims.y * last.dims.z;
+    const std::uint64_t all_faces = last.faces + std::uint64_t(shaderio::faces_total(last.dims));
+    const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
+    const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
+    struct Want {
+        gpu::Buffer* buffer;
+        std::uint64_t bytes;
+        gpu::MemoryUse use;
+        VkBufferUsageFlags usage;
+    };
+    const Want wants[] = {
+        {&m.velocity, faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.velocity_tmp, faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.velocity_back, faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.weights, all_faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.solid_velocity, faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.pressure, all_cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.pressure_tmp, cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.rhs, all_cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.residual_buf, all_cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_fluid, cells * words_per_cell * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_motion, cells * 16, gpu::MemoryUse::Device, 0},
+        {&m.vorticity_buf, cells * 16, gpu::MemoryUse::Device, 0},
+        {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), gpu::MemoryUse::Upload, 0},
+        {&m.state, sizeof(SolverState), gpu::MemoryUse::Readback, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
+        {&m.dispatch, 2 * kDispatchSlots * sizeof(LevelDispatch), gpu::MemoryUse::Upload,
+         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
+        {&m.bindings, sizeof(SolverBindings), gpu::MemoryUse::Upload, 0}};
+    for (const Want& want : wants) {
+        auto buffer = gpu::Buffer::create(ctx, want.bytes, want.use, want.usage);
+        if (!buffer) return buffer.status();
+        *want.buffer = std::move(*buffer);
+    }
+    auto profiler = gpu::Profiler::create(ctx, 16);
+    if (!profiler) return profiler.status();
+    m.profiler = std::move(*profiler);
+
+    std::vector<LevelDispatch> dispatch(2 * kDispatchSlots, LevelDispatch{0, 0, 0});
+    for (std::size_t l = 0; l < m.levels.size(); ++l) {
+        const glm::ivec3 d = m.levels[l].dims;
+        dispatch[kDispatchSlots + l] = groups_for(std::uint64_t(d.x) * d.y * d.z);
+    }
+    dispatch[kDispatchSlots + shaderio::kCoarseSlot] = {1, 1, 1};
+    std::memcpy(m.dispatch.mapped(), dispatch.data(), dispatch.size() * sizeof(LevelDispatch));
+
+    SolverBindings& b = m.b;
+    b.velocity = m.velocity.address();
+    b.velocity_tmp = m.velocity_tmp.address();
+    b.velocity_back = m.velocity_back.address();
+    b.weights = m.weights.address();
+    b.solid_velocity = m.solid_velocity.address();
+    b.pressure = m.pressure.address();
+    b.pressure_tmp = m.pressure_tmp.address();
+    b.rhs = m.rhs.address();
+    b.residual = m.residual_buf.address();
+    b.cell_solid = m.cell_solid.address();
+    b.cell_fluid = m.cell_fluid.address();
+    b.cell_flags = m.cell_flags.address();
+    b.cell_motion = m.cell_motion.address();
+    b.vorticity = m.vorticity_buf.address();
+    b.emitters = m.emitters.address();
+    b.state = m.state.address();
+    b.dispatch = m.dispatch.address();
+    b.dims = glm::ivec3(desc.cells);
+    b.h = desc.cell_size;
+    b.voxels_per_cell = desc.voxels_per_cell;
+    b.cell_words = std::uint32_t(words_per_cell);
+    b.levels = solver->levels_;
+    b.tolerance = desc.tolerance;
+    b.vorticity_strength = desc.vorticity;
+    std::copy(m.levels.begin(), m.levels.end(), b.level);
+    detail::face_masks(desc.voxels_per_cell, b.face_mask);
+
+    Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+        for (gpu::Buffer* buffer : {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid})
+            ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
+        ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE, std::bit_cast<std::uint32_t>(1.0f));
+    });
+    if (!cleared) return cleared;
+    return solver;
+}
+
+Status WindSolver::set_ambient(glm::vec3 velocity) {
+    if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
+        return Status::failure("ambient wind must be finite");
+    if (glm::length(velocity) > 1e4f) return Status::failure("ambient wind must be below 10000 m/s");
+    ambient_ = velocity;
+    return Status{};
+}
+
+Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
+    if (Status s = validate(emitters); !s) return s;
+    auto* out = static_cast<shaderio::GpuEmitter*>(impl_->emitters.mapped());
+    for (std::size_t i = 0; i < emitters.size(); ++i) out[i] = detail::to_gpu(emitters[i]);
+    impl_->emitter_count = std::uint32_t(emitters.size());
+    return Status{};
+}
+
+Status WindSolver::set_velocity(std::span<const float> faces) {
+    if (faces.size() != face_count())
+        return Status::failure("expected " + std::to_string(face_count()) + " face velocities, got " +
+                               std::to_string(faces.size()));
+    for (float v : faces)
+        if (!std::isfinite(v)) return Status::failure("face velocities must be finite");
+    return upload(ctx_, impl_->velocity, faces.data(), faces.size_bytes());
+}
+
+namespace {
+Result<std::vector<float>> read_floats(gpu::Context& ctx, const gpu::Buffer& buffer, std::size_t count) {
+    std::vector<float> out(count);
+    if (Status s = download(ctx, buffer, out.data(), count * sizeof(float)); !s) return s;
+    return out;
+}
+} // namespace
+
+Result<std::vector<float>> WindSolver::read_velocity() const { return read_floats(ctx_, impl_->velocity, face_count()); }
+Result<std::vector<float>> WindSolver::read_open_fraction() const {
+    return read_floats(ctx_, impl_->weights, face_count());
+}
+Result<std::vector<float>> WindSolver::read_solid_velocity() const {
+    return read_floats(ctx_, impl_->solid_velocity, face_count());
+}
+Result<std::vector<float>> WindSolver::read_solid_fraction() const {
+    return read_floats(ctx_, impl_->cell_solid, cell_count());
+}
+Result<std::vector<float>> WindSolver::read_pressure() const {
+    auto phi = read_floats(ctx_, impl_->pressure, cell_count());
+    if (!phi) return phi;
+    const float scale = last_dt_ > 0.0f ? detail::kAirDensity / last_dt_ : 0.0f;
+    for (float& p : *phi) p *= scale;
+    return phi;
+}
+
+Status WindSolver::scroll(glm::ivec3 cells) {
+    if (cells == glm::ivec3(0)) return Status{};
+    Impl& m = *impl_;
+    m.b.ambient = ambient_;
+    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
+    SolverPush push{};
+    push.bindings = m.bindings.address();
+    push.shift = cells;
+    const LevelDispatch g = groups_for(face_count());
+    Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        m.scroll.bind(cmd, &push, sizeof(push));
+        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx_, cmd);
+        const VkBufferCopy copy{0, 0, face_count() * sizeof(float)};
+        ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &copy);
+    });
+    if (!s) return s;
+    origin_ += glm::vec3(cells) * desc_.cell_size;
+    return Status{};
+}
+
+Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
+    if (Status s = detail::validate_dt(dt); !s) return s;
+    Impl& m = *impl_;
+    const gpu::Dispatch& vk = ctx_.vk();
+    SolverBindings& b = m.b;
+    b.origin = origin_;
+    b.ambient = ambient_;
+    b.open_sides = shaderio::open_sides_for(ambient_);
+    b.emitter_count = m.emitter_count;
+    b.tree_nodes = b.tree_masks = b.fragments = b.fragment_count = b.fragment_motion = 0;
+    b.tree_levels = 0;
+    b.fragment_capacity = 0;
+    if (solid && solid->tree) {
+        const SparseTree& tree = *solid->tree;
+        b.tree_nodes = tree.node_address();
+        b.tree_masks = tree.mask_address();
+        b.tree_levels = tree.depth();
+        b.tree_log2_branching = std::uint32_t(std::countr_zero(tree.branching()));
+        b.mask_words = shaderio::mask_words(b.tree_log2_branching);
+        b.mask_stride = shaderio::mask_stride(b.tree_log2_branching);
+        b.voxel_offset = solid->voxel_offset;
+    }
+    if (solid && solid->fragments && solid->fragment_velocities) {
+        b.fragments = solid->fragments;
+        b.fragment_count = solid->fragment_count;
+        b.fragment_motion = solid->fragment_velocities;
+        b.fragment_capacity = std::uint32_t(std::min<std::uint64_t>(solid->fragment_capacity, 0xffffffffu));
+    }
+    std::memcpy(m.bindings.mapped(), &b, sizeof(b));
+
+    const std::uint32_t levels = levels_;
+    const LevelDispatch face_groups = groups_for(face_count());
+    const LevelDispatch cell_groups = groups_for(cell_count());
+    SolverPush push{};
+    push.bindings = m.bindings.address();
+    push.dt = dt;
+    auto run = [&](VkCommandBuffer cmd, const gpu::Pipeline& p, LevelDispatch g) {
+        p.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx_, cmd);
+    };
+    auto run_slot = [&](VkCommandBuffer cmd, const gpu::Pipeline& p, std::uint32_t slot) {
+        p.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
+        gpu::barrier(ctx_, cmd);
+    };
+    auto copy = [&](VkCommandBuffer cmd, const gpu::Buffer& from, const gpu::Buffer& to) {
+        const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
+        vk.vkCmdCopyBuffer(cmd, from.handle(), to.handle(), 1, &region);
+        gpu::barrier(ctx_, cmd);
+    };
+    auto smooth = [&](VkCommandBuffer cmd, std::uint32_t l) {
+        push.level = l;
+        for (std::uint32_t s = 0; s < desc_.smoothing; ++s)
+            for (std::uint32_t colour = 0; colour < 2; ++colour) {
+                push.parity = colour;
+                run_slot(cmd, m.relax, l);
+            }
+    };
+
+    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        m.profiler.reset(cmd);
+        vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
+        vk.vkCmdFillBuffer(cmd, m.cell_motion.handle(), 0, VK_WHOLE_SIZE, 0);
+        const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0, kDispatchSlots * sizeof(LevelDispatch)};
+        vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
+        gpu::barrier(ctx_, cmd);
+
+        m.profiler.begin(cmd, "solid");
+        run(cmd, m.solid_cells, cell_groups);
+        run(cmd, m.fragment_args, {1, 1, 1});
+        m.solid_motion.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
+        gpu::barrier(ctx_, cmd);
+        run(cmd, m.solid_faces, face_groups);
+        for (std::uint32_t l = 1; l < levels; ++l) {
+            push.level = l;
+            const glm::ivec3 d = m.levels[l].dims;
+            run(cmd, m.coarse_weights, groups_for(std::uint64_t(shaderio::faces_total(d))));
+        }
+        m.profiler.end(cmd);
+
+        if (desc_.advection != Advection::None) {
+            m.profiler.begin(cmd, "advect");
+            push.parity = 0;
+            run(cmd, m.advect, face_groups);
+            if (desc_.advection == Advection::MacCormack) {
+                push.parity = 1;
+                run(cmd, m.advect, face_groups);
+                push.parity = 2;
+                run(cmd, m.advect, face_groups);
+            }
+            copy(cmd, m.velocity_tmp, m.velocity);
+            m.profiler.end(cmd);
+        }
+
+        m.profiler.begin(cmd, "forces");
+        push.param = detail::emitter_rate(dt, desc_.emitter_response);
+        run(cmd, m.forces, face_groups);
+        if (desc_.vorticity > 0.0f) {
+            run(cmd, m.vorticity, cell_groups);
+            push.param = desc_.vorticity;
+            run(cmd, m.confine, face_groups);
+            copy(cmd, m.velocity_tmp, m.velocity);
+        }
+        m.profiler.end(cmd);
+
+        if (desc_.viscosity > 0.0f) {
+            m.profiler.begin(cmd, "viscosity");
+            push.param = desc_.viscosity * dt / (desc_.cell_size * desc_.cell_size);
+            std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
+            for (std::uint32_t i = 0; i < detail::kViscosityIterations; ++i) {
+                push.parity = from;
+                push.iterations = to;
+                run(cmd, m.diffuse, face_groups);
+                from = to;
+                to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
+            }
+            copy(cmd, from == shaderio::kFieldTmp ? m.velocity_tmp : m.velocity_back, m.velocity);
+            m.profiler.end(cmd);
+        }
+
+        m.profiler.begin(cmd, "pressure");
+        push.level = 0;
+        push.parity = 0;
+        run(cmd, m.divergence, cell_groups);
+        run(cmd, m.check, {1, 1, 1});
+        if (desc_.pressure == PressureSolver::Multigrid) {
+            for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
+                for (std::uint32_t l = 0; l + 1 < levels; ++l) {
+                    smooth(cmd, l);
+                    push.level = l;
+                    push.parity = 0;
+                    run_slot(cmd, m.residual, l);
+                    push.level = l + 1;
+                    run_slot(cmd, m.restrict_, l + 1);
+                }
+                push.level = levels - 1;
+                push.iterations = detail::kCoarseSweeps;
+                run_slot(cmd, m.coarse_solve, shaderio::kCoarseSlot);
+                for (std::uint32_t l = levels - 1; l-- > 0;) {
+                    push.level = l;
+                    run_slot(cmd, m.prolong, l);
+                    smooth(cmd, l);
+                }
+                push.level = 0;
+                push.parity = 1;
+                run_slot(cmd, m.residual, 0);
+                run(cmd, m.check, {1, 1, 1});
+            }
+        } else {
+            push.level = 0;
+            const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+            for (std::uint32_t block = 0; block < blocks; ++block) {
+                for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
+                    push.parity = 2 + (i & 1);
+                    run_slot(cmd, m.relax, 0);
+                }
+                push.parity = 1;
+                run_slot(cmd, m.residual, 0);
+                run(cmd, m.check, {1, 1, 1});
+            }
+        }
+        m.profiler.end(cmd);
+
+        m.profiler.begin(cmd, "project");
+        run(cmd, m.project, face_groups);
+        push.parity = 1;
+        run(cmd, m.divergence, cell_groups);
+        m.profiler.end(cmd);
+    });
+    if (!recorded) return recorded;
+    last_dt_ = dt;
+
+    SolverState st;
+    std::memcpy(&st, m.state.mapped(), sizeof(st));
+    WindStats stats;
+    stats.divergence_before = from_bits(st.divergence_before);
+    stats.divergence_after = from_bits(st.divergence_after);
+    stats.residual = from_bits(st.residual);
+    stats.converged = st.done != 0;
+    const std::uint32_t per_check = desc_.pressure == PressureSolver::Multigrid ? 1 : detail::kJacobiBlock;
+    const std::uint32_t limit = desc_.pressure == PressureSolver::Multigrid
+                                    ? desc_.max_cycles
+                                    : (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+    stats.cycles = std::min(st.checks, limit) * per_check;
+    stats.cut_cells = st.cut_cells;
+    stats.fluid_cells = st.fluid_cells;
+    stats.moving_fragments = st.fragments;
+    stats.ms = m.profiler.read();
+    return stats;
+}
+
+} // namespace gust

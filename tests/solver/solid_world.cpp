@@ -1,0 +1,87 @@
+#include "solver/solid_world.hpp"
+
+#include <gtest/gtest.h>
+
+namespace gust::test {
+
+SolidWorld::SolidWorld(gpu::Context& ctx, const SolverDesc& desc, std::uint32_t branching) : ctx_(ctx), desc_(desc) {
+    const std::uint32_t longest = std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
+    std::uint32_t res = 1;
+    while (res < longest || res < kMinRes) res *= branching;
+    grid_.origin = desc.origin;
+    grid_.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
+    grid_.res = res;
+    WorldDesc world;
+    world.grid = grid_;
+    world.tree.branching = branching;
+    world.tree.hysteresis = 0;
+    world.method = VoxelizeMethod::Compute;
+    auto created = VoxelWorld::create(ctx, world);
+    EXPECT_TRUE(created) << created.message();
+    if (created) world_ = std::move(*created);
+}
+
+void SolidWorld::update(const std::vector<Body>& bodies, float dt) {
+    ASSERT_TRUE(world_);
+    meshes_.clear();
+    meshes_.reserve(bodies.size());
+    for (const Body& body : bodies) {
+        auto mesh = world_->upload(body.mesh.view());
+        ASSERT_TRUE(mesh) << mesh.message();
+        meshes_.push_back(std::move(*mesh));
+    }
+    std::vector<GpuInstance> statics, dynamics;
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+        GpuInstance instance{&meshes_[i], bodies[i].model, bodies[i].prev_model};
+        (bodies[i].prev_model ? dynamics : statics).push_back(instance);
+    }
+    world_->set_static(statics);
+    auto frame = world_->step(dynamics, dt);
+    ASSERT_TRUE(frame) << frame.message();
+}
+
+SolidSource SolidWorld::source() const {
+    SolidSource s;
+    s.tree = &world_->tree();
+    const Voxelizer& moving = world_->dynamic_voxelizer();
+    s.fragments = moving.fragment_buffer().address();
+    s.fragment_count = moving.fragment_count_address();
+    s.fragment_velocities = moving.velocity_buffer() ? moving.velocity_buffer().address() : 0;
+    s.fragment_capacity = moving.fragment_capacity();
+    return s;
+}
+
+CpuSolid SolidWorld::cpu() const {
+    CpuSolid solid;
+    const glm::uvec3 voxels = desc_.cells * desc_.voxels_per_cell;
+    solid.occupied.assign(std::size_t(voxels.x) * voxels.y * voxels.z, 0);
+    auto keys = world_->tree().leaf_voxels();
+    EXPECT_TRUE(keys) << keys.message();
+    if (!keys) return solid;
+    for (std::uint32_t key : *keys) {
+        const glm::uvec3 v(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u);
+        if (v.x < voxels.x && v.y < voxels.y && v.z < voxels.z)
+            solid.occupied[v.x + std::size_t(voxels.x) * (v.y + std::size_t(voxels.y) * v.z)] = 1;
+    }
+    const Voxelizer& moving = world_->dynamic_voxelizer();
+    auto fragments = moving.read_fragments();
+    auto velocities = moving.read_velocities();
+    EXPECT_TRUE(fragments && velocities);
+    if (!fragments || !velocities) return solid;
+    for (std::size_t i = 0; i < fragments->size() && i < velocities->size(); ++i) {
+        const std::uint32_t key = (*fragments)[i];
+        solid.fragments.emplace_back(glm::ivec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u), (*velocities)[i]);
+    }
+    return solid;
+}
+
+TestMesh box(glm::vec3 lo, glm::vec3 hi) {
+    TestMesh mesh;
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.push_back(glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
+    const std::uint32_t faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& q : faces) mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    return mesh;
+}
+
+} // namespace gust::test
