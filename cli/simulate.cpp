@@ -9,6 +9,7 @@
 #include <gust/gpu/context.hpp>
 #include <gust/scene/domain_grid.hpp>
 #include <gust/scene/scene_runtime.hpp>
+#include <gust/solver/wind_solver.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <iostream>
 #include <map>
@@ -27,6 +28,46 @@ std::string frame_file(std::uint64_t frame) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame_%04llu.vdb", static_cast<unsigned long long>(frame));
     return name;
+}
+
+SolverDesc solver_desc(const SceneDesc& scene) {
+    SolverDesc desc;
+    desc.cells = scene.domain.cells;
+    desc.cell_size = scene.domain.cell_size;
+    desc.origin = scene.domain.center - glm::vec3(scene.domain.cells) * scene.domain.cell_size * 0.5f;
+    desc.voxels_per_cell = scene.domain.voxels_per_cell;
+    const SolverSettings& s = scene.solver;
+    desc.advection = s.advection == "none"              ? Advection::None
+                     : s.advection == "semi_lagrangian" ? Advection::SemiLagrangian
+                                                        : Advection::MacCormack;
+    desc.pressure = s.pressure == "jacobi" ? PressureSolver::Jacobi : PressureSolver::Multigrid;
+    desc.tolerance = s.tolerance;
+    desc.max_cycles = s.max_cycles;
+    desc.max_iterations = s.max_iterations;
+    desc.vorticity = s.vorticity;
+    desc.viscosity = s.viscosity;
+    return desc;
+}
+
+/// The scene's emitters at time t (motors moved along their paths).
+std::vector<Emitter> emitters_at(const SceneDesc& scene, double t) {
+    std::vector<Emitter> out;
+    for (const EmitterDesc& e : scene.emitters) {
+        Emitter emitter;
+        emitter.type = e.type == "directional" ? EmitterType::Directional
+                       : e.type == "omni"      ? EmitterType::Omni
+                       : e.type == "vortex"    ? EmitterType::Vortex
+                       : e.shape == "cone"     ? EmitterType::ConeMotor
+                                               : EmitterType::CapsuleMotor;
+        emitter.position = emitter_position(e, t);
+        emitter.direction = e.direction;
+        emitter.radius = e.radius;
+        emitter.strength = e.strength;
+        emitter.falloff = e.falloff;
+        emitter.length = e.type == "motor" ? e.length : 0.0f;
+        out.push_back(emitter);
+    }
+    return out;
 }
 
 } // namespace
@@ -66,6 +107,9 @@ int run_simulate(const SimulateArgs& args) {
     world_desc.tree.hysteresis = scene->domain.hysteresis;
     auto world = VoxelWorld::create(**ctx, world_desc);
     if (!world) return fail(world.message());
+    auto wind = WindSolver::create(**ctx, solver_desc(*scene));
+    if (!wind) return fail(args.scene + ": " + wind.message());
+    if (Status s = (*wind)->set_ambient(scene->ambient_velocity); !s) return fail(args.scene + ": ambient: " + s.message());
 
     // Objects showing the same mesh share one device copy (and one `auto` measurement); deforming
     // objects get their own, since their vertex buffers change every frame.
@@ -116,6 +160,19 @@ int run_simulate(const SimulateArgs& args) {
         }
         auto step = (*world)->step(dynamic, float(dt));
         if (!step) return fail("frame " + std::to_string(frame) + ": " + step.message());
+        const std::vector<Emitter> emitters = emitters_at(*scene, t);
+        if (Status s = (*wind)->set_emitters(emitters); !s) return fail(args.scene + ": " + s.message());
+        SolidSource solid;
+        solid.tree = &(*world)->tree();
+        const Voxelizer& moving = (*world)->dynamic_voxelizer();
+        if (!dynamic.empty() && moving.velocity_buffer()) {
+            solid.fragments = moving.fragment_buffer().address();
+            solid.fragment_count = moving.fragment_count_address();
+            solid.fragment_velocities = moving.velocity_buffer().address();
+            solid.fragment_capacity = moving.fragment_capacity();
+        }
+        auto air = (*wind)->step(float(dt), &solid);
+        if (!air) return fail("frame " + std::to_string(frame) + ": wind: " + air.message());
 
         nlohmann::ordered_json line;
         const TreeStats& tree = step->tree;
@@ -134,7 +191,16 @@ int run_simulate(const SimulateArgs& args) {
         nlohmann::ordered_json ms;
         for (const auto& [pass, value] : step->ms)
             ms[pass] = value;
+        for (const auto& [pass, value] : air->ms)
+            ms["wind_" + pass] = value;
         line["ms"] = ms;
+        line["divergence_before"] = air->divergence_before;
+        line["divergence_after"] = air->divergence_after;
+        line["residual"] = air->residual;
+        line["cycles"] = air->cycles;
+        line["converged"] = air->converged;
+        line["cut_cells"] = air->cut_cells;
+        line["fluid_cells"] = air->fluid_cells;
         line["nodes_per_level"] = tree.nodes_per_level;
         line["exhausted"] = tree.exhausted;
         line["pool_growths"] = step->pool_growths;
@@ -147,8 +213,14 @@ int run_simulate(const SimulateArgs& args) {
         if (frame == 0 || (args.every > 0 && frame % args.every == 0)) {
             auto voxels = (*world)->tree().leaf_voxels();
             if (!voxels) return fail(voxels.message());
+            auto faces = (*wind)->read_velocity();
+            auto solid_fraction = (*wind)->read_solid_fraction();
+            auto pressure = (*wind)->read_pressure();
+            if (!faces || !solid_fraction || !pressure) return fail("frame " + std::to_string(frame) + ": wind readback failed");
+            const std::vector<glm::vec3> velocity = cell_velocities(scene->domain.cells, *faces);
+            WindGrids grids{scene->domain.cells, scene->domain.cell_size, (*wind)->origin(), *solid_fraction, velocity, *pressure};
             const fs::path path = fs::path(args.out) / frame_file(frame);
-            if (Status s = write_occupancy_vdb(path, *voxels, *grid); !s) return fail(s.message());
+            if (Status s = write_frame_vdb(path, *voxels, *grid, grids); !s) return fail(s.message());
         }
         if ((frame + 1) % std::max<std::uint64_t>(1, args.frames / 10) == 0 || frame + 1 == args.frames) {
             const double seconds =

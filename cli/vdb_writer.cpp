@@ -4,29 +4,78 @@
 
 namespace gust::cli {
 
-Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
-                           const GridDesc& grid) {
+namespace {
+
+/// Index (i,j,k) -> origin + (i + 0.5) · size.
+openvdb::math::Transform::Ptr centred_transform(glm::vec3 origin, float size) {
+    auto transform = openvdb::math::Transform::createLinearTransform(double(size));
+    const glm::dvec3 centre0 = glm::dvec3(origin) + 0.5 * double(size);
+    transform->postTranslate(openvdb::Vec3d(centre0.x, centre0.y, centre0.z));
+    return transform;
+}
+
+openvdb::BoolGrid::Ptr occupancy_grid(std::span<const std::uint32_t> voxels, const GridDesc& grid) {
+    auto occupancy = openvdb::BoolGrid::create(false);
+    occupancy->setName("occupancy");
+    occupancy->setGridClass(openvdb::GRID_UNKNOWN);
+    occupancy->setTransform(centred_transform(grid.origin, grid.voxel_size));
+    auto accessor = occupancy->getAccessor();
+    for (std::uint32_t key : voxels) {
+        const glm::uvec3 v = unpack_voxel(key);
+        accessor.setValueOn(openvdb::Coord(int(v.x), int(v.y), int(v.z)), true);
+    }
+    return occupancy;
+}
+
+Status write_grids(const std::filesystem::path& path, const openvdb::GridPtrVec& grids) {
     try {
-        openvdb::initialize();
-        auto occupancy = openvdb::BoolGrid::create(false);
-        occupancy->setName("occupancy");
-        occupancy->setGridClass(openvdb::GRID_UNKNOWN);
-        auto transform = openvdb::math::Transform::createLinearTransform(double(grid.voxel_size));
-        const glm::dvec3 centre0 = glm::dvec3(grid.origin) + 0.5 * double(grid.voxel_size);
-        transform->postTranslate(openvdb::Vec3d(centre0.x, centre0.y, centre0.z));
-        occupancy->setTransform(transform);
-        auto accessor = occupancy->getAccessor();
-        for (std::uint32_t key : voxels) {
-            const glm::uvec3 v = unpack_voxel(key);
-            accessor.setValueOn(openvdb::Coord(int(v.x), int(v.y), int(v.z)), true);
-        }
         openvdb::io::File file(path.string());
-        file.write({occupancy});
+        file.write(grids);
         file.close();
     } catch (const std::exception& e) {
         return Status::failure(path.string() + ": cannot write OpenVDB file: " + e.what());
     }
     return {};
+}
+
+} // namespace
+
+Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
+                           const GridDesc& grid) {
+    openvdb::initialize();
+    return write_grids(path, {occupancy_grid(voxels, grid)});
+}
+
+Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
+                       const GridDesc& grid, const WindGrids& wind) {
+    const std::size_t cells = std::size_t(wind.cells.x) * wind.cells.y * wind.cells.z;
+    if (wind.solid.size() != cells || wind.velocity.size() != cells || wind.pressure.size() != cells)
+        return Status::failure(path.string() + ": wind grids do not match the domain's cells");
+    openvdb::initialize();
+    const auto transform = centred_transform(wind.origin, wind.cell_size);
+    auto solid = openvdb::FloatGrid::create(0.0f);
+    solid->setName("solid");
+    auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setName("velocity");
+    velocity->setVectorType(openvdb::VEC_INVARIANT);
+    auto pressure = openvdb::FloatGrid::create(0.0f);
+    pressure->setName("pressure");
+    for (openvdb::GridBase* g : {static_cast<openvdb::GridBase*>(solid.get()), static_cast<openvdb::GridBase*>(velocity.get()),
+                                 static_cast<openvdb::GridBase*>(pressure.get())})
+        g->setTransform(transform->copy());
+    auto s = solid->getAccessor();
+    auto v = velocity->getAccessor();
+    auto p = pressure->getAccessor();
+    std::size_t i = 0;
+    for (std::uint32_t z = 0; z < wind.cells.z; ++z)
+        for (std::uint32_t y = 0; y < wind.cells.y; ++y)
+            for (std::uint32_t x = 0; x < wind.cells.x; ++x, ++i) {
+                const openvdb::Coord c{int(x), int(y), int(z)};
+                if (wind.solid[i] > 0.0f) s.setValueOn(c, wind.solid[i]);
+                v.setValueOn(c, openvdb::Vec3s(wind.velocity[i].x, wind.velocity[i].y, wind.velocity[i].z));
+                p.setValueOn(c, wind.pressure[i]);
+            }
+    return write_grids(path, {occupancy_grid(voxels, grid), solid, velocity, pressure});
 }
 
 } // namespace gust::cli

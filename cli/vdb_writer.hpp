@@ -1,17 +1,34 @@
 // OpenVDB output in the layout DESIGN.md fixes: a BoolGrid "occupancy" whose index (i,j,k) maps to
-// the voxel centre origin + (i + 0.5) h.
+// the voxel centre origin + (i + 0.5) h, and for simulated frames the wind grids "solid", "velocity"
+// and "pressure" whose index (i,j,k) maps to the wind cell's centre.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <glm/glm.hpp>
 #include <gust/gpu/result.hpp>
 #include <gust/voxelizer/grid.hpp>
 #include <span>
 
 namespace gust::cli {
 
+/// One frame's wind, cell-centred, index x + X·(y + Y·z).
+struct WindGrids {
+    glm::uvec3 cells{0};
+    float cell_size = 1.0f;
+    glm::vec3 origin{0.0f};             ///< world position of the grid's min corner, m
+    std::span<const float> solid;       ///< solid fraction per cell, 0..1
+    std::span<const glm::vec3> velocity; ///< m/s, world space
+    std::span<const float> pressure;    ///< Pa
+};
+
 /// Writes the packed voxel keys (any order, duplicates allowed) as grid "occupancy" to `path`.
 Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
                            const GridDesc& grid);
+
+/// Writes "occupancy" and the wind grids "solid" (FloatGrid, cells with solid voxels active),
+/// "velocity" (Vec3SGrid) and "pressure" (FloatGrid), every cell active in the last two.
+Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
+                       const GridDesc& grid, const WindGrids& wind);
 
 } // namespace gust::cli

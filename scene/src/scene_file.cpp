@@ -331,7 +331,7 @@ DomainDesc read_domain(const json& value, const std::string& at) {
     if (const json* v = member(value, "cell_size"))
         domain.cell_size = positive_float(*v, key_path(at, "cell_size"));
     if (const json* v = member(value, "voxels_per_cell")) {
-        domain.voxels_per_cell = integer(*v, key_path(at, "voxels_per_cell"), 1, 1024);
+        domain.voxels_per_cell = integer(*v, key_path(at, "voxels_per_cell"), 1, 8);
     }
     if (const json* v = member(value, "branching")) {
         const std::string branching_at = key_path(at, "branching");
@@ -434,7 +434,8 @@ SceneObject read_object(const json& value, const std::string& at, const fs::path
 
 EmitterDesc read_emitter(const json& value, const std::string& at) {
     object(value, at);
-    allow_keys(value, at, {"type", "position", "direction", "radius", "strength", "falloff"});
+    allow_keys(value, at,
+               {"type", "position", "direction", "radius", "strength", "falloff", "shape", "length", "path"});
     EmitterDesc emitter;
     const std::string type_at = key_path(at, "type");
     emitter.type = text(required(value, "type", at), type_at);
@@ -460,14 +461,87 @@ EmitterDesc read_emitter(const json& value, const std::string& at) {
         if (emitter.falloff < 0.0f)
             fail(falloff_at, "must not be negative (found " + format(emitter.falloff) + ")");
     }
+    const bool motor = emitter.type == "motor";
+    if (const json* v = member(value, "shape")) {
+        const std::string shape_at = key_path(at, "shape");
+        if (!motor) fail(shape_at, "only motors have a shape");
+        emitter.shape = text(*v, shape_at);
+        if (emitter.shape != "capsule" && emitter.shape != "cone")
+            fail(shape_at, "unknown motor shape '" + emitter.shape + "' (expected capsule or cone)");
+    }
+    if (const json* v = member(value, "length")) {
+        const std::string length_at = key_path(at, "length");
+        if (!motor) fail(length_at, "only motors have a length");
+        emitter.length = float_number(*v, length_at);
+        if (emitter.length < 0.0f) fail(length_at, "must not be negative (found " + format(emitter.length) + ")");
+    }
+    if (motor && emitter.shape == "cone" && !(emitter.length > 0.0f))
+        fail(key_path(at, "length"), "a cone motor needs a length greater than 0");
+    if (const json* v = member(value, "path")) {
+        const std::string path_at = key_path(at, "path");
+        array(*v, path_at);
+        if (v->empty()) fail(path_at, "needs at least one key");
+        for (std::size_t i = 0; i < v->size(); ++i) {
+            const std::string key_at = index_path(path_at, i);
+            const json& item = object((*v)[i], key_at);
+            allow_keys(item, key_at, {"t", "position"});
+            EmitterKey key;
+            const std::string t_at = key_path(key_at, "t");
+            key.t = number(required(item, "t", key_at), t_at);
+            if (!emitter.path.empty() && !(key.t > emitter.path.back().t))
+                fail(t_at, "path keys must be in increasing time order (" + format(key.t) + " after " +
+                               format(emitter.path.back().t) + ")");
+            key.position = vec3(required(item, "position", key_at), key_path(key_at, "position"));
+            emitter.path.push_back(key);
+        }
+    }
     return emitter;
+}
+
+SolverSettings read_solver(const json& value, const std::string& at) {
+    object(value, at);
+    allow_keys(value, at, {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity", "viscosity"});
+    SolverSettings solver;
+    if (const json* v = member(value, "advection")) {
+        const std::string advection_at = key_path(at, "advection");
+        solver.advection = text(*v, advection_at);
+        if (solver.advection != "maccormack" && solver.advection != "semi_lagrangian" && solver.advection != "none")
+            fail(advection_at, "unknown advection '" + solver.advection +
+                                   "' (expected maccormack, semi_lagrangian or none)");
+    }
+    if (const json* v = member(value, "pressure")) {
+        const std::string pressure_at = key_path(at, "pressure");
+        solver.pressure = text(*v, pressure_at);
+        if (solver.pressure != "multigrid" && solver.pressure != "jacobi")
+            fail(pressure_at, "unknown pressure solver '" + solver.pressure + "' (expected multigrid or jacobi)");
+    }
+    if (const json* v = member(value, "tolerance")) {
+        const std::string tolerance_at = key_path(at, "tolerance");
+        solver.tolerance = positive_float(*v, tolerance_at);
+        if (!(solver.tolerance < 1.0f)) fail(tolerance_at, "must be less than 1 (found " + format(solver.tolerance) + ")");
+    }
+    if (const json* v = member(value, "max_cycles")) solver.max_cycles = integer(*v, key_path(at, "max_cycles"), 1, 1000);
+    if (const json* v = member(value, "max_iterations"))
+        solver.max_iterations = integer(*v, key_path(at, "max_iterations"), 1, 1000000);
+    if (const json* v = member(value, "vorticity")) {
+        const std::string vorticity_at = key_path(at, "vorticity");
+        solver.vorticity = float_number(*v, vorticity_at);
+        if (solver.vorticity < 0.0f || solver.vorticity > 10.0f)
+            fail(vorticity_at, "must be from 0 to 10 (found " + format(solver.vorticity) + ")");
+    }
+    if (const json* v = member(value, "viscosity")) {
+        const std::string viscosity_at = key_path(at, "viscosity");
+        solver.viscosity = float_number(*v, viscosity_at);
+        if (solver.viscosity < 0.0f) fail(viscosity_at, "must not be negative (found " + format(solver.viscosity) + ")");
+    }
+    return solver;
 }
 
 SceneDesc read_scene(const json& root, const fs::path& file) {
     if (!root.is_object()) {
         throw Invalid{std::string("the top level must be a JSON object (found ") + root.type_name() + ")"};
     }
-    allow_keys(root, "", {"dt", "domain", "ambient", "objects", "emitters"});
+    allow_keys(root, "", {"dt", "domain", "ambient", "objects", "emitters", "solver"});
     SceneDesc scene;
     scene.file = file;
     std::error_code ec;
@@ -495,6 +569,7 @@ SceneDesc read_scene(const json& root, const fs::path& file) {
         for (std::size_t i = 0; i < v->size(); ++i)
             scene.emitters.push_back(read_emitter((*v)[i], index_path("emitters", i)));
     }
+    if (const json* v = member(root, "solver")) scene.solver = read_solver(*v, "solver");
     return scene;
 }
 
@@ -544,6 +619,19 @@ glm::mat4 object_matrix(const SceneObject& object, double t) {
     between.rotate_deg = glm::vec3(glm::mix(glm::dvec3(a.rotate_deg), glm::dvec3(b.rotate_deg), s));
     between.scale = static_cast<float>(glm::mix(double{a.scale}, double{b.scale}, s));
     return between.matrix();
+}
+
+glm::vec3 emitter_position(const EmitterDesc& emitter, double t) {
+    const std::vector<EmitterKey>& path = emitter.path;
+    if (path.empty()) return emitter.position;
+    if (t <= path.front().t) return path.front().position;
+    if (t >= path.back().t) return path.back().position;
+    const auto next = std::upper_bound(path.begin(), path.end(), t,
+                                       [](double time, const EmitterKey& key) { return time < key.t; });
+    const EmitterKey& a = *(next - 1);
+    const EmitterKey& b = *next;
+    const double s = (t - a.t) / (b.t - a.t);
+    return glm::vec3(glm::mix(glm::dvec3(a.position), glm::dvec3(b.position), s));
 }
 
 } // namespace gust

@@ -150,6 +150,28 @@ TEST_F(SceneFile, readsTheExtensions) {
     EXPECT_EQ(scene.emitters[2].falloff, 2.5f);
 }
 
+TEST_F(SceneFile, readsMovingMotorsAndSolverSettings) {
+    const gust::SceneDesc scene = load_ok(R"({
+      "emitters": [{"type": "motor", "shape": "cone", "length": 3, "direction": [0, 0, 2],
+                    "path": [{"t": 0, "position": [0, 1, 0]}, {"t": 2, "position": [4, 1, 0]}]}],
+      "solver": {"advection": "semi_lagrangian", "pressure": "jacobi", "tolerance": 1e-3,
+                 "max_cycles": 5, "max_iterations": 100, "vorticity": 0.5, "viscosity": 0.01}})");
+    const gust::EmitterDesc& motor = scene.emitters[0];
+    EXPECT_EQ(motor.shape, "cone");
+    EXPECT_EQ(motor.length, 3.0f);
+    expect_vec3(motor.direction, {0, 0, 1});
+    expect_vec3(gust::emitter_position(motor, -1.0), {0, 1, 0});
+    expect_vec3(gust::emitter_position(motor, 0.5), {1, 1, 0});
+    expect_vec3(gust::emitter_position(motor, 9.0), {4, 1, 0});
+    EXPECT_EQ(scene.solver.advection, "semi_lagrangian");
+    EXPECT_EQ(scene.solver.pressure, "jacobi");
+    EXPECT_EQ(scene.solver.tolerance, 1e-3f);
+    EXPECT_EQ(scene.solver.max_cycles, 5u);
+    EXPECT_EQ(scene.solver.max_iterations, 100u);
+    EXPECT_EQ(scene.solver.vorticity, 0.5f);
+    EXPECT_EQ(scene.solver.viscosity, 0.01f);
+}
+
 TEST_F(SceneFile, resolvesAbsoluteMeshPathsAsGiven) {
     const fs::path wall = dir_.path() / "wall.obj";
     const gust::SceneDesc scene = load_ok(R"({"objects": [{"mesh": ")" + wall.string() + R"("}]})");
@@ -331,8 +353,8 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "objects[1].mesh: duplicate key"},
     BadScene{"DeepNesting", deep_nesting(), "objects[0][0][0]"},
     BadScene{"TopLevelArray", "[]", "the top level must be a JSON object (found array)"},
-    BadScene{"UnknownTopLevelKey", R"({"solver": {}})",
-             "solver: unknown key (expected one of: dt, domain, ambient, objects, emitters)"},
+    BadScene{"UnknownTopLevelKey", R"({"wind": {}})",
+             "wind: unknown key (expected one of: dt, domain, ambient, objects, emitters, solver)"},
     BadScene{"UnknownObjectKey", R"({"objects": [{"mesh": "wall.obj", "colour": "red"}]})",
              "objects[0].colour: unknown key (expected one of: mesh, static, transform, keyframes, animation)"},
     BadScene{"UnknownDomainKey", R"({"domain": {"size": 3}})", "domain.size: unknown key"},
@@ -358,7 +380,7 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "domain.cells: expected an array of 3 integers (found 2 items)"},
     BadScene{"ZeroCellSize", R"({"domain": {"cell_size": 0}})", "domain.cell_size: must be greater than 0 (found 0.0)"},
     BadScene{"ZeroVoxelsPerCell", R"({"domain": {"voxels_per_cell": 0}})",
-             "domain.voxels_per_cell: must be an integer from 1 to 1024 (found 0.0)"},
+             "domain.voxels_per_cell: must be an integer from 1 to 8 (found 0.0)"},
     BadScene{"BranchingThree", R"({"domain": {"branching": 3}})", "domain.branching: must be 2, 4 or 8 (found 3.0)"},
     BadScene{"BranchingSixteen", R"({"domain": {"branching": 16}})", "domain.branching: must be 2, 4 or 8 (found 16.0)"},
     BadScene{"NegativeHysteresis", R"({"domain": {"hysteresis": -1}})",
@@ -420,7 +442,28 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
     BadScene{"NegativeFalloff", R"({"emitters": [{"type": "omni", "falloff": -1}]})",
              "emitters[0].falloff: must not be negative (found -1.0)"},
     BadScene{"EmitterStrengthOverflow", R"({"emitters": [{"type": "omni", "strength": -4e38}]})",
-             "emitters[0].strength: number -4e+38 is too large for a 32-bit float"}),
+             "emitters[0].strength: number -4e+38 is too large for a 32-bit float"},
+    BadScene{"ShapeOnNonMotor", R"({"emitters": [{"type": "omni", "shape": "cone"}]})",
+             "emitters[0].shape: only motors have a shape"},
+    BadScene{"UnknownMotorShape", R"({"emitters": [{"type": "motor", "shape": "box"}]})",
+             "emitters[0].shape: unknown motor shape 'box' (expected capsule or cone)"},
+    BadScene{"ConeWithoutLength", R"({"emitters": [{"type": "motor", "shape": "cone"}]})",
+             "emitters[0].length: a cone motor needs a length greater than 0"},
+    BadScene{"NegativeMotorLength", R"({"emitters": [{"type": "motor", "length": -2}]})",
+             "emitters[0].length: must not be negative (found -2.0)"},
+    BadScene{"PathOutOfOrder", R"({"emitters": [{"type": "motor", "path": [{"t": 1, "position": [0, 0, 0]}, {"t": 1, "position": [1, 0, 0]}]}]})",
+             "emitters[0].path[1].t: path keys must be in increasing time order (1.0 after 1.0)"},
+    BadScene{"PathKeyWithoutPosition", R"({"emitters": [{"type": "omni", "path": [{"t": 0}]}]})",
+             "emitters[0].path[0].position: missing required key"},
+    BadScene{"UnknownAdvection", R"({"solver": {"advection": "bfecc2"}})",
+             "solver.advection: unknown advection 'bfecc2' (expected maccormack, semi_lagrangian or none)"},
+    BadScene{"UnknownPressureSolver", R"({"solver": {"pressure": "cg"}})",
+             "solver.pressure: unknown pressure solver 'cg' (expected multigrid or jacobi)"},
+    BadScene{"ToleranceOfOne", R"({"solver": {"tolerance": 1}})", "solver.tolerance: must be less than 1 (found 1.0)"},
+    BadScene{"ZeroCycles", R"({"solver": {"max_cycles": 0}})", "solver.max_cycles: must be an integer from 1 to 1000 (found 0.0)"},
+    BadScene{"NegativeViscosity", R"({"solver": {"viscosity": -1}})", "solver.viscosity: must not be negative (found -1.0)"},
+    BadScene{"NineVoxelsPerCell", R"({"domain": {"voxels_per_cell": 9}})",
+             "domain.voxels_per_cell: must be an integer from 1 to 8 (found 9.0)"}),
     [](const testing::TestParamInfo<BadScene>& param) { return std::string(param.param.name); });
 // clang-format on
 

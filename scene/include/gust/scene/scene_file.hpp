@@ -46,14 +46,34 @@ struct SceneObject {
     std::optional<AnimationDesc> animation; ///< a skinned clip deforming the mesh, if any
 };
 
+/// One key of a moving emitter's path.
+struct EmitterKey {
+    double t = 0.0;           ///< seconds (frame · dt)
+    glm::vec3 position{0.0f}; ///< metres, world
+};
+
 /// A wind source. The solver defines each type's profile; these are its parameters.
 struct EmitterDesc {
     std::string type;             ///< "directional", "omni", "vortex" or "motor"
-    glm::vec3 position{0.0f};     ///< world units (metres)
+    glm::vec3 position{0.0f};     ///< world units (metres); a motor's start
     glm::vec3 direction{1, 0, 0}; ///< unit vector (normalised at load): flow or axis direction
     float radius = 1.0f;          ///< metres, > 0
     float strength = 0.0f;        ///< wind speed at the centre, m/s (negative reverses it)
     float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p inside the radius, >= 0 (0 = uniform)
+    std::string shape = "capsule"; ///< motors: "capsule" or "cone"
+    float length = 0.0f;           ///< motors: metres along `direction`, >= 0 (> 0 for a cone)
+    std::vector<EmitterKey> path;  ///< strictly increasing t; empty: fixed at `position`
+};
+
+/// Numerics of the wind solver (all optional in the file; defaults as in gust::SolverDesc).
+struct SolverSettings {
+    std::string advection = "maccormack"; ///< "maccormack", "semi_lagrangian" or "none"
+    std::string pressure = "multigrid";   ///< "multigrid" or "jacobi"
+    float tolerance = 1e-5f;              ///< relative residual, in (0, 1)
+    std::uint32_t max_cycles = 20;        ///< multigrid V-cycles per step, 1..1000
+    std::uint32_t max_iterations = 4000;  ///< Jacobi iterations per step, 1..1000000
+    float vorticity = 0.2f;               ///< confinement strength, 0..10
+    float viscosity = 0.0f;               ///< m^2/s, >= 0
 };
 
 /// The simulated box and its resolution.
@@ -61,7 +81,7 @@ struct DomainDesc {
     glm::vec3 center{0.0f};            ///< world units (metres); min corner = center − cells·cell_size/2
     glm::uvec3 cells{32, 16, 32};      ///< wind cells per axis, each 8..256
     float cell_size = 1.0f;            ///< metres, > 0
-    std::uint32_t voxels_per_cell = 4; ///< voxels per wind cell per axis, 1..1024
+    std::uint32_t voxels_per_cell = 4; ///< voxels per wind cell per axis, 1..8
     std::uint32_t branching = 4;       ///< sparse tree branching per axis: 2, 4 or 8
     std::uint32_t hysteresis = 8;      ///< frames a tree node stays refined after its last fragment
 };
@@ -74,6 +94,7 @@ struct SceneDesc {
     glm::vec3 ambient_velocity{0.0f};  ///< m/s, world space, entering at the domain's faces
     std::vector<SceneObject> objects;  ///< meshes, in file order
     std::vector<EmitterDesc> emitters; ///< wind sources, in file order
+    SolverSettings solver;             ///< JSON "solver"
 };
 
 /// Reads and checks a scene file. Mesh files must exist (they are not opened here: the mesh loaders
@@ -86,5 +107,9 @@ Result<SceneDesc> load_scene(const std::filesystem::path& file);
 /// (translate, rotate_deg, scale), holding the end values outside their range; without keyframes the
 /// object's transform.
 glm::mat4 object_matrix(const SceneObject& object, double t);
+
+/// Position of an emitter at time t (seconds): its path interpolated linearly, holding the end keys
+/// outside their range; without a path its position.
+glm::vec3 emitter_position(const EmitterDesc& emitter, double t);
 
 } // namespace gust
