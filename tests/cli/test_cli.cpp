@@ -243,6 +243,62 @@ TEST(CliSimulate, writesStatsLinesAndOccupancyFramesMatchingTheReference) {
     fs::remove_all(out);
 }
 
+TEST(CliSimulate, framesHoldTheWindGridsOnCellCentresAndStatsTheSolve) {
+    const fs::path out = fs::temp_directory_path() / "gust_cli_simulate_wind";
+    fs::remove_all(out);
+    const std::string scene_path = asset("scenes/dragon_wall_arch.json");
+    const CliRun run = gust("simulate " + scene_path + " --frames 3 --validation --out " + out.string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    std::ifstream stats(out / "stats.jsonl");
+    std::string line;
+    int frames = 0;
+    while (std::getline(stats, line)) {
+        const auto j = nlohmann::json::parse(line);
+        for (const char* key : {"divergence_before", "divergence_after", "residual", "cycles", "converged"})
+            EXPECT_TRUE(j.contains(key)) << key;
+        for (const char* pass : {"wind_solid", "wind_advect", "wind_forces", "wind_pressure", "wind_project"})
+            EXPECT_TRUE(j["ms"].contains(pass)) << pass;
+        const double before = j["divergence_before"].get<double>();
+        EXPECT_EQ(j["converged"].get<bool>(), j["residual"].get<double>() <= 1e-5 * before);
+        EXPECT_LT(j["divergence_after"].get<double>(), 1e-3 * before);
+        ++frames;
+    }
+    EXPECT_EQ(frames, 3);
+
+    auto scene = load_scene(scene_path);
+    ASSERT_TRUE(scene) << scene.message();
+    const glm::vec3 corner = scene->domain.center - glm::vec3(scene->domain.cells) * scene->domain.cell_size * 0.5f;
+    openvdb::initialize();
+    openvdb::io::File file((out / "frame_0000.vdb").string());
+    file.open();
+    auto solid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("solid"));
+    auto velocity = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("velocity"));
+    auto pressure = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("pressure"));
+    file.close();
+    ASSERT_TRUE(solid && velocity && pressure);
+    const std::uint64_t cells = std::uint64_t(scene->domain.cells.x) * scene->domain.cells.y * scene->domain.cells.z;
+    EXPECT_EQ(velocity->activeVoxelCount(), cells);
+    EXPECT_EQ(pressure->activeVoxelCount(), cells);
+    EXPECT_GT(solid->activeVoxelCount(), 0u);
+    for (const openvdb::GridBase* g : {static_cast<openvdb::GridBase*>(solid.get()),
+                                       static_cast<openvdb::GridBase*>(velocity.get()),
+                                       static_cast<openvdb::GridBase*>(pressure.get())}) {
+        EXPECT_NEAR(g->voxelSize().x(), scene->domain.cell_size, 1e-6);
+        const openvdb::Vec3d c = g->indexToWorld(openvdb::Coord(2, 3, 4));
+        EXPECT_NEAR(c.x(), corner.x + 2.5 * scene->domain.cell_size, 1e-5);
+        EXPECT_NEAR(c.y(), corner.y + 3.5 * scene->domain.cell_size, 1e-5);
+        EXPECT_NEAR(c.z(), corner.z + 4.5 * scene->domain.cell_size, 1e-5);
+    }
+    for (auto it = solid->cbeginValueOn(); it; ++it) {
+        EXPECT_GT(*it, 0.0f);
+        EXPECT_LE(*it, 1.0f);
+    }
+    // At the upwind (−z) face the ambient wind comes in.
+    const openvdb::Vec3s inflow = velocity->getConstAccessor().getValue(openvdb::Coord(1, 6, 0));
+    EXPECT_GT(inflow.z(), 0.5f * scene->ambient_velocity.z);
+    fs::remove_all(out);
+}
+
 TEST(CliSimulate, badSceneFailsNamingTheFileAndKey) {
     const fs::path dir = fs::temp_directory_path() / "gust_cli_bad_scene";
     fs::create_directories(dir);
