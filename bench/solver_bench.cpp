@@ -1,0 +1,987 @@
+// Measures the wind solver (DESIGN.md "Wind solver"): GPU time per pass of one step at God of War's
+// 32x16x32 grid and larger ones, multigrid against the Jacobi baseline to the same tolerance, and the
+// bytes each pass moves against the device's copy bandwidth.
+#include "bench_common.hpp"
+#include "solver_setup.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/context.hpp>
+#include <gust/gpu/profiler.hpp>
+#include <gust/solver/wind_solver.hpp>
+#include <gust/voxelizer/voxel_world.hpp>
+#include <iostream>
+#include <memory>
+#include <span>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+using gust::bench::Clock;
+using gust::bench::command_line;
+using gust::bench::cpu_model;
+using gust::bench::failed_cell;
+using gust::bench::fmt_ms;
+using gust::bench::fmt_ratio;
+using gust::bench::grouped;
+using gust::bench::load_average;
+using gust::bench::ms_since;
+using gust::bench::RunInfo;
+using gust::bench::usable_cores;
+using gust::bench::utc_now;
+using PassMs = std::vector<std::pair<std::string, double>>;
+
+/// Names this tool in its error and Vulkan messages.
+constexpr const char* kTool = "gust_bench_solver";
+/// Names this bench's block in the results file (`<!-- bench:solver:begin -->`).
+constexpr const char* kBlock = "solver";
+
+/// Prints a fatal error under this tool's name and gives the exit status.
+int fail(const std::string& message) {
+    return gust::bench::fail(kTool, message);
+}
+
+/// Frame time of every step, seconds.
+constexpr float kDt = 1.0f / 30.0f;
+/// Wind cell size, metres, at every grid size: a larger grid covers more ground, as a game's would.
+constexpr float kCellSize = 1.0f;
+/// The ambient wind of every run, m/s.
+constexpr glm::vec3 kAmbient{4.0f, 0.0f, 0.0f};
+/// Velocity of the moving box, m/s.
+constexpr glm::vec3 kBoxVelocity{0.0f, 0.0f, 3.0f};
+/// Untimed steps before the timed ones of the step-time table.
+constexpr int kWarmupSteps = 2;
+/// Caps of the search step of the multigrid against Jacobi table: far more than the tolerance should
+/// take (five times SolverDesc's 20 V-cycles; 200,000 Jacobi iterations), so the tolerance stops them.
+constexpr std::uint32_t kMultigridCap = 100;
+constexpr std::uint32_t kJacobiCap = 200000;
+/// Largest grid of the multigrid against Jacobi table: Jacobi's iterations grow with the square of the
+/// grid's width, so at 128^3 one solve would take most of an hour on lavapipe.
+constexpr std::uint64_t kSolveMaxCells = 64ull * 64 * 64;
+/// Tolerances of the multigrid against Jacobi table; 1e-5 is SolverDesc's default.
+constexpr float kTolerances[] = {1e-4f, 1e-5f};
+/// Each copy of the bandwidth measurement, bytes (read once and written once).
+constexpr VkDeviceSize kCopyBytes = 256ull << 20;
+
+/// What the command line asked for.
+struct Options {
+    std::vector<std::string> sizes = {"32x16x32", "64", "128"};
+    int repeat = 3;
+    double budget_s = 30.0;
+    std::string write;
+    std::string device;
+};
+
+/// Median of `values` (mean of the middle two for an even count), the statistic every column reports.
+double median(std::vector<double> values) {
+    if (values.empty()) return 0.0;
+    std::sort(values.begin(), values.end());
+    const std::size_t mid = values.size() / 2;
+    return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+}
+
+/// Parses "N" (a cube) or "XxYxZ".
+gust::Result<glm::uvec3> parse_size(const std::string& text) {
+    glm::uvec3 cells(0);
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%ux%ux%u%c", &cells.x, &cells.y, &cells.z, &tail) == 3) return cells;
+    if (std::sscanf(text.c_str(), "%u%c", &cells.x, &tail) == 1) return glm::uvec3(cells.x);
+    return gust::Result<glm::uvec3>::failure("--sizes: \"" + text + "\" is neither N nor XxYxZ");
+}
+
+/// "32x16x32", or "64^3" for a cube.
+std::string size_name(glm::uvec3 cells) {
+    if (cells.x == cells.y && cells.y == cells.z) return std::to_string(cells.x) + "^3";
+    return std::to_string(cells.x) + "x" + std::to_string(cells.y) + "x" + std::to_string(cells.z);
+}
+
+std::uint64_t cell_count(glm::uvec3 cells) {
+    return std::uint64_t(cells.x) * cells.y * cells.z;
+}
+
+/// Seconds with three significant digits, for the time-to-tolerance columns.
+std::string fmt_s(double s) {
+    char text[32];
+    std::snprintf(text, sizeof(text), s < 1.0 ? "%.3f" : s < 10.0 ? "%.2f" : "%.1f", s);
+    return text;
+}
+
+/// A residual or tolerance in scientific notation.
+std::string fmt_sci(double x) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.1e", x);
+    return text;
+}
+
+/// Milliseconds of the pass `name`, or a negative number when the step did not time it.
+double pass_ms(const PassMs& passes, const std::string& name) {
+    for (const auto& [pass, ms] : passes)
+        if (pass == name) return ms;
+    return -1.0;
+}
+
+double summed(const PassMs& passes) {
+    double total = 0.0;
+    for (const auto& pass : passes)
+        total += pass.second;
+    return total;
+}
+
+/// The unit cube [0, 1]^3 as 8 corners and 12 triangles; every box of the scene is an instance of it.
+struct UnitBox {
+    std::array<glm::vec3, 8> positions;
+    std::array<std::uint32_t, 36> indices;
+
+    UnitBox() {
+        for (std::uint32_t i = 0; i < 8; ++i)
+            positions[i] = glm::vec3(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1));
+        const std::uint32_t quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                           {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+        std::size_t n = 0;
+        for (const auto& q : quads)
+            for (std::uint32_t corner : {q[0], q[1], q[2], q[0], q[2], q[3]})
+                indices[n++] = corner;
+    }
+
+    gust::MeshView view() const {
+        gust::MeshView v;
+        v.positions = &positions[0].x;
+        v.vertex_count = positions.size();
+        v.position_stride = sizeof(glm::vec3);
+        v.indices = indices.data();
+        v.index_count = indices.size();
+        return v;
+    }
+};
+
+/// Model matrix of the unit box stretched to span lo..hi.
+glm::mat4 box_model(glm::vec3 lo, glm::vec3 hi) {
+    return glm::scale(glm::translate(glm::mat4(1.0f), lo), hi - lo);
+}
+
+/// A box of the scene: x and z in fractions of the domain's extent, y in metres from its floor.
+struct Placed {
+    glm::vec2 lo_xz, hi_xz;
+    float lo_y, hi_y; ///< metres, or fractions of the height where `top_fraction` says so
+    bool top_fraction;
+};
+
+/// The solids and sources of one grid: a ground slab whose top cuts the lowest cells, three buildings
+/// standing in it, a box sliding along +z over the ground, an omni emitter among them, and the ambient
+/// wind along +x. Footprints and heights are fractions of the domain, so every size holds the same scene
+/// at its own resolution; the ground's top is at the same height in metres, so it cuts its cells alike.
+class Scene {
+  public:
+    /// A b = 4 VoxelWorld over the wind grid of `desc` with the static boxes set; the moving box is placed
+    /// by advance().
+    static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx, const gust::SolverDesc& desc) {
+        std::unique_ptr<Scene> scene(new Scene(desc));
+        const std::uint32_t longest = std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
+        std::uint32_t res = 1;
+        while (res < longest || res < gust::kMinRes)
+            res *= 4;
+        gust::WorldDesc world;
+        world.grid.origin = desc.origin;
+        world.grid.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
+        world.grid.res = res;
+        world.tree.branching = 4;
+        world.method = gust::VoxelizeMethod::Compute;
+        auto created = gust::VoxelWorld::create(ctx, world);
+        if (!created) return created.status();
+        scene->world_ = std::move(*created);
+        auto box = scene->world_->upload(UnitBox().view());
+        if (!box) return gust::Status::failure("box upload failed: " + box.message());
+        scene->box_ = std::make_unique<gust::GpuMesh>(std::move(*box));
+        std::vector<gust::GpuInstance> statics;
+        for (const Placed& p : kStatic)
+            statics.push_back({scene->box_.get(), scene->model(p), std::nullopt});
+        scene->world_->set_static(std::move(statics));
+        return scene;
+    }
+
+    /// Moves the box to step `index` and voxelizes the frame (static set once, box with velocities).
+    gust::Result<gust::WorldFrame> advance(std::uint64_t index) {
+        const glm::vec3 at = float(index) * kDt * kBoxVelocity;
+        const glm::mat4 here = glm::translate(glm::mat4(1.0f), at) * model(kMoving);
+        const glm::mat4 before = glm::translate(glm::mat4(1.0f), at - kDt * kBoxVelocity) * model(kMoving);
+        const gust::GpuInstance moving{box_.get(), here, before};
+        auto frame = world_->step(std::span(&moving, 1), kDt);
+        if (frame) last_ = *frame;
+        return frame;
+    }
+
+    /// The solid boundary as the solver takes it: the tree and the moving box's fragments. Taken after
+    /// advance(), since a step may reallocate the fragment list.
+    gust::SolidSource source() const {
+        const gust::Voxelizer& moving = world_->dynamic_voxelizer();
+        gust::SolidSource s;
+        s.tree = &world_->tree();
+        s.fragments = moving.fragment_buffer().address();
+        s.fragment_count = moving.fragment_count_address();
+        s.fragment_velocities = moving.velocity_buffer().address();
+        s.fragment_capacity = moving.fragment_capacity();
+        return s;
+    }
+
+    /// The omni emitter, pushing air outwards among the buildings.
+    gust::Emitter emitter() const {
+        gust::Emitter e;
+        e.type = gust::EmitterType::Omni;
+        e.position = origin_ + extent_ * kEmitterAt;
+        e.radius = kEmitterRadius * std::min({extent_.x, extent_.y, extent_.z});
+        e.strength = kEmitterStrength;
+        return e;
+    }
+
+    /// The last frame the world stepped.
+    const gust::WorldFrame& last_frame() const { return last_; }
+
+    /// What the scene holds, for the results text.
+    static std::string describe() {
+        std::ostringstream out;
+        const auto box = [&](const Placed& p) {
+            out << "x " << p.lo_xz.x << "-" << p.hi_xz.x << ", z " << p.lo_xz.y << "-" << p.hi_xz.y << " of the "
+                << "extent, ";
+            if (p.top_fraction) out << "up to " << p.hi_y << " of the height";
+            else out << "y " << p.lo_y << "-" << p.hi_y << " m";
+        };
+        out << "a ground slab (past every side) with its top at y = " << kStatic[0].hi_y
+            << " m, inside the lowest cells; buildings at ";
+        for (std::size_t i = 1; i < std::size(kStatic); ++i) {
+            if (i > 1) out << (i + 1 == std::size(kStatic) ? " and " : "; ");
+            box(kStatic[i]);
+        }
+        out << ", standing in the ground; a box at ";
+        box(kMoving);
+        out << ", sliding along +z at " << kBoxVelocity.z << " m/s; an omni emitter (" << kEmitterStrength
+            << " m/s, radius " << kEmitterRadius << " of the shortest side, falloff 1) at (" << kEmitterAt.x << ", "
+            << kEmitterAt.y << ", " << kEmitterAt.z << ") of the extent";
+        return out.str();
+    }
+
+  private:
+    explicit Scene(const gust::SolverDesc& desc)
+        : origin_(desc.origin), extent_(glm::vec3(desc.cells) * desc.cell_size) {}
+
+    glm::mat4 model(const Placed& p) const {
+        const float hi_y = p.top_fraction ? p.hi_y * extent_.y : p.hi_y;
+        const glm::vec3 lo(p.lo_xz.x * extent_.x, p.lo_y, p.lo_xz.y * extent_.z);
+        const glm::vec3 hi(p.hi_xz.x * extent_.x, hi_y, p.hi_xz.y * extent_.z);
+        return box_model(origin_ + lo, origin_ + hi);
+    }
+
+    /// The ground first, reaching past the sides and the floor so that it has no edges inside; the
+    /// buildings reach below the floor too.
+    static constexpr Placed kStatic[] = {{{-0.1f, -0.1f}, {1.1f, 1.1f}, -1.0f, 0.3f, false},
+                                         {{0.2f, 0.25f}, {0.3f, 0.4f}, -1.0f, 0.5f, true},
+                                         {{0.5f, 0.6f}, {0.62f, 0.72f}, -1.0f, 0.7f, true},
+                                         {{0.7f, 0.2f}, {0.78f, 0.45f}, -1.0f, 0.35f, true}};
+    static constexpr Placed kMoving{{0.42f, 0.12f}, {0.48f, 0.18f}, 0.5f, 0.2f, true};
+    static constexpr glm::vec3 kEmitterAt{0.35f, 0.3f, 0.5f};
+    static constexpr float kEmitterRadius = 0.15f;
+    static constexpr float kEmitterStrength = 6.0f;
+
+    glm::vec3 origin_;
+    glm::vec3 extent_;
+    std::unique_ptr<gust::VoxelWorld> world_;
+    std::unique_ptr<gust::GpuMesh> box_;
+    gust::WorldFrame last_;
+};
+
+/// Face velocities of the uniform ambient wind: the non-random start of every timed solve.
+std::vector<float> ambient_field(glm::uvec3 cells) {
+    const glm::ivec3 n(cells);
+    std::vector<float> faces(std::size_t(gust::shaderio::faces_total(n)));
+    for (int i = 0; i < int(faces.size()); ++i) {
+        std::uint32_t axis;
+        gust::shaderio::face_from_index(n, i, axis);
+        faces[std::size_t(i)] = kAmbient[int(axis)];
+    }
+    return faces;
+}
+
+/// A solver of `desc` with the scene's ambient wind and emitter.
+gust::Result<std::unique_ptr<gust::WindSolver>> make_solver(gust::gpu::Context& ctx, const gust::SolverDesc& desc,
+                                                            const Scene& scene) {
+    auto solver = gust::WindSolver::create(ctx, desc);
+    if (!solver) return solver;
+    if (gust::Status s = (*solver)->set_ambient(kAmbient); !s) return s;
+    const gust::Emitter emitter = scene.emitter();
+    if (gust::Status s = (*solver)->set_emitters(std::span(&emitter, 1)); !s) return s;
+    return solver;
+}
+
+/// One timed step.
+struct StepSample {
+    double wall_ms = 0.0; ///< around WindSolver::step()
+    gust::WindStats stats;
+};
+
+/// The step-time table's row of one grid.
+struct StepRow {
+    glm::uvec3 cells{0};
+    std::uint32_t levels = 0;
+    std::vector<StepSample> steps;
+    gust::WorldFrame world; ///< of the last timed step
+    std::string error;
+    /// Median GPU ms of `pass` over the timed steps.
+    double pass(const std::string& name) const {
+        std::vector<double> v;
+        for (const StepSample& s : steps)
+            v.push_back(pass_ms(s.stats.ms, name));
+        return median(v);
+    }
+    double total() const {
+        std::vector<double> v;
+        for (const StepSample& s : steps)
+            v.push_back(summed(s.stats.ms));
+        return median(v);
+    }
+    double wall() const {
+        std::vector<double> v;
+        for (const StepSample& s : steps)
+            v.push_back(s.wall_ms);
+        return median(v);
+    }
+    double cycles() const {
+        std::vector<double> v;
+        for (const StepSample& s : steps)
+            v.push_back(double(s.stats.cycles));
+        return median(v);
+    }
+};
+
+/// Steps the scene and a default multigrid solver from the uniform ambient wind, moving the box every
+/// step: kWarmupSteps untimed, then up to `repeat` timed, fewer once the timed ones pass `budget_s`.
+gust::Status bench_steps(Scene& scene, gust::WindSolver& solver, int repeat, double budget_s, StepRow& row) {
+    if (gust::Status s = solver.set_velocity(ambient_field(row.cells)); !s) return s;
+    double spent_ms = 0.0;
+    for (int i = 0; i < kWarmupSteps + repeat && !(i > kWarmupSteps && spent_ms > budget_s * 1000.0); ++i) {
+        auto frame = scene.advance(std::uint64_t(i));
+        if (!frame) return frame.status();
+        const gust::SolidSource solid = scene.source();
+        StepSample sample;
+        const auto start = Clock::now();
+        auto stats = solver.step(kDt, &solid);
+        sample.wall_ms = ms_since(start);
+        if (!stats) return stats.status();
+        sample.stats = std::move(*stats);
+        if (i < kWarmupSteps) continue;
+        spent_ms += sample.wall_ms;
+        row.steps.push_back(std::move(sample));
+    }
+    row.world = scene.last_frame();
+    return {};
+}
+
+/// One step of one solver from the uniform ambient wind.
+struct Solve {
+    double wall_s = 0.0; ///< around WindSolver::step()
+    gust::WindStats stats;
+};
+
+/// One solver's side of the multigrid against Jacobi table.
+struct SolveSide {
+    std::uint32_t cap = 0; ///< cycles or iterations the search step may run
+    Solve search;          ///< the first step, at the generous cap
+    std::vector<Solve> timed; ///< at a cap of what the search needed; none when it did not converge
+    std::string error;
+    bool converged() const { return error.empty() && search.stats.converged; }
+    double wall_s() const {
+        std::vector<double> v;
+        for (const Solve& s : timed)
+            v.push_back(s.wall_s);
+        return median(v);
+    }
+    double pressure_ms() const {
+        std::vector<double> v;
+        for (const Solve& s : timed)
+            v.push_back(pass_ms(s.stats.ms, "pressure"));
+        return median(v);
+    }
+};
+
+/// One grid and tolerance of the multigrid against Jacobi table.
+struct SolveRow {
+    glm::uvec3 cells{0};
+    float tolerance = 0.0f;
+    SolveSide multigrid;
+    SolveSide jacobi;
+};
+
+/// One step from `start`, timed around step().
+gust::Result<Solve> solve_once(gust::WindSolver& solver, const gust::SolidSource& solid,
+                               const std::vector<float>& start) {
+    if (gust::Status s = solver.set_velocity(start); !s) return s;
+    Solve out;
+    const auto begin = Clock::now();
+    auto stats = solver.step(kDt, &solid);
+    out.wall_s = ms_since(begin) / 1000.0;
+    if (!stats) return stats.status();
+    out.stats = std::move(*stats);
+    return out;
+}
+
+/// `desc` with its solver's cap (V-cycles or iterations) set to `cap`.
+gust::SolverDesc capped(gust::SolverDesc desc, std::uint32_t cap) {
+    (desc.pressure == gust::PressureSolver::Multigrid ? desc.max_cycles : desc.max_iterations) = cap;
+    return desc;
+}
+
+/// Multigrid and Jacobi on the scene as it stands (the box no longer moves), from the same start each
+/// time. Each first runs once at a generous cap to find how many cycles or iterations the tolerance
+/// takes; then, side by side in rounds, a solver capped at that count is timed up to `repeat` times,
+/// fewer once its timed steps pass `budget_s`.
+SolveRow bench_solve(gust::gpu::Context& ctx, const Scene& scene, glm::uvec3 cells, float tolerance, int repeat,
+                     double budget_s) {
+    SolveRow row;
+    row.cells = cells;
+    row.tolerance = tolerance;
+    gust::SolverDesc desc;
+    desc.cells = cells;
+    desc.cell_size = kCellSize;
+    desc.tolerance = tolerance;
+    gust::SolverDesc jacobi_desc = desc;
+    jacobi_desc.pressure = gust::PressureSolver::Jacobi;
+    row.multigrid.cap = kMultigridCap;
+    row.jacobi.cap = kJacobiCap;
+    const gust::SolidSource solid = scene.source();
+    const std::vector<float> start = ambient_field(cells);
+    const std::pair<gust::SolverDesc, SolveSide*> sides[] = {{desc, &row.multigrid}, {jacobi_desc, &row.jacobi}};
+    std::unique_ptr<gust::WindSolver> timed[2];
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto& [side_desc, side] = sides[i];
+        auto search = make_solver(ctx, capped(side_desc, side->cap), scene);
+        if (!search) {
+            side->error = search.message();
+            continue;
+        }
+        auto solve = solve_once(**search, solid, start);
+        if (!solve) {
+            side->error = solve.message();
+            continue;
+        }
+        side->search = std::move(*solve);
+        if (!side->search.stats.converged) continue;
+        auto solver = make_solver(ctx, capped(side_desc, std::max(side->search.stats.cycles, 1u)), scene);
+        if (solver) timed[i] = std::move(*solver);
+        else side->error = solver.message();
+    }
+    for (int round = 0; round < repeat; ++round)
+        for (std::size_t i = 0; i < 2; ++i) {
+            SolveSide& side = *sides[i].second;
+            double spent = 0.0;
+            for (const Solve& s : side.timed)
+                spent += s.wall_s;
+            if (!timed[i] || !side.error.empty() || (round > 0 && spent > budget_s)) continue;
+            auto solve = solve_once(*timed[i], solid, start);
+            if (solve) side.timed.push_back(std::move(*solve));
+            else side.error = solve.message();
+        }
+    return row;
+}
+
+/// Device copy bandwidth, bytes per second: a kCopyBytes vkCmdCopyBuffer timed by the GPU's timestamps
+/// (read once and written once, so 2 x kCopyBytes move), median of `repeat` after one warm-up.
+gust::Result<double> copy_bandwidth(gust::gpu::Context& ctx, int repeat) {
+    auto from = gust::gpu::Buffer::create(ctx, kCopyBytes, gust::gpu::MemoryUse::Device);
+    if (!from) return from.status();
+    auto to = gust::gpu::Buffer::create(ctx, kCopyBytes, gust::gpu::MemoryUse::Device);
+    if (!to) return to.status();
+    auto profiler = gust::gpu::Profiler::create(ctx, 1);
+    if (!profiler) return profiler.status();
+    std::vector<double> ms;
+    for (int i = -1; i < repeat; ++i) {
+        gust::Status s = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+            if (i < 0) {
+                ctx.vk().vkCmdFillBuffer(cmd, from->handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);
+                gust::gpu::barrier(ctx, cmd);
+            }
+            profiler->reset(cmd);
+            profiler->begin(cmd, "copy");
+            const VkBufferCopy region{0, 0, kCopyBytes};
+            ctx.vk().vkCmdCopyBuffer(cmd, from->handle(), to->handle(), 1, &region);
+            profiler->end(cmd);
+        });
+        if (!s) return s;
+        const PassMs passes = profiler->read();
+        if (passes.empty()) return gust::Status::failure("the copy returned no timestamps");
+        if (i >= 0) ms.push_back(passes.front().second);
+    }
+    return 2.0 * double(kCopyBytes) / (median(ms) / 1000.0);
+}
+
+// ---- Bytes per pass ------------------------------------------------------------------------------------
+//
+// Counting rule, from the kernels in shaders/solver/*.comp and solver_kernels.h, for an interior face or
+// cell (all neighbours inside the grid, every face open), 4 bytes per float or word:
+//   accessed: every load and store a thread issues, as if no cache existed (an advected face's two
+//             velocity samples and its field sample are 3 x 8 + 3 x 8 + 8 loads);
+//   unique:   every array element a dispatch touches, once (a perfect cache: a neighbour read by six
+//             threads counts once); this is what a kernel must move at the least, so unique bytes over
+//             the copy bandwidth is the floor.
+// Uniform parameters (bindings, level table, emitters) and one-thread passes (check, fragment_args) are
+// not counted; the tree's pools count once (pool_bytes) in both; each moving fragment's four atomics
+// count as reads and writes of 4 bytes.
+
+/// Bytes one pass moves, counted both ways.
+struct Traffic {
+    double accessed = 0.0;
+    double unique = 0.0;
+    std::uint64_t dispatches = 0;
+    /// Adds `n` dispatches of `accessed` and `unique` bytes each.
+    void add(double accessed_bytes, double unique_bytes, std::uint64_t n = 1) {
+        accessed += double(n) * accessed_bytes;
+        unique += double(n) * unique_bytes;
+        dispatches += n;
+    }
+};
+
+/// What the byte counts depend on: the grid hierarchy and what one step found.
+struct Workload {
+    std::vector<gust::shaderio::GridLevel> levels;
+    std::uint32_t smoothing = 0;   ///< SolverDesc::smoothing
+    std::uint32_t cell_words = 0;  ///< words of a cell's voxel set
+    double cycles = 0.0;           ///< V-cycles per step (median)
+    double cut_cells = 0.0;        ///< cells holding solid voxels
+    double fragments = 0.0;        ///< moving fragments
+    double tree_bytes = 0.0;       ///< live bytes of the tree's pools
+    double faces(std::size_t l) const { return double(gust::shaderio::faces_total(levels[l].dims)); }
+    double cells(std::size_t l) const {
+        const glm::ivec3 d = levels[l].dims;
+        return double(d.x) * d.y * d.z;
+    }
+};
+
+/// The "solid" pass: solid_cells, solid_motion, solid_faces, coarse_weights per coarser level.
+Traffic solid_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0), C = w.cells(0), fluid = 4.0 * w.cut_cells * w.cell_words;
+    // solid_cells: flag and fraction per cell, the voxel set of a cut cell, the tree once.
+    t.add(8 * C + fluid + w.tree_bytes, 8 * C + fluid + w.tree_bytes);
+    // solid_motion: key and half-float velocity, four 4-byte atomics, per fragment.
+    t.add(44 * w.fragments, 44 * w.fragments);
+    // solid_faces: two flags, two motion sums (16 B), weight and solid velocity stored; a face of a cut
+    // cell (six per cut cell) also reads both voxel sets.
+    t.add(48 * F + 6 * 2 * fluid, (4 + 16) * C + 8 * F + fluid);
+    // coarse_weights: the fine faces a coarse face covers (each read by one coarse face) and the store.
+    for (std::size_t l = 1; l < w.levels.size(); ++l) {
+        double bytes = 0.0;
+        for (std::uint32_t axis = 0; axis < 3; ++axis) {
+            glm::ivec3 span = w.levels[l - 1].factor;
+            span[int(axis)] = 1;
+            bytes += 4.0 * gust::shaderio::face_count(w.levels[l].dims, axis) * (span.x * span.y * span.z + 1);
+        }
+        t.add(bytes, bytes);
+    }
+    return t;
+}
+
+/// The "advect" pass, MacCormack: forward, backward, clamped correction, then the copy back.
+Traffic advect_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0);
+    // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
+    const double trace = 2 * 3 * 8 * 4;
+    t.add(F * (trace + 8 * 4 + 4), 8 * F);             // velocity -> tmp
+    t.add(F * (trace + 8 * 4 + 4), 12 * F);            // tmp -> back, tracing with the velocity
+    t.add(F * (3 * 4 + trace + 8 * 4 + 4), 16 * F);    // tmp, velocity, back -> tmp, clamped to 8 values
+    t.add(8 * F, 8 * F);                               // vkCmdCopyBuffer tmp -> velocity
+    return t;
+}
+
+/// The "forces" pass: emitters and ambient, then vorticity and confinement (vorticity is on by default).
+Traffic forces_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0), C = w.cells(0);
+    t.add(8 * F, 8 * F);                      // forces: in place
+    t.add(C * (3 * 2 * 6 * 4 + 16), 4 * F + 16 * C); // vorticity: six cell velocities (6 faces each), vec4 out
+    // confine: the face, two cell velocities, two forces of seven vec4 vorticities each, the store.
+    t.add(F * (4 + 2 * 6 * 4 + 2 * 7 * 16 + 4), 8 * F + 16 * C);
+    t.add(8 * F, 8 * F); // vkCmdCopyBuffer tmp -> velocity
+    return t;
+}
+
+/// One colour of red-black relaxation at level l: half the cells read six weights and six neighbours,
+/// the right-hand side, and store.
+void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint64_t n) {
+    t.add(w.cells(l) / 2 * (12 * 4 + 4 + 4), 4 * w.faces(l) + 8 * w.cells(l), n);
+}
+
+/// Residual at level l: the operator, the right-hand side and the cell's φ, one store.
+void add_residual(Traffic& t, const Workload& w, std::size_t l) {
+    t.add(w.cells(l) * (12 * 4 + 4 + 4 + 4), 4 * w.faces(l) + 12 * w.cells(l));
+}
+
+/// The "pressure" pass with multigrid: divergence, then per V-cycle smoothing, residual and restriction
+/// down, the coarsest solve, prolongation and smoothing up, and the residual of the check.
+Traffic pressure_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0), C = w.cells(0);
+    // divergence: the operator (12 loads), six face fluxes (3 loads each), right-hand side and φ stored.
+    t.add(C * (12 * 4 + 6 * 3 * 4 + 8), 12 * F + 12 * C);
+    const std::size_t last = w.levels.size() - 1;
+    Traffic cycle;
+    for (std::size_t l = 0; l < last; ++l) {
+        add_relax(cycle, w, l, 2 * 2 * w.smoothing);
+        add_residual(cycle, w, l);
+        cycle.add(w.cells(l + 1) * (8 * 4 + 8), 4 * w.cells(l) + 8 * w.cells(l + 1)); // restrict
+        cycle.add(w.cells(l) * (4 + 8 * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1)); // prolong
+    }
+    add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps);
+    add_residual(cycle, w, 0);
+    t.accessed += w.cycles * cycle.accessed;
+    t.unique += w.cycles * cycle.unique;
+    t.dispatches += std::uint64_t(w.cycles * double(cycle.dispatches) + 0.5);
+    return t;
+}
+
+/// The "project" pass: the gradient subtracted per face, then the divergence measured again.
+Traffic project_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0), C = w.cells(0);
+    t.add(F * 20, 12 * F + 4 * C);
+    t.add(C * (12 * 4 + 6 * 3 * 4), 12 * F + 4 * C);
+    return t;
+}
+
+/// The byte model of one step, per pass in the order the solver runs them.
+std::vector<std::pair<std::string, Traffic>> step_traffic(const Workload& w) {
+    return {{"solid", solid_traffic(w)},
+            {"advect", advect_traffic(w)},
+            {"forces", forces_traffic(w)},
+            {"pressure", pressure_traffic(w)},
+            {"project", project_traffic(w)}};
+}
+
+/// The workload of a step-time row.
+Workload workload_of(const StepRow& row, const gust::SolverDesc& desc) {
+    Workload w;
+    w.levels = gust::detail::build_levels(row.cells, desc.cell_size);
+    w.smoothing = desc.smoothing;
+    w.cell_words = gust::detail::cell_words(desc.voxels_per_cell);
+    w.cycles = row.cycles();
+    std::vector<double> cut, fragments;
+    for (const StepSample& s : row.steps) {
+        cut.push_back(double(s.stats.cut_cells));
+        fragments.push_back(double(s.stats.moving_fragments));
+    }
+    w.cut_cells = median(cut);
+    w.fragments = median(fragments);
+    w.tree_bytes = double(row.world.tree.pool_bytes);
+    return w;
+}
+
+/// Decimal gigabytes per second.
+std::string fmt_gbs(double bytes_per_s) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.2f", bytes_per_s / 1e9);
+    return text;
+}
+
+/// Megabytes with two decimals (decimal MB, as GB/s is).
+std::string fmt_mb(double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.2f", bytes / 1e6);
+    return text;
+}
+
+/// The passes the step-time table shows, in the solver's order.
+constexpr const char* kPasses[] = {"solid", "advect", "forces", "pressure", "project"};
+
+void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
+                  int repeat, double budget_s, std::vector<std::string>& notes) {
+    out << "### Step time per pass\n\n";
+    out << "Every grid has " << kCellSize << " m cells, so a larger grid covers more ground, and holds the same "
+        << "scene: " << Scene::describe() << ". One `VoxelWorld` over the wind grid (b = 4, compute path, "
+        << desc.voxels_per_cell
+        << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind (" << kAmbient.x
+        << ", " << kAmbient.y << ", " << kAmbient.z
+        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: MacCormack advection, multigrid with "
+        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps, tolerance " << fmt_sci(desc.tolerance)
+        << ", at most " << desc.max_cycles << " V-cycles, vorticity confinement " << desc.vorticity
+        << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; " << kWarmupSteps
+        << " untimed steps, then up to " << repeat << " timed ones, fewer once they pass " << budget_s
+        << " s; every column is the median over the timed steps. Pass columns are `WindStats::ms` (GPU "
+           "timestamps); total GPU ms sums them; wall ms is around `WindSolver::step()` (recording, submission "
+           "and the wait).\n\n";
+    out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Steps |";
+    for (const char* pass : kPasses)
+        out << " `" << pass << "` ms |";
+    out << " Total GPU ms | Wall ms | V-cycles | Converged |\n|--:|--:|--:|--:|--:|--:|";
+    for (std::size_t i = 0; i < std::size(kPasses); ++i)
+        out << "--:|";
+    out << "--:|--:|--:|---|\n";
+    for (const StepRow& row : rows) {
+        out << "| " << size_name(row.cells) << " | " << grouped(cell_count(row.cells)) << " | ";
+        if (!row.error.empty()) {
+            out << failed_cell(notes, size_name(row.cells) + " steps", row.error) << " |";
+            for (std::size_t i = 0; i < std::size(kPasses) + 8; ++i)
+                out << " |";
+            out << "\n";
+            continue;
+        }
+        const gust::WindStats& last = row.steps.back().stats;
+        std::size_t converged = 0;
+        for (const StepSample& s : row.steps)
+            converged += s.stats.converged ? 1 : 0;
+        out << row.levels << " | " << grouped(last.cut_cells) << " | " << grouped(last.moving_fragments) << " | "
+            << row.steps.size() << " |";
+        for (const char* pass : kPasses)
+            out << " " << fmt_ms(row.pass(pass)) << " |";
+        out << " " << fmt_ms(row.total()) << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
+            << converged << " of " << row.steps.size() << " |\n";
+    }
+    out << "\n";
+}
+
+void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows, const std::vector<StepRow>& steps,
+                   double budget_s, std::vector<std::string>& notes) {
+    out << "### Multigrid against Jacobi to a tolerance\n\n";
+    out << "The same scene with the moving box stopped where the step-time runs left it, the same settings, "
+           "and one step from the uniform ambient wind each time, so the divergence is smooth (the emitter, "
+           "the inflow side and the solids' faces). Both solvers stop when max |residual| <= tolerance x max "
+           "|divergence before projection|. A solver records every cycle or iteration its cap allows and the "
+           "check zeroes the dispatches left once the tolerance is met, so a generous cap costs time after "
+           "convergence too. Each solver therefore first runs once at a generous cap (multigrid "
+        << kMultigridCap << " V-cycles, five times the default; Jacobi, damped with weight "
+        << gust::shaderio::kJacobiWeight << ", " << grouped(kJacobiCap) << " iterations, checked every "
+        << gust::detail::kJacobiBlock
+        << "): that step's wall time is the last column, and the cycles or iterations it took are the count. "
+           "Then a solver capped at that count is timed, multigrid and Jacobi side by side in rounds, up to "
+           "the stated runs, fewer once a solver's timed steps pass "
+        << budget_s
+        << " s; a solver that did not converge at the generous cap is not timed. Wall s is around "
+           "`WindSolver::step()` (the whole step), pressure ms the `pressure` pass's GPU time; medians over "
+           "the timed runs. Grids above "
+        << grouped(kSolveMaxCells)
+        << " cells are left out: Jacobi's iterations grow with the square of the grid's width, so at 128^3 "
+           "one solve would take most of an hour on lavapipe.\n\n";
+    out << "| Grid | Tolerance | Solver | Converged | Cycles / iterations | Residual / divergence | Runs | Wall s "
+           "| Pressure GPU ms | Jacobi / multigrid (wall) | Jacobi / multigrid (pressure GPU) | Wall s at the "
+           "generous cap |\n";
+    out << "|--:|--:|---|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    for (const SolveRow& row : rows) {
+        const std::string grid = size_name(row.cells);
+        const std::string tol = fmt_sci(row.tolerance);
+        const bool both = row.multigrid.converged() && row.jacobi.converged() && !row.multigrid.timed.empty() &&
+                          !row.jacobi.timed.empty();
+        const auto side = [&](const char* name, const SolveSide& r, bool ratios) {
+            out << "| " << grid << " | " << tol << " | " << name << " | ";
+            if (!r.error.empty()) {
+                out << failed_cell(notes, grid + " " + name + " at " + tol, r.error) << " | | | | | | | | |\n";
+                return;
+            }
+            const gust::WindStats& found = r.search.stats;
+            const double ratio = found.divergence_before > 0.0 ? found.residual / found.divergence_before : 0.0;
+            out << (found.converged ? "yes" : "no (cap " + grouped(r.cap) + ")") << " | " << grouped(found.cycles)
+                << " | " << fmt_sci(ratio) << " | " << r.timed.size() << " | ";
+            if (r.timed.empty()) out << "- | - | ";
+            else out << fmt_s(r.wall_s()) << " | " << fmt_ms(r.pressure_ms()) << " | ";
+            if (ratios && both)
+                out << fmt_ratio(row.jacobi.wall_s() / row.multigrid.wall_s()) << " | "
+                    << fmt_ratio(row.jacobi.pressure_ms() / row.multigrid.pressure_ms()) << " | ";
+            else
+                out << "- | - | ";
+            out << fmt_s(r.search.wall_s) << " |\n";
+        };
+        side("multigrid", row.multigrid, false);
+        side("Jacobi", row.jacobi, true);
+    }
+    for (const StepRow& row : steps)
+        if (cell_count(row.cells) > kSolveMaxCells)
+            out << "| " << size_name(row.cells) << " | - | both | skipped (more than " << grouped(kSolveMaxCells)
+                << " cells) | | | | | | | | |\n";
+    out << "\n";
+}
+
+void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
+                  double bandwidth, int repeat) {
+    out << "### Bytes per step against the bandwidth floor\n\n";
+    out << "Copy bandwidth: " << fmt_gbs(bandwidth) << " GB/s, one `vkCmdCopyBuffer` of "
+        << grouped(kCopyBytes >> 20) << " MiB timed by GPU timestamps (`gpu::Profiler`), counted as "
+        << grouped(kCopyBytes >> 20) << " MiB read plus as much written, median of " << repeat
+        << " after one warm-up. Bytes per pass are counted from the kernels (shaders/solver/*.comp, "
+           "solver_kernels.h) for an interior face or cell at 4 bytes per float: *accessed* counts every "
+           "load and store a thread issues as if there were no cache (an advected face traces through two "
+           "velocity samples of 3 x 8 loads and samples its field with 8 more; a red-black sweep touches "
+           "half the cells, each reading six weights, six neighbours and its right-hand side); *unique* "
+           "counts every array element a dispatch touches once, as a perfect cache would, and is the least a "
+           "pass must move, so floor ms = unique bytes / copy bandwidth. Uniform parameters (bindings, level "
+           "table, emitters) and one-thread passes (the convergence check, the fragment count) are left out; "
+           "the tree's live pools count once; the two `vkCmdCopyBuffer` of a step count as read plus write. "
+           "The pressure pass is counted per V-cycle (at every level but the coarsest: "
+        << 2 * desc.smoothing << " half-sweeps down and " << 2 * desc.smoothing
+        << " up, residual, restriction, prolongation; the coarsest level's " << 2 * gust::detail::kCoarseSweeps
+        << " half-sweeps; the level-0 residual of the check) times the median V-cycles of the step-time "
+           "table. Measured ms are that table's medians.\n\n";
+    out << "| Grid | Pass | Dispatches | Accessed MB | Unique MB | Accessed / unique | Floor ms | Measured ms | "
+           "Measured / floor | Accessed at bandwidth ms |\n";
+    out << "|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    for (const StepRow& row : rows) {
+        if (!row.error.empty()) continue;
+        const Workload w = workload_of(row, desc);
+        Traffic total;
+        double measured_total = 0.0;
+        const auto line = [&](const std::string& pass, const Traffic& t, double measured) {
+            const double floor_ms = t.unique / bandwidth * 1000.0;
+            out << "| " << size_name(row.cells) << " | " << pass << " | " << grouped(t.dispatches) << " | "
+                << fmt_mb(t.accessed) << " | " << fmt_mb(t.unique) << " | " << fmt_ratio(t.accessed / t.unique)
+                << " | " << fmt_ms(floor_ms) << " | " << fmt_ms(measured) << " | "
+                << fmt_ratio(measured / floor_ms) << " | " << fmt_ms(t.accessed / bandwidth * 1000.0) << " |\n";
+        };
+        for (const auto& [pass, t] : step_traffic(w)) {
+            const double measured = row.pass(pass);
+            line("`" + pass + "`", t, measured);
+            total.accessed += t.accessed;
+            total.unique += t.unique;
+            total.dispatches += t.dispatches;
+            measured_total += measured;
+        }
+        line("**step**", total, measured_total);
+    }
+    out << "\n";
+}
+
+/// The Markdown body of the results block: heading, command, machine, the three sections and notes.
+std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow>& solves,
+                   const gust::SolverDesc& desc, double bandwidth, int repeat, double budget_s,
+                   const gust::gpu::DeviceInfo& device, const RunInfo& run) {
+    std::ostringstream out;
+    std::vector<std::string> notes;
+    out << "## Wind solver: step time, multigrid against Jacobi, bytes against bandwidth\n\n";
+    out << "Command: `" << run.command << "`\n\n";
+    out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver << "); CPU "
+        << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started << " and took "
+        << fmt_ms(ms_since(run.start) / 60000.0) << " min; 1-minute load average " << run.load_start
+        << " at the start and " << load_average()
+        << " at the end (a load above the core count means other processes shared the cores).\n\n";
+    render_steps(out, steps, desc, repeat, budget_s, notes);
+    render_solves(out, solves, steps, budget_s, notes);
+    render_bytes(out, steps, desc, bandwidth, repeat);
+    if (!notes.empty()) {
+        out << "Notes:\n\n";
+        for (std::size_t i = 0; i < notes.size(); ++i)
+            out << i + 1 << ". " << notes[i] << "\n";
+        out << "\n";
+    }
+    if (device.type == "cpu")
+        out << device.name << " is a CPU-emulated Vulkan device: its \"GPU\" time is the CPU's, so only the "
+               "ratios carry over to a GPU.\n";
+    return out.str();
+}
+
+} // namespace
+
+/// Runs the three measurements per grid, prints the block and writes it where --write says.
+int main(int argc, char** argv) {
+    Options options;
+    CLI::App app{"Wind solver step time per pass, multigrid against Jacobi to a tolerance, and bytes per step "
+                 "against the copy bandwidth"};
+    app.add_option("--sizes", options.sizes, "wind grids, each N (a cube) or XxYxZ")->expected(1, -1);
+    app.add_option("--repeat", options.repeat, "timed steps per measurement (median is reported)")
+        ->check(CLI::Range(1, 1000));
+    app.add_option("--budget", options.budget_s,
+                   "seconds of timed steps after which a measurement stops short of --repeat (at least one)")
+        ->check(CLI::Range(0.0, 1e6));
+    app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
+    app.add_option("--device", options.device, "Vulkan device index or name substring");
+    CLI11_PARSE(app, argc, argv);
+    const RunInfo run{command_line(argc, argv), utc_now(), load_average(), Clock::now()};
+
+    std::vector<glm::uvec3> sizes;
+    for (const std::string& text : options.sizes) {
+        auto cells = parse_size(text);
+        if (!cells) return fail(cells.message());
+        gust::SolverDesc desc;
+        desc.cells = *cells;
+        if (gust::Status s = gust::validate(desc); !s) return fail("--sizes " + text + ": " + s.message());
+        sizes.push_back(*cells);
+    }
+
+    gust::gpu::ContextDesc context;
+    context.device = options.device;
+    context.on_message = [](gust::gpu::Severity severity, const std::string& message) {
+        if (severity != gust::gpu::Severity::Info) std::cerr << kTool << ": vulkan: " << message << "\n";
+    };
+    auto ctx = gust::gpu::Context::create(context);
+    if (!ctx) return fail("cannot create a Vulkan context: " + ctx.message());
+    if ((*ctx)->info().timestamp_period_ns <= 0.0f)
+        return fail((*ctx)->info().name + " has no timestamps, and every table here is in GPU time");
+    std::cerr << "device: " << (*ctx)->info().name << "\n";
+
+    auto bandwidth = copy_bandwidth(**ctx, options.repeat);
+    if (!bandwidth) return fail("copy bandwidth: " + bandwidth.message());
+    std::cerr << "copy bandwidth: " << fmt_gbs(*bandwidth) << " GB/s" << std::endl;
+
+    gust::SolverDesc defaults;
+    defaults.cell_size = kCellSize;
+    std::vector<StepRow> steps;
+    std::vector<SolveRow> solves;
+    for (glm::uvec3 cells : sizes) {
+        std::cerr << size_name(cells) << ":" << std::endl;
+        gust::SolverDesc desc = defaults;
+        desc.cells = cells;
+        StepRow row;
+        row.cells = cells;
+        auto scene = Scene::create(**ctx, desc);
+        if (!scene) {
+            row.error = scene.message();
+            steps.push_back(std::move(row));
+            continue;
+        }
+        auto solver = make_solver(**ctx, desc, **scene);
+        if (!solver) {
+            row.error = solver.message();
+        } else {
+            row.levels = (*solver)->levels();
+            if (gust::Status s = bench_steps(**scene, **solver, options.repeat, options.budget_s, row); !s)
+                row.error = s.message();
+        }
+        if (row.error.empty())
+            std::cerr << "  step: " << fmt_ms(row.total()) << " ms GPU, " << fmt_ms(row.wall()) << " ms wall, "
+                      << row.cycles() << " V-cycles" << std::endl;
+        else
+            std::cerr << "  step failed: " << row.error << std::endl;
+        const bool stepped = row.error.empty();
+        steps.push_back(std::move(row));
+        if (!stepped) continue;
+        if (cell_count(cells) > kSolveMaxCells) continue;
+        for (float tolerance : kTolerances) {
+            SolveRow solve = bench_solve(**ctx, **scene, cells, tolerance, options.repeat, options.budget_s);
+            for (const auto& [name, side] : {std::pair("multigrid", &solve.multigrid), std::pair("Jacobi", &solve.jacobi)}) {
+                std::cerr << "  " << name << " to " << fmt_sci(tolerance) << ": ";
+                if (!side->error.empty())
+                    std::cerr << "failed: " << side->error << std::endl;
+                else
+                    std::cerr << grouped(side->search.stats.cycles)
+                              << (side->search.stats.converged ? " (converged), " : " (not converged), ")
+                              << fmt_s(side->search.wall_s) << " s at the generous cap"
+                              << (side->timed.empty() ? "" : ", " + fmt_s(side->wall_s()) + " s capped") << std::endl;
+            }
+            solves.push_back(std::move(solve));
+        }
+    }
+
+    const std::string body =
+        render(steps, solves, defaults, *bandwidth, options.repeat, options.budget_s, (*ctx)->info(), run);
+    std::cout << body << std::flush;
+    if (!options.write.empty()) {
+        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s) return fail(s.message());
+        std::cerr << "wrote the solver block of " << options.write << "\n";
+    }
+    for (const StepRow& row : steps)
+        if (!row.error.empty()) return fail(size_name(row.cells) + ": " + row.error);
+    for (const SolveRow& row : solves)
+        for (const SolveSide* r : {&row.multigrid, &row.jacobi})
+            if (!r->error.empty()) return fail(size_name(row.cells) + " solve: " + r->error);
+    return 0;
+}
