@@ -63,9 +63,6 @@ constexpr int kWarmupSteps = 2;
 /// take (five times SolverDesc's 20 V-cycles; 200,000 Jacobi iterations), so the tolerance stops them.
 constexpr std::uint32_t kMultigridCap = 100;
 constexpr std::uint32_t kJacobiCap = 200000;
-/// Largest grid of the multigrid against Jacobi table: Jacobi's iterations grow with the square of the
-/// grid's width, so at 128^3 one solve would take most of an hour on lavapipe.
-constexpr std::uint64_t kSolveMaxCells = 64ull * 64 * 64;
 /// Tolerances of the multigrid against Jacobi table; 1e-5 is SolverDesc's default.
 constexpr float kTolerances[] = {1e-4f, 1e-5f};
 /// Each copy of the bandwidth measurement, bytes (read once and written once).
@@ -76,6 +73,9 @@ struct Options {
     std::vector<std::string> sizes = {"32x16x32", "64", "128"};
     int repeat = 3;
     double budget_s = 30.0;
+    /// Largest grid of the multigrid against Jacobi table: Jacobi's iterations grow with the square of the
+    /// grid's width and each costs the cells, so a 128^3 solve would take hours on lavapipe.
+    std::uint64_t solve_max_cells = 64ull * 64 * 64;
     std::string write;
     std::string device;
 };
@@ -86,6 +86,14 @@ double median(std::vector<double> values) {
     std::sort(values.begin(), values.end());
     const std::size_t mid = values.size() / 2;
     return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+}
+
+/// Median of `field(item)` over `items`.
+template <class T, class F> double median_of(const std::vector<T>& items, F field) {
+    std::vector<double> values;
+    for (const T& item : items)
+        values.push_back(double(field(item)));
+    return median(values);
 }
 
 /// Parses "N" (a cube) or "XxYxZ".
@@ -103,6 +111,7 @@ std::string size_name(glm::uvec3 cells) {
     return std::to_string(cells.x) + "x" + std::to_string(cells.y) + "x" + std::to_string(cells.z);
 }
 
+/// Cells of a grid, the size the multigrid against Jacobi table is limited by.
 std::uint64_t cell_count(glm::uvec3 cells) {
     return std::uint64_t(cells.x) * cells.y * cells.z;
 }
@@ -128,6 +137,7 @@ double pass_ms(const PassMs& passes, const std::string& name) {
     return -1.0;
 }
 
+/// GPU milliseconds of all passes of a step.
 double summed(const PassMs& passes) {
     double total = 0.0;
     for (const auto& pass : passes)
@@ -182,9 +192,11 @@ class Scene {
   public:
     /// A b = 4 VoxelWorld over the wind grid of `desc` with the static boxes set; the moving box is placed
     /// by advance().
-    static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx, const gust::SolverDesc& desc) {
+    static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx,
+                                                       const gust::SolverDesc& desc) {
         std::unique_ptr<Scene> scene(new Scene(desc));
-        const std::uint32_t longest = std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
+        const std::uint32_t longest =
+            std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
         std::uint32_t res = 1;
         while (res < longest || res < gust::kMinRes)
             res *= 4;
@@ -248,10 +260,9 @@ class Scene {
     static std::string describe() {
         std::ostringstream out;
         const auto box = [&](const Placed& p) {
-            out << "x " << p.lo_xz.x << "-" << p.hi_xz.x << ", z " << p.lo_xz.y << "-" << p.hi_xz.y << " of the "
-                << "extent, ";
-            if (p.top_fraction) out << "up to " << p.hi_y << " of the height";
-            else out << "y " << p.lo_y << "-" << p.hi_y << " m";
+            out << "x " << p.lo_xz.x << "-" << p.hi_xz.x << ", z " << p.lo_xz.y << "-" << p.hi_xz.y
+                << " of the extent, y from " << p.lo_y << " m to " << p.hi_y
+                << (p.top_fraction ? " of the height" : " m");
         };
         out << "a ground slab (past every side) with its top at y = " << kStatic[0].hi_y
             << " m, inside the lowest cells; buildings at ";
@@ -262,8 +273,8 @@ class Scene {
         out << ", standing in the ground; a box at ";
         box(kMoving);
         out << ", sliding along +z at " << kBoxVelocity.z << " m/s; an omni emitter (" << kEmitterStrength
-            << " m/s, radius " << kEmitterRadius << " of the shortest side, falloff 1) at (" << kEmitterAt.x << ", "
-            << kEmitterAt.y << ", " << kEmitterAt.z << ") of the extent";
+            << " m/s, radius " << kEmitterRadius << " of the shortest side, falloff 1) at (" << kEmitterAt.x
+            << ", " << kEmitterAt.y << ", " << kEmitterAt.z << ") of the extent";
         return out.str();
     }
 
@@ -309,8 +320,8 @@ std::vector<float> ambient_field(glm::uvec3 cells) {
 }
 
 /// A solver of `desc` with the scene's ambient wind and emitter.
-gust::Result<std::unique_ptr<gust::WindSolver>> make_solver(gust::gpu::Context& ctx, const gust::SolverDesc& desc,
-                                                            const Scene& scene) {
+gust::Result<std::unique_ptr<gust::WindSolver>>
+make_solver(gust::gpu::Context& ctx, const gust::SolverDesc& desc, const Scene& scene) {
     auto solver = gust::WindSolver::create(ctx, desc);
     if (!solver) return solver;
     if (gust::Status s = (*solver)->set_ambient(kAmbient); !s) return s;
@@ -332,30 +343,18 @@ struct StepRow {
     std::vector<StepSample> steps;
     gust::WorldFrame world; ///< of the last timed step
     std::string error;
-    /// Median GPU ms of `pass` over the timed steps.
+    /// Medians over the timed steps: GPU ms of `name`, of all passes, wall ms, V-cycles.
     double pass(const std::string& name) const {
-        std::vector<double> v;
-        for (const StepSample& s : steps)
-            v.push_back(pass_ms(s.stats.ms, name));
-        return median(v);
+        return median_of(steps, [&](const StepSample& s) { return pass_ms(s.stats.ms, name); });
     }
     double total() const {
-        std::vector<double> v;
-        for (const StepSample& s : steps)
-            v.push_back(summed(s.stats.ms));
-        return median(v);
+        return median_of(steps, [](const StepSample& s) { return summed(s.stats.ms); });
     }
     double wall() const {
-        std::vector<double> v;
-        for (const StepSample& s : steps)
-            v.push_back(s.wall_ms);
-        return median(v);
+        return median_of(steps, [](const StepSample& s) { return s.wall_ms; });
     }
     double cycles() const {
-        std::vector<double> v;
-        for (const StepSample& s : steps)
-            v.push_back(double(s.stats.cycles));
-        return median(v);
+        return median_of(steps, [](const StepSample& s) { return s.stats.cycles; });
     }
 };
 
@@ -364,7 +363,8 @@ struct StepRow {
 gust::Status bench_steps(Scene& scene, gust::WindSolver& solver, int repeat, double budget_s, StepRow& row) {
     if (gust::Status s = solver.set_velocity(ambient_field(row.cells)); !s) return s;
     double spent_ms = 0.0;
-    for (int i = 0; i < kWarmupSteps + repeat && !(i > kWarmupSteps && spent_ms > budget_s * 1000.0); ++i) {
+    for (int i = 0; i < kWarmupSteps + repeat; ++i) {
+        if (!row.steps.empty() && spent_ms > budget_s * 1000.0) break;
         auto frame = scene.advance(std::uint64_t(i));
         if (!frame) return frame.status();
         const gust::SolidSource solid = scene.source();
@@ -390,22 +390,17 @@ struct Solve {
 
 /// One solver's side of the multigrid against Jacobi table.
 struct SolveSide {
-    std::uint32_t cap = 0; ///< cycles or iterations the search step may run
-    Solve search;          ///< the first step, at the generous cap
+    std::uint32_t cap = 0;    ///< cycles or iterations the search step may run
+    Solve search;             ///< the first step, at the generous cap
     std::vector<Solve> timed; ///< at a cap of what the search needed; none when it did not converge
     std::string error;
     bool converged() const { return error.empty() && search.stats.converged; }
+    /// Medians over the timed steps: wall seconds, GPU ms of the pressure pass.
     double wall_s() const {
-        std::vector<double> v;
-        for (const Solve& s : timed)
-            v.push_back(s.wall_s);
-        return median(v);
+        return median_of(timed, [](const Solve& s) { return s.wall_s; });
     }
     double pressure_ms() const {
-        std::vector<double> v;
-        for (const Solve& s : timed)
-            v.push_back(pass_ms(s.stats.ms, "pressure"));
-        return median(v);
+        return median_of(timed, [](const Solve& s) { return pass_ms(s.stats.ms, "pressure"); });
     }
 };
 
@@ -440,8 +435,8 @@ gust::SolverDesc capped(gust::SolverDesc desc, std::uint32_t cap) {
 /// time. Each first runs once at a generous cap to find how many cycles or iterations the tolerance
 /// takes; then, side by side in rounds, a solver capped at that count is timed up to `repeat` times,
 /// fewer once its timed steps pass `budget_s`.
-SolveRow bench_solve(gust::gpu::Context& ctx, const Scene& scene, glm::uvec3 cells, float tolerance, int repeat,
-                     double budget_s) {
+SolveRow bench_solve(gust::gpu::Context& ctx, const Scene& scene, glm::uvec3 cells, float tolerance,
+                     int repeat, double budget_s) {
     SolveRow row;
     row.cells = cells;
     row.tolerance = tolerance;
@@ -455,36 +450,42 @@ SolveRow bench_solve(gust::gpu::Context& ctx, const Scene& scene, glm::uvec3 cel
     row.jacobi.cap = kJacobiCap;
     const gust::SolidSource solid = scene.source();
     const std::vector<float> start = ambient_field(cells);
-    const std::pair<gust::SolverDesc, SolveSide*> sides[] = {{desc, &row.multigrid}, {jacobi_desc, &row.jacobi}};
-    std::unique_ptr<gust::WindSolver> timed[2];
-    for (std::size_t i = 0; i < 2; ++i) {
-        const auto& [side_desc, side] = sides[i];
-        auto search = make_solver(ctx, capped(side_desc, side->cap), scene);
+    struct Contender {
+        gust::SolverDesc desc;
+        SolveSide* side;
+        std::unique_ptr<gust::WindSolver> timed; ///< capped at the search step's count
+    };
+    Contender contenders[] = {{desc, &row.multigrid, nullptr}, {jacobi_desc, &row.jacobi, nullptr}};
+    for (Contender& c : contenders) {
+        auto search = make_solver(ctx, capped(c.desc, c.side->cap), scene);
         if (!search) {
-            side->error = search.message();
+            c.side->error = search.message();
             continue;
         }
         auto solve = solve_once(**search, solid, start);
         if (!solve) {
-            side->error = solve.message();
+            c.side->error = solve.message();
             continue;
         }
-        side->search = std::move(*solve);
-        if (!side->search.stats.converged) continue;
-        auto solver = make_solver(ctx, capped(side_desc, std::max(side->search.stats.cycles, 1u)), scene);
-        if (solver) timed[i] = std::move(*solver);
-        else side->error = solver.message();
+        c.side->search = std::move(*solve);
+        if (!c.side->search.stats.converged) continue;
+        auto solver = make_solver(ctx, capped(c.desc, std::max(c.side->search.stats.cycles, 1u)), scene);
+        if (solver)
+            c.timed = std::move(*solver);
+        else
+            c.side->error = solver.message();
     }
     for (int round = 0; round < repeat; ++round)
-        for (std::size_t i = 0; i < 2; ++i) {
-            SolveSide& side = *sides[i].second;
-            double spent = 0.0;
-            for (const Solve& s : side.timed)
-                spent += s.wall_s;
-            if (!timed[i] || !side.error.empty() || (round > 0 && spent > budget_s)) continue;
-            auto solve = solve_once(*timed[i], solid, start);
-            if (solve) side.timed.push_back(std::move(*solve));
-            else side.error = solve.message();
+        for (Contender& c : contenders) {
+            double spent_s = 0.0;
+            for (const Solve& s : c.side->timed)
+                spent_s += s.wall_s;
+            if (!c.timed || !c.side->error.empty() || (round > 0 && spent_s > budget_s)) continue;
+            auto solve = solve_once(*c.timed, solid, start);
+            if (solve)
+                c.side->timed.push_back(std::move(*solve));
+            else
+                c.side->error = solve.message();
         }
     return row;
 }
@@ -537,10 +538,10 @@ struct Traffic {
     double accessed = 0.0;
     double unique = 0.0;
     std::uint64_t dispatches = 0;
-    /// Adds `n` dispatches of `accessed` and `unique` bytes each.
+    /// Adds `n` dispatches moving `accessed_bytes` and `unique_bytes` in all.
     void add(double accessed_bytes, double unique_bytes, std::uint64_t n = 1) {
-        accessed += double(n) * accessed_bytes;
-        unique += double(n) * unique_bytes;
+        accessed += accessed_bytes;
+        unique += unique_bytes;
         dispatches += n;
     }
 };
@@ -548,12 +549,12 @@ struct Traffic {
 /// What the byte counts depend on: the grid hierarchy and what one step found.
 struct Workload {
     std::vector<gust::shaderio::GridLevel> levels;
-    std::uint32_t smoothing = 0;   ///< SolverDesc::smoothing
-    std::uint32_t cell_words = 0;  ///< words of a cell's voxel set
-    double cycles = 0.0;           ///< V-cycles per step (median)
-    double cut_cells = 0.0;        ///< cells holding solid voxels
-    double fragments = 0.0;        ///< moving fragments
-    double tree_bytes = 0.0;       ///< live bytes of the tree's pools
+    std::uint32_t smoothing = 0;  ///< SolverDesc::smoothing
+    std::uint32_t cell_words = 0; ///< words of a cell's voxel set
+    double cycles = 0.0;          ///< V-cycles per step (median)
+    double cut_cells = 0.0;       ///< cells holding solid voxels
+    double fragments = 0.0;       ///< moving fragments
+    double tree_bytes = 0.0;      ///< live bytes of the tree's pools
     double faces(std::size_t l) const { return double(gust::shaderio::faces_total(levels[l].dims)); }
     double cells(std::size_t l) const {
         const glm::ivec3 d = levels[l].dims;
@@ -578,7 +579,8 @@ Traffic solid_traffic(const Workload& w) {
         for (std::uint32_t axis = 0; axis < 3; ++axis) {
             glm::ivec3 span = w.levels[l - 1].factor;
             span[int(axis)] = 1;
-            bytes += 4.0 * gust::shaderio::face_count(w.levels[l].dims, axis) * (span.x * span.y * span.z + 1);
+            bytes +=
+                4.0 * gust::shaderio::face_count(w.levels[l].dims, axis) * (span.x * span.y * span.z + 1);
         }
         t.add(bytes, bytes);
     }
@@ -591,10 +593,10 @@ Traffic advect_traffic(const Workload& w) {
     const double F = w.faces(0);
     // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
     const double trace = 2 * 3 * 8 * 4;
-    t.add(F * (trace + 8 * 4 + 4), 8 * F);             // velocity -> tmp
-    t.add(F * (trace + 8 * 4 + 4), 12 * F);            // tmp -> back, tracing with the velocity
-    t.add(F * (3 * 4 + trace + 8 * 4 + 4), 16 * F);    // tmp, velocity, back -> tmp, clamped to 8 values
-    t.add(8 * F, 8 * F);                               // vkCmdCopyBuffer tmp -> velocity
+    t.add(F * (trace + 8 * 4 + 4), 8 * F);          // velocity -> tmp
+    t.add(F * (trace + 8 * 4 + 4), 12 * F);         // tmp -> back, tracing with the velocity
+    t.add(F * (3 * 4 + trace + 8 * 4 + 4), 16 * F); // tmp, velocity, back -> tmp, clamped to 8 values
+    t.add(8 * F, 8 * F);                            // vkCmdCopyBuffer tmp -> velocity
     return t;
 }
 
@@ -602,18 +604,21 @@ Traffic advect_traffic(const Workload& w) {
 Traffic forces_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    t.add(8 * F, 8 * F);                      // forces: in place
-    t.add(C * (3 * 2 * 6 * 4 + 16), 4 * F + 16 * C); // vorticity: six cell velocities (6 faces each), vec4 out
+    t.add(8 * F, 8 * F); // forces: in place
+    t.add(C * (3 * 2 * 6 * 4 + 16),
+          4 * F + 16 * C); // vorticity: six cell velocities (6 faces each), vec4 out
     // confine: the face, two cell velocities, two forces of seven vec4 vorticities each, the store.
     t.add(F * (4 + 2 * 6 * 4 + 2 * 7 * 16 + 4), 8 * F + 16 * C);
     t.add(8 * F, 8 * F); // vkCmdCopyBuffer tmp -> velocity
     return t;
 }
 
-/// One colour of red-black relaxation at level l: half the cells read six weights and six neighbours,
-/// the right-hand side, and store.
-void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint64_t n) {
-    t.add(w.cells(l) / 2 * (12 * 4 + 4 + 4), 4 * w.faces(l) + 8 * w.cells(l), n);
+/// `half_sweeps` red-black half-sweeps at level l in `dispatches` dispatches: each touches half the cells,
+/// which read six weights, six neighbours (of the other colour) and their right-hand side, and store.
+void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint32_t half_sweeps,
+               std::uint64_t dispatches) {
+    const double n = half_sweeps;
+    t.add(n * w.cells(l) / 2 * (12 * 4 + 4 + 4), n * (4 * w.faces(l) + 6 * w.cells(l)), dispatches);
 }
 
 /// Residual at level l: the operator, the right-hand side and the cell's φ, one store.
@@ -631,16 +636,18 @@ Traffic pressure_traffic(const Workload& w) {
     const std::size_t last = w.levels.size() - 1;
     Traffic cycle;
     for (std::size_t l = 0; l < last; ++l) {
-        add_relax(cycle, w, l, 2 * 2 * w.smoothing);
+        add_relax(cycle, w, l, 2 * 2 * w.smoothing, 2 * 2 * w.smoothing);
         add_residual(cycle, w, l);
-        cycle.add(w.cells(l + 1) * (8 * 4 + 8), 4 * w.cells(l) + 8 * w.cells(l + 1)); // restrict
-        cycle.add(w.cells(l) * (4 + 8 * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1)); // prolong
+        const glm::ivec3 k = w.levels[l].factor;
+        const double children = k.x * k.y * k.z;
+        const double parents = std::uint32_t(1) << ((k.x == 2) + (k.y == 2) + (k.z == 2));
+        cycle.add(w.cells(l + 1) * (children * 4 + 8), 4 * w.cells(l) + 8 * w.cells(l + 1)); // restrict
+        cycle.add(w.cells(l) * (4 + parents * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1));  // prolong
     }
-    add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps);
+    add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps, 1);
     add_residual(cycle, w, 0);
-    t.accessed += w.cycles * cycle.accessed;
-    t.unique += w.cycles * cycle.unique;
-    t.dispatches += std::uint64_t(w.cycles * double(cycle.dispatches) + 0.5);
+    t.add(w.cycles * cycle.accessed, w.cycles * cycle.unique,
+          std::uint64_t(w.cycles * double(cycle.dispatches) + 0.5));
     return t;
 }
 
@@ -669,13 +676,8 @@ Workload workload_of(const StepRow& row, const gust::SolverDesc& desc) {
     w.smoothing = desc.smoothing;
     w.cell_words = gust::detail::cell_words(desc.voxels_per_cell);
     w.cycles = row.cycles();
-    std::vector<double> cut, fragments;
-    for (const StepSample& s : row.steps) {
-        cut.push_back(double(s.stats.cut_cells));
-        fragments.push_back(double(s.stats.moving_fragments));
-    }
-    w.cut_cells = median(cut);
-    w.fragments = median(fragments);
+    w.cut_cells = median_of(row.steps, [](const StepSample& s) { return s.stats.cut_cells; });
+    w.fragments = median_of(row.steps, [](const StepSample& s) { return s.stats.moving_fragments; });
     w.tree_bytes = double(row.world.tree.pool_bytes);
     return w;
 }
@@ -698,20 +700,24 @@ std::string fmt_mb(double bytes) {
 constexpr const char* kPasses[] = {"solid", "advect", "forces", "pressure", "project"};
 
 void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
-                  int repeat, double budget_s, std::vector<std::string>& notes) {
+                  const Options& options, std::vector<std::string>& notes) {
     out << "### Step time per pass\n\n";
-    out << "Every grid has " << kCellSize << " m cells, so a larger grid covers more ground, and holds the same "
+    out << "Every grid has " << kCellSize
+        << " m cells, so a larger grid covers more ground, and holds the same "
         << "scene: " << Scene::describe() << ". One `VoxelWorld` over the wind grid (b = 4, compute path, "
         << desc.voxels_per_cell
-        << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind (" << kAmbient.x
-        << ", " << kAmbient.y << ", " << kAmbient.z
+        << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind ("
+        << kAmbient.x << ", " << kAmbient.y << ", " << kAmbient.z
         << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: MacCormack advection, multigrid with "
-        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps, tolerance " << fmt_sci(desc.tolerance)
-        << ", at most " << desc.max_cycles << " V-cycles, vorticity confinement " << desc.vorticity
-        << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; " << kWarmupSteps
-        << " untimed steps, then up to " << repeat << " timed ones, fewer once they pass " << budget_s
+        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps, tolerance "
+        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles << " V-cycles, vorticity confinement "
+        << desc.vorticity
+        << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; "
+        << kWarmupSteps << " untimed steps, then up to " << options.repeat
+        << " timed ones, fewer once they pass " << options.budget_s
         << " s; every column is the median over the timed steps. Pass columns are `WindStats::ms` (GPU "
-           "timestamps); total GPU ms sums them; wall ms is around `WindSolver::step()` (recording, submission "
+           "timestamps); total GPU ms sums them; wall ms is around `WindSolver::step()` (recording, "
+           "submission "
            "and the wait).\n\n";
     out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Steps |";
     for (const char* pass : kPasses)
@@ -733,8 +739,8 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
         std::size_t converged = 0;
         for (const StepSample& s : row.steps)
             converged += s.stats.converged ? 1 : 0;
-        out << row.levels << " | " << grouped(last.cut_cells) << " | " << grouped(last.moving_fragments) << " | "
-            << row.steps.size() << " |";
+        out << row.levels << " | " << grouped(last.cut_cells) << " | " << grouped(last.moving_fragments)
+            << " | " << row.steps.size() << " |";
         for (const char* pass : kPasses)
             out << " " << fmt_ms(row.pass(pass)) << " |";
         out << " " << fmt_ms(row.total()) << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
@@ -743,8 +749,9 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
     out << "\n";
 }
 
-void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows, const std::vector<StepRow>& steps,
-                   double budget_s, std::vector<std::string>& notes) {
+void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
+                   const std::vector<StepRow>& steps, const Options& options,
+                   std::vector<std::string>& notes) {
     out << "### Multigrid against Jacobi to a tolerance\n\n";
     out << "The same scene with the moving box stopped where the step-time runs left it, the same settings, "
            "and one step from the uniform ambient wind each time, so the divergence is smooth (the emitter, "
@@ -758,34 +765,44 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows, c
         << "): that step's wall time is the last column, and the cycles or iterations it took are the count. "
            "Then a solver capped at that count is timed, multigrid and Jacobi side by side in rounds, up to "
            "the stated runs, fewer once a solver's timed steps pass "
-        << budget_s
+        << options.budget_s
         << " s; a solver that did not converge at the generous cap is not timed. Wall s is around "
            "`WindSolver::step()` (the whole step), pressure ms the `pressure` pass's GPU time; medians over "
            "the timed runs. Grids above "
-        << grouped(kSolveMaxCells)
+        << grouped(options.solve_max_cells)
         << " cells are left out: Jacobi's iterations grow with the square of the grid's width, so at 128^3 "
-           "one solve would take most of an hour on lavapipe.\n\n";
-    out << "| Grid | Tolerance | Solver | Converged | Cycles / iterations | Residual / divergence | Runs | Wall s "
-           "| Pressure GPU ms | Jacobi / multigrid (wall) | Jacobi / multigrid (pressure GPU) | Wall s at the "
+           "one solve would take about 32 times as long as at 64^3, hours on lavapipe.\n\n";
+    out << "| Grid | Tolerance | Solver | Converged | Cycles / iterations | Residual / divergence | Runs | "
+           "Wall s "
+           "| Pressure GPU ms | Jacobi / multigrid (wall) | Jacobi / multigrid (pressure GPU) | Wall s at "
+           "the "
            "generous cap |\n";
     out << "|--:|--:|---|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     for (const SolveRow& row : rows) {
         const std::string grid = size_name(row.cells);
         const std::string tol = fmt_sci(row.tolerance);
-        const bool both = row.multigrid.converged() && row.jacobi.converged() && !row.multigrid.timed.empty() &&
-                          !row.jacobi.timed.empty();
+        const bool both = row.multigrid.converged() && row.jacobi.converged() &&
+                          !row.multigrid.timed.empty() && !row.jacobi.timed.empty();
         const auto side = [&](const char* name, const SolveSide& r, bool ratios) {
             out << "| " << grid << " | " << tol << " | " << name << " | ";
             if (!r.error.empty()) {
-                out << failed_cell(notes, grid + " " + name + " at " + tol, r.error) << " | | | | | | | | |\n";
+                out << failed_cell(notes, grid + " " + name + " at " + tol, r.error)
+                    << " | | | | | | | | |\n";
                 return;
             }
             const gust::WindStats& found = r.search.stats;
-            const double ratio = found.divergence_before > 0.0 ? found.residual / found.divergence_before : 0.0;
-            out << (found.converged ? "yes" : "no (cap " + grouped(r.cap) + ")") << " | " << grouped(found.cycles)
-                << " | " << fmt_sci(ratio) << " | " << r.timed.size() << " | ";
-            if (r.timed.empty()) out << "- | - | ";
-            else out << fmt_s(r.wall_s()) << " | " << fmt_ms(r.pressure_ms()) << " | ";
+            const double ratio =
+                found.divergence_before > 0.0 ? found.residual / found.divergence_before : 0.0;
+            out << (found.converged ? "yes" : "no (cap " + grouped(r.cap) + ")") << " | "
+                << grouped(found.cycles) << " | " << fmt_sci(ratio) << " | " << r.timed.size();
+            const auto missed = std::count_if(r.timed.begin(), r.timed.end(),
+                                              [](const Solve& t) { return !t.stats.converged; });
+            if (missed > 0) out << " (" << missed << " not converged)";
+            out << " | ";
+            if (r.timed.empty())
+                out << "- | - | ";
+            else
+                out << fmt_s(r.wall_s()) << " | " << fmt_ms(r.pressure_ms()) << " | ";
             if (ratios && both)
                 out << fmt_ratio(row.jacobi.wall_s() / row.multigrid.wall_s()) << " | "
                     << fmt_ratio(row.jacobi.pressure_ms() / row.multigrid.pressure_ms()) << " | ";
@@ -797,18 +814,18 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows, c
         side("Jacobi", row.jacobi, true);
     }
     for (const StepRow& row : steps)
-        if (cell_count(row.cells) > kSolveMaxCells)
-            out << "| " << size_name(row.cells) << " | - | both | skipped (more than " << grouped(kSolveMaxCells)
-                << " cells) | | | | | | | | |\n";
+        if (cell_count(row.cells) > options.solve_max_cells)
+            out << "| " << size_name(row.cells) << " | - | both | skipped (more than "
+                << grouped(options.solve_max_cells) << " cells) | | | | | | | | |\n";
     out << "\n";
 }
 
 void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
-                  double bandwidth, int repeat) {
+                  double bandwidth, const Options& options) {
     out << "### Bytes per step against the bandwidth floor\n\n";
     out << "Copy bandwidth: " << fmt_gbs(bandwidth) << " GB/s, one `vkCmdCopyBuffer` of "
         << grouped(kCopyBytes >> 20) << " MiB timed by GPU timestamps (`gpu::Profiler`), counted as "
-        << grouped(kCopyBytes >> 20) << " MiB read plus as much written, median of " << repeat
+        << grouped(kCopyBytes >> 20) << " MiB read plus as much written, median of " << options.repeat
         << " after one warm-up. Bytes per pass are counted from the kernels (shaders/solver/*.comp, "
            "solver_kernels.h) for an interior face or cell at 4 bytes per float: *accessed* counts every "
            "load and store a thread issues as if there were no cache (an advected face traces through two "
@@ -820,10 +837,14 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "the tree's live pools count once; the two `vkCmdCopyBuffer` of a step count as read plus write. "
            "The pressure pass is counted per V-cycle (at every level but the coarsest: "
         << 2 * desc.smoothing << " half-sweeps down and " << 2 * desc.smoothing
-        << " up, residual, restriction, prolongation; the coarsest level's " << 2 * gust::detail::kCoarseSweeps
+        << " up, residual, restriction, prolongation; the coarsest level's "
+        << 2 * gust::detail::kCoarseSweeps
         << " half-sweeps; the level-0 residual of the check) times the median V-cycles of the step-time "
-           "table. Measured ms are that table's medians.\n\n";
-    out << "| Grid | Pass | Dispatches | Accessed MB | Unique MB | Accessed / unique | Floor ms | Measured ms | "
+           "table. Measured ms are that table's pass medians; the step row sums them (the step-time table's "
+           "total is the median of the sums). Accessed at bandwidth ms is what the accessed bytes would take "
+           "at the copy bandwidth, for a kernel whose loads all miss the cache.\n\n";
+    out << "| Grid | Pass | Dispatches | Accessed MB | Unique MB | Accessed / unique | Floor ms | Measured "
+           "ms | "
            "Measured / floor | Accessed at bandwidth ms |\n";
     out << "|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     for (const StepRow& row : rows) {
@@ -834,9 +855,10 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
         const auto line = [&](const std::string& pass, const Traffic& t, double measured) {
             const double floor_ms = t.unique / bandwidth * 1000.0;
             out << "| " << size_name(row.cells) << " | " << pass << " | " << grouped(t.dispatches) << " | "
-                << fmt_mb(t.accessed) << " | " << fmt_mb(t.unique) << " | " << fmt_ratio(t.accessed / t.unique)
-                << " | " << fmt_ms(floor_ms) << " | " << fmt_ms(measured) << " | "
-                << fmt_ratio(measured / floor_ms) << " | " << fmt_ms(t.accessed / bandwidth * 1000.0) << " |\n";
+                << fmt_mb(t.accessed) << " | " << fmt_mb(t.unique) << " | "
+                << fmt_ratio(t.accessed / t.unique) << " | " << fmt_ms(floor_ms) << " | " << fmt_ms(measured)
+                << " | " << fmt_ratio(measured / floor_ms) << " | " << fmt_ms(t.accessed / bandwidth * 1000.0)
+                << " |\n";
         };
         for (const auto& [pass, t] : step_traffic(w)) {
             const double measured = row.pass(pass);
@@ -853,20 +875,20 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
 
 /// The Markdown body of the results block: heading, command, machine, the three sections and notes.
 std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow>& solves,
-                   const gust::SolverDesc& desc, double bandwidth, int repeat, double budget_s,
+                   const gust::SolverDesc& desc, double bandwidth, const Options& options,
                    const gust::gpu::DeviceInfo& device, const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
     out << "## Wind solver: step time, multigrid against Jacobi, bytes against bandwidth\n\n";
     out << "Command: `" << run.command << "`\n\n";
-    out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver << "); CPU "
-        << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started << " and took "
-        << fmt_ms(ms_since(run.start) / 60000.0) << " min; 1-minute load average " << run.load_start
-        << " at the start and " << load_average()
+    out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
+        << "); CPU " << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started
+        << " and took " << fmt_ms(ms_since(run.start) / 60000.0) << " min; 1-minute load average "
+        << run.load_start << " at the start and " << load_average()
         << " at the end (a load above the core count means other processes shared the cores).\n\n";
-    render_steps(out, steps, desc, repeat, budget_s, notes);
-    render_solves(out, solves, steps, budget_s, notes);
-    render_bytes(out, steps, desc, bandwidth, repeat);
+    render_steps(out, steps, desc, options, notes);
+    render_solves(out, solves, steps, options, notes);
+    render_bytes(out, steps, desc, bandwidth, options);
     if (!notes.empty()) {
         out << "Notes:\n\n";
         for (std::size_t i = 0; i < notes.size(); ++i)
@@ -874,7 +896,8 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
         out << "\n";
     }
     if (device.type == "cpu")
-        out << device.name << " is a CPU-emulated Vulkan device: its \"GPU\" time is the CPU's, so only the "
+        out << device.name
+            << " is a CPU-emulated Vulkan device: its \"GPU\" time is the CPU's, so only the "
                "ratios carry over to a GPU.\n";
     return out.str();
 }
@@ -884,14 +907,18 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
 /// Runs the three measurements per grid, prints the block and writes it where --write says.
 int main(int argc, char** argv) {
     Options options;
-    CLI::App app{"Wind solver step time per pass, multigrid against Jacobi to a tolerance, and bytes per step "
-                 "against the copy bandwidth"};
+    CLI::App app{
+        "Wind solver step time per pass, multigrid against Jacobi to a tolerance, and bytes per step "
+        "against the copy bandwidth"};
     app.add_option("--sizes", options.sizes, "wind grids, each N (a cube) or XxYxZ")->expected(1, -1);
     app.add_option("--repeat", options.repeat, "timed steps per measurement (median is reported)")
         ->check(CLI::Range(1, 1000));
     app.add_option("--budget", options.budget_s,
                    "seconds of timed steps after which a measurement stops short of --repeat (at least one)")
         ->check(CLI::Range(0.0, 1e6));
+    app.add_option("--solve-max-cells", options.solve_max_cells,
+                   "largest grid, in cells, of the multigrid against Jacobi table")
+        ->check(CLI::Range(std::uint64_t(1), std::uint64_t(256) * 256 * 256));
     app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
     app.add_option("--device", options.device, "Vulkan device index or name substring");
     CLI11_PARSE(app, argc, argv);
@@ -947,17 +974,18 @@ int main(int argc, char** argv) {
                 row.error = s.message();
         }
         if (row.error.empty())
-            std::cerr << "  step: " << fmt_ms(row.total()) << " ms GPU, " << fmt_ms(row.wall()) << " ms wall, "
-                      << row.cycles() << " V-cycles" << std::endl;
+            std::cerr << "  step: " << fmt_ms(row.total()) << " ms GPU, " << fmt_ms(row.wall())
+                      << " ms wall, " << row.cycles() << " V-cycles" << std::endl;
         else
             std::cerr << "  step failed: " << row.error << std::endl;
         const bool stepped = row.error.empty();
         steps.push_back(std::move(row));
         if (!stepped) continue;
-        if (cell_count(cells) > kSolveMaxCells) continue;
+        if (cell_count(cells) > options.solve_max_cells) continue;
         for (float tolerance : kTolerances) {
             SolveRow solve = bench_solve(**ctx, **scene, cells, tolerance, options.repeat, options.budget_s);
-            for (const auto& [name, side] : {std::pair("multigrid", &solve.multigrid), std::pair("Jacobi", &solve.jacobi)}) {
+            for (const auto& [name, side] :
+                 {std::pair("multigrid", &solve.multigrid), std::pair("Jacobi", &solve.jacobi)}) {
                 std::cerr << "  " << name << " to " << fmt_sci(tolerance) << ": ";
                 if (!side->error.empty())
                     std::cerr << "failed: " << side->error << std::endl;
@@ -965,17 +993,18 @@ int main(int argc, char** argv) {
                     std::cerr << grouped(side->search.stats.cycles)
                               << (side->search.stats.converged ? " (converged), " : " (not converged), ")
                               << fmt_s(side->search.wall_s) << " s at the generous cap"
-                              << (side->timed.empty() ? "" : ", " + fmt_s(side->wall_s()) + " s capped") << std::endl;
+                              << (side->timed.empty() ? "" : ", " + fmt_s(side->wall_s()) + " s capped")
+                              << std::endl;
             }
             solves.push_back(std::move(solve));
         }
     }
 
-    const std::string body =
-        render(steps, solves, defaults, *bandwidth, options.repeat, options.budget_s, (*ctx)->info(), run);
+    const std::string body = render(steps, solves, defaults, *bandwidth, options, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
-        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s) return fail(s.message());
+        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s)
+            return fail(s.message());
         std::cerr << "wrote the solver block of " << options.write << "\n";
     }
     for (const StepRow& row : steps)
