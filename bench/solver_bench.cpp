@@ -195,15 +195,10 @@ class Scene {
     static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx,
                                                        const gust::SolverDesc& desc) {
         std::unique_ptr<Scene> scene(new Scene(desc));
-        const std::uint32_t longest =
-            std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
-        std::uint32_t res = 1;
-        while (res < longest || res < gust::kMinRes)
-            res *= 4;
+        auto grid = gust::voxel_grid(desc, 4);
+        if (!grid) return grid.status();
         gust::WorldDesc world;
-        world.grid.origin = desc.origin;
-        world.grid.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
-        world.grid.res = res;
+        world.grid = *grid;
         world.tree.branching = 4;
         world.method = gust::VoxelizeMethod::Compute;
         auto created = gust::VoxelWorld::create(ctx, world);
@@ -232,16 +227,7 @@ class Scene {
 
     /// The solid boundary as the solver takes it: the tree and the moving box's fragments. Taken after
     /// advance(), since a step may reallocate the fragment list.
-    gust::SolidSource source() const {
-        const gust::Voxelizer& moving = world_->dynamic_voxelizer();
-        gust::SolidSource s;
-        s.tree = &world_->tree();
-        s.fragments = moving.fragment_buffer().address();
-        s.fragment_count = moving.fragment_count_address();
-        s.fragment_velocities = moving.velocity_buffer().address();
-        s.fragment_capacity = moving.fragment_capacity();
-        return s;
-    }
+    gust::SolidSource source() const { return gust::solid_source(*world_); }
 
     /// The omni emitter, pushing air outwards among the buildings.
     gust::Emitter emitter() const {

@@ -30,25 +30,6 @@ std::string frame_file(std::uint64_t frame) {
     return name;
 }
 
-SolverDesc solver_desc(const SceneDesc& scene) {
-    SolverDesc desc;
-    desc.cells = scene.domain.cells;
-    desc.cell_size = scene.domain.cell_size;
-    desc.origin = scene.domain.center - glm::vec3(scene.domain.cells) * scene.domain.cell_size * 0.5f;
-    desc.voxels_per_cell = scene.domain.voxels_per_cell;
-    const SolverSettings& s = scene.solver;
-    desc.advection = s.advection == "none"              ? Advection::None
-                     : s.advection == "semi_lagrangian" ? Advection::SemiLagrangian
-                                                        : Advection::MacCormack;
-    desc.pressure = s.pressure == "jacobi" ? PressureSolver::Jacobi : PressureSolver::Multigrid;
-    desc.tolerance = s.tolerance;
-    desc.max_cycles = s.max_cycles;
-    desc.max_iterations = s.max_iterations;
-    desc.vorticity = s.vorticity;
-    desc.viscosity = s.viscosity;
-    return desc;
-}
-
 /// The scene's emitters at time t (motors moved along their paths).
 std::vector<Emitter> emitters_at(const SceneDesc& scene, double t) {
     std::vector<Emitter> out;
@@ -162,15 +143,7 @@ int run_simulate(const SimulateArgs& args) {
         if (!step) return fail("frame " + std::to_string(frame) + ": " + step.message());
         const std::vector<Emitter> emitters = emitters_at(*scene, t);
         if (Status s = (*wind)->set_emitters(emitters); !s) return fail(args.scene + ": " + s.message());
-        SolidSource solid;
-        solid.tree = &(*world)->tree();
-        const Voxelizer& moving = (*world)->dynamic_voxelizer();
-        if (!dynamic.empty() && moving.velocity_buffer()) {
-            solid.fragments = moving.fragment_buffer().address();
-            solid.fragment_count = moving.fragment_count_address();
-            solid.fragment_velocities = moving.velocity_buffer().address();
-            solid.fragment_capacity = moving.fragment_capacity();
-        }
+        const SolidSource solid = solid_source(**world);
         auto air = (*wind)->step(float(dt), &solid);
         if (!air) return fail("frame " + std::to_string(frame) + ": wind: " + air.message());
 

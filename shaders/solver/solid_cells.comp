@@ -48,7 +48,8 @@ void main() {
     bool any_node = false;
     for (int k = 0; k < 8 && !any_node; ++k) {
         ivec3 corner = lo + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1) * int(v - 1u);
-        any_node = in_tree(corner) && node_at(corner, coarse) != kNone && NodesRef(sb().b.tree_nodes).v[node_at(corner, coarse)].x != 0u;
+        uint node = in_tree(corner) ? node_at(corner, coarse) : kNone;
+        any_node = node != kNone && NodesRef(sb().b.tree_nodes).v[node].x != 0u;
     }
     if (!any_node) return;
 

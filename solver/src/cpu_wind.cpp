@@ -335,12 +335,12 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         stats.cycles = std::min(checks, desc.max_cycles);
     } else {
         std::vector<float>& other = k.cell[shaderio::kCellPressureTmp];
+        std::vector<float> next(m.cells());
         const std::uint32_t blocks = (desc.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
         for (std::uint32_t block = 0; block < blocks && !done; ++block) {
             for (std::uint32_t it = 0; it < detail::kJacobiBlock; ++it) {
                 const std::uint32_t from = (it & 1) ? shaderio::kCellPressureTmp : shaderio::kCellPressure;
                 std::vector<float>& to = (it & 1) ? phi : other;
-                std::vector<float> next(m.cells());
                 m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
                 std::copy(next.begin(), next.end(), to.begin());
             }

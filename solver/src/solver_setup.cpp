@@ -81,6 +81,39 @@ namespace {
 bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 } // namespace
 
+Result<GridDesc> voxel_grid(const SolverDesc& desc, std::uint32_t branching) {
+    if (branching != 2 && branching != 4 && branching != 8)
+        return Result<GridDesc>::failure("branching must be 2, 4 or 8, got " + std::to_string(branching));
+    const std::uint32_t longest = std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
+    std::uint32_t res = 1;
+    while (res < longest || res < kMinRes) {
+        res *= branching;
+        if (res > kMaxRes)
+            return Result<GridDesc>::failure("the domain needs " + std::to_string(longest) +
+                                             " voxels along its longest axis; with branching " +
+                                             std::to_string(branching) + " the tree would exceed " +
+                                             std::to_string(kMaxRes) + " per axis");
+    }
+    GridDesc grid;
+    grid.res = res;
+    grid.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
+    grid.origin = desc.origin;
+    return grid;
+}
+
+SolidSource solid_source(const VoxelWorld& world) {
+    SolidSource s;
+    s.tree = &world.tree();
+    const Voxelizer& moving = world.dynamic_voxelizer();
+    if (moving.velocity_buffer()) {
+        s.fragments = moving.fragment_buffer().address();
+        s.fragment_count = moving.fragment_count_address();
+        s.fragment_velocities = moving.velocity_buffer().address();
+        s.fragment_capacity = moving.fragment_capacity();
+    }
+    return s;
+}
+
 Status validate(const SolverDesc& desc) {
     for (int a = 0; a < 3; ++a)
         if (desc.cells[a] < 8 || desc.cells[a] > 256)

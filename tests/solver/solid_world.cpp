@@ -5,12 +5,10 @@
 namespace gust::test {
 
 SolidWorld::SolidWorld(gpu::Context& ctx, const SolverDesc& desc, std::uint32_t branching) : ctx_(ctx), desc_(desc) {
-    const std::uint32_t longest = std::max({desc.cells.x, desc.cells.y, desc.cells.z}) * desc.voxels_per_cell;
-    std::uint32_t res = 1;
-    while (res < longest || res < kMinRes) res *= branching;
-    grid_.origin = desc.origin;
-    grid_.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
-    grid_.res = res;
+    auto grid = voxel_grid(desc, branching);
+    EXPECT_TRUE(grid) << grid.message();
+    if (!grid) return;
+    grid_ = *grid;
     WorldDesc world;
     world.grid = grid_;
     world.tree.branching = branching;
@@ -40,16 +38,7 @@ void SolidWorld::update(const std::vector<Body>& bodies, float dt) {
     ASSERT_TRUE(frame) << frame.message();
 }
 
-SolidSource SolidWorld::source() const {
-    SolidSource s;
-    s.tree = &world_->tree();
-    const Voxelizer& moving = world_->dynamic_voxelizer();
-    s.fragments = moving.fragment_buffer().address();
-    s.fragment_count = moving.fragment_count_address();
-    s.fragment_velocities = moving.velocity_buffer() ? moving.velocity_buffer().address() : 0;
-    s.fragment_capacity = moving.fragment_capacity();
-    return s;
-}
+SolidSource SolidWorld::source() const { return solid_source(*world_); }
 
 CpuSolid SolidWorld::cpu() const {
     CpuSolid solid;

@@ -1,34 +1,23 @@
-// The voxel grid of a scene's domain (DESIGN.md "Interfaces": voxels are cell_size / voxels_per_cell
-// wide and indexed from the domain's min corner).
+// The wind grid and voxel grid of a scene's domain (DESIGN.md "Interfaces": voxels are cell_size /
+// voxels_per_cell wide and indexed from the domain's min corner, wind cells likewise).
 #pragma once
 
 #include <gust/gpu/result.hpp>
 #include <gust/scene/scene_file.hpp>
+#include <gust/solver/wind_solver.hpp>
 #include <gust/voxelizer/grid.hpp>
-#include <string>
 
 namespace gust {
 
-/// The cubic voxel grid the tree covers: min corner at the domain's, voxel size cell_size /
-/// voxels_per_cell, res the smallest power of the branching factor (at least 8) spanning the domain's
-/// longest axis. Voxels beyond the domain's shorter axes exist in the tree but the wind ignores them.
-inline Result<GridDesc> domain_grid(const DomainDesc& domain) {
-    const std::uint32_t longest =
-        std::max({domain.cells.x, domain.cells.y, domain.cells.z}) * domain.voxels_per_cell;
-    std::uint32_t res = 1;
-    while (res < longest || res < kMinRes) {
-        res *= domain.branching;
-        if (res > kMaxRes)
-            return Result<GridDesc>::failure("the domain needs " + std::to_string(longest) +
-                                             " voxels along its longest axis; with branching " +
-                                             std::to_string(domain.branching) + " the tree would exceed " +
-                                             std::to_string(kMaxRes) + " per axis");
-    }
-    GridDesc grid;
-    grid.res = res;
-    grid.voxel_size = domain.cell_size / float(domain.voxels_per_cell);
-    grid.origin = domain.center - glm::vec3(domain.cells) * domain.cell_size * 0.5f;
-    return grid;
-}
+/// The wind grid of a domain: its cells, cell size, voxels per cell and min corner
+/// (center − cells·cell_size/2); numerics at their defaults.
+SolverDesc domain_solver_desc(const DomainDesc& domain);
+
+/// The wind grid of a scene: its domain's (domain_solver_desc) with the scene's solver settings.
+SolverDesc solver_desc(const SceneDesc& scene);
+
+/// The cubic voxel grid the tree covers (voxel_grid of the domain's wind grid). Voxels beyond the
+/// domain's shorter axes exist in the tree but the wind ignores them.
+Result<GridDesc> domain_grid(const DomainDesc& domain);
 
 } // namespace gust

@@ -8,6 +8,7 @@
 #include <gust/gpu/pipeline.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/sparse_tree.hpp>
+#include <gust/voxelizer/voxel_world.hpp>
 #include <memory>
 #include <span>
 #include <string>
@@ -85,6 +86,15 @@ struct WindStats {
     std::uint32_t moving_fragments = 0;
     std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (when timed)
 };
+
+/// The voxel grid of the tree that bounds a wind grid: min corner at the wind grid's, voxels
+/// cell_size / voxels_per_cell wide, res the smallest power of `branching` (at least 8) spanning the
+/// longest axis. Fails when that would pass the voxelizer's 1024 per axis.
+Result<GridDesc> voxel_grid(const SolverDesc& desc, std::uint32_t branching);
+
+/// The solid boundary a VoxelWorld over voxel_grid(desc) gives as of its last step: its tree and its
+/// moving fragments. Take it again after every step (a step may reallocate the fragment list).
+SolidSource solid_source(const VoxelWorld& world);
 
 /// Fails on a grid or setting out of range (the message names it).
 Status validate(const SolverDesc& desc);

@@ -1,0 +1,33 @@
+#include <gust/scene/domain_grid.hpp>
+
+namespace gust {
+
+SolverDesc domain_solver_desc(const DomainDesc& domain) {
+    SolverDesc desc;
+    desc.cells = domain.cells;
+    desc.cell_size = domain.cell_size;
+    desc.origin = domain.center - glm::vec3(domain.cells) * domain.cell_size * 0.5f;
+    desc.voxels_per_cell = domain.voxels_per_cell;
+    return desc;
+}
+
+SolverDesc solver_desc(const SceneDesc& scene) {
+    SolverDesc desc = domain_solver_desc(scene.domain);
+    const SolverSettings& s = scene.solver;
+    desc.advection = s.advection == "none"              ? Advection::None
+                     : s.advection == "semi_lagrangian" ? Advection::SemiLagrangian
+                                                        : Advection::MacCormack;
+    desc.pressure = s.pressure == "jacobi" ? PressureSolver::Jacobi : PressureSolver::Multigrid;
+    desc.tolerance = s.tolerance;
+    desc.max_cycles = s.max_cycles;
+    desc.max_iterations = s.max_iterations;
+    desc.vorticity = s.vorticity;
+    desc.viscosity = s.viscosity;
+    return desc;
+}
+
+Result<GridDesc> domain_grid(const DomainDesc& domain) {
+    return voxel_grid(domain_solver_desc(domain), domain.branching);
+}
+
+} // namespace gust
