@@ -46,6 +46,110 @@ int type_rank(VkPhysicalDeviceType type) {
     }
 }
 
+std::string version_string(std::uint32_t version) {
+    return std::to_string(VK_API_VERSION_MAJOR(version)) + "." +
+           std::to_string(VK_API_VERSION_MINOR(version));
+}
+
+void append(std::string& list, const char* name) {
+    list += (list.empty() ? "" : ", ") + std::string(name);
+}
+
+// The one list of device features gust uses: create() enables it, adopt() and check_device_support()
+// check it, add_required_features() hands it to a host. vertexPipelineStoresAndAtomics because
+// voxelize.geom counts rejected triangles with an atomic.
+template <class Fn>
+void for_each_feature(VkPhysicalDeviceFeatures& f, VkPhysicalDeviceVulkan12Features& f12,
+                      VkPhysicalDeviceVulkan13Features& f13, Fn&& fn) {
+    fn(f.geometryShader, "geometryShader");
+    fn(f.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
+    fn(f.vertexPipelineStoresAndAtomics, "vertexPipelineStoresAndAtomics");
+    fn(f.shaderInt64, "shaderInt64");
+    fn(f12.bufferDeviceAddress, "bufferDeviceAddress");
+    fn(f12.scalarBlockLayout, "scalarBlockLayout");
+    fn(f13.synchronization2, "synchronization2");
+    fn(f13.dynamicRendering, "dynamicRendering");
+    fn(f13.maintenance4, "maintenance4");
+}
+
+// VkPhysicalDeviceFeatures2 -> Vulkan12Features -> Vulkan13Features, chained (so neither copied nor moved).
+struct FeatureChain {
+    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &f13};
+    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
+    FeatureChain() = default;
+    FeatureChain(const FeatureChain&) = delete;
+    FeatureChain& operator=(const FeatureChain&) = delete;
+};
+
+std::vector<VkExtensionProperties> device_extensions(const Dispatch& vk, VkPhysicalDevice physical) {
+    std::uint32_t count = 0;
+    vk.vkEnumerateDeviceExtensionProperties(physical, nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> exts(count);
+    vk.vkEnumerateDeviceExtensionProperties(physical, nullptr, &count, exts.data());
+    return exts;
+}
+
+bool has_extension(const std::vector<VkExtensionProperties>& exts, const std::string& name) {
+    return std::any_of(exts.begin(), exts.end(),
+                       [&](const VkExtensionProperties& e) { return name == e.extensionName; });
+}
+
+std::vector<VkQueueFamilyProperties> queue_families(const Dispatch& vk, VkPhysicalDevice physical) {
+    std::uint32_t count = 0;
+    vk.vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vk.vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, families.data());
+    return families;
+}
+
+bool graphics_and_compute(const VkQueueFamilyProperties& family) {
+    const VkQueueFlags want = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+    return (family.queueFlags & want) == want;
+}
+
+// Loads the instance-level table through vk.vkGetInstanceProcAddr; fails naming what it did not return.
+Status load_instance_functions(Dispatch& vk, VkInstance instance) {
+    std::string missing;
+#define GUST_LOAD(name)                                                                                      \
+    vk.name = reinterpret_cast<PFN_##name>(vk.vkGetInstanceProcAddr(instance, #name));                       \
+    if (!vk.name) append(missing, #name);
+    GUST_VK_INSTANCE_FUNCTIONS(GUST_LOAD)
+#undef GUST_LOAD
+    if (!missing.empty())
+        return Status::failure("vkGetInstanceProcAddr returned null for " + missing +
+                               " (is the instance Vulkan 1.3?)");
+    return {};
+}
+
+// What `physical` lacks of device_requirements(), every item named; ok when nothing.
+Status check_support(const Dispatch& vk, VkPhysicalDevice physical) {
+    const DeviceRequirements req = device_requirements();
+    VkPhysicalDeviceProperties props;
+    vk.vkGetPhysicalDeviceProperties(physical, &props);
+    const std::string device = std::string("device '") + props.deviceName + "'";
+    if (props.apiVersion < req.api_version)
+        return Status::failure(device + " supports only Vulkan " + version_string(props.apiVersion) +
+                               "; gust needs " + version_string(req.api_version));
+    FeatureChain have;
+    vk.vkGetPhysicalDeviceFeatures2(physical, &have.f2);
+    std::string missing_features;
+    for_each_feature(have.f2.features, have.f12, have.f13, [&](VkBool32 supported, const char* name) {
+        if (!supported) append(missing_features, name);
+    });
+    const std::vector<VkExtensionProperties> exts = device_extensions(vk, physical);
+    std::string missing_extensions;
+    for (const char* name : req.extensions)
+        if (!has_extension(exts, name)) append(missing_extensions, name);
+    std::string message;
+    if (!missing_features.empty()) message = device + " lacks required features: " + missing_features;
+    if (!missing_extensions.empty())
+        message += (message.empty() ? device : std::string(";")) +
+                   " lacks required extensions: " + missing_extensions;
+    if (!message.empty()) return Status::failure(message);
+    return {};
+}
+
 VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                               VkDebugUtilsMessageTypeFlagsEXT types,
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
@@ -59,7 +163,58 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBit
     return VK_FALSE;
 }
 
+VkDebugUtilsMessengerCreateInfoEXT messenger_info(Context* ctx) {
+    VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    info.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    info.pfnUserCallback = debug_callback;
+    info.pUserData = ctx;
+    return info;
+}
+
 } // namespace
+
+DeviceRequirements device_requirements() {
+    DeviceRequirements req;
+    req.optional_extensions = {VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME};
+    FeatureChain chain;
+    for_each_feature(chain.f2.features, chain.f12, chain.f13,
+                     [&](VkBool32&, const char* name) { req.features.push_back(name); });
+    return req;
+}
+
+Status add_required_features(VkPhysicalDeviceFeatures2& features) {
+    VkPhysicalDeviceVulkan12Features* f12 = nullptr;
+    VkPhysicalDeviceVulkan13Features* f13 = nullptr;
+    for (auto* s = static_cast<VkBaseOutStructure*>(features.pNext); s; s = s->pNext) {
+        if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES)
+            f12 = reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(s);
+        if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES)
+            f13 = reinterpret_cast<VkPhysicalDeviceVulkan13Features*>(s);
+    }
+    std::string missing;
+    if (!f12) append(missing, "VkPhysicalDeviceVulkan12Features");
+    if (!f13) append(missing, "VkPhysicalDeviceVulkan13Features");
+    if (!missing.empty())
+        return Status::failure("the pNext chain of VkPhysicalDeviceFeatures2 lacks " + missing +
+                               ", where gust's required features are set");
+    for_each_feature(features.features, *f12, *f13, [](VkBool32& enable, const char*) { enable = VK_TRUE; });
+    return {};
+}
+
+Status check_device_support(PFN_vkGetInstanceProcAddr get_instance_proc_addr, VkInstance instance,
+                            VkPhysicalDevice physical_device) {
+    if (!get_instance_proc_addr || !instance || !physical_device)
+        return Status::failure("check_device_support needs vkGetInstanceProcAddr, an instance and a "
+                               "physical device (one is null)");
+    Dispatch vk;
+    vk.vkGetInstanceProcAddr = get_instance_proc_addr;
+    if (Status s = load_instance_functions(vk, instance); !s) return s;
+    return check_support(vk, physical_device);
+}
 
 const char* to_string(VkResult result) {
     switch (result) {
@@ -100,6 +255,12 @@ Result<std::unique_ptr<Context>> Context::create(const ContextDesc& desc) {
     return ctx;
 }
 
+Result<std::unique_ptr<Context>> Context::adopt(const HostDevice& host) {
+    std::unique_ptr<Context> ctx(new Context());
+    if (Status s = ctx->init_adopted(host); !s) return s;
+    return ctx;
+}
+
 void Context::report(Severity severity, bool validation, const std::string& message) {
     if (validation && severity != Severity::Info) {
         validation_messages_.fetch_add(1);
@@ -129,9 +290,8 @@ Status Context::init(const ContextDesc& desc) {
     std::uint32_t version = VK_API_VERSION_1_0;
     if (vk_.vkEnumerateInstanceVersion) vk_.vkEnumerateInstanceVersion(&version);
     if (version < VK_API_VERSION_1_3)
-        return Status::failure("the Vulkan loader supports only " +
-                               std::to_string(VK_API_VERSION_MAJOR(version)) + "." +
-                               std::to_string(VK_API_VERSION_MINOR(version)) + "; gust needs Vulkan 1.3");
+        return Status::failure("the Vulkan loader supports only " + version_string(version) +
+                               "; gust needs Vulkan 1.3");
 
     std::vector<const char*> layers;
     std::vector<const char*> extensions;
@@ -160,18 +320,10 @@ Status Context::init(const ContextDesc& desc) {
     app.pApplicationName = "gust";
     app.pEngineName = "gust";
     app.apiVersion = VK_API_VERSION_1_3;
-    VkDebugUtilsMessengerCreateInfoEXT messenger_info{
-        VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    messenger_info.messageSeverity =
-        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    messenger_info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
-                                 VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                                 VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-    messenger_info.pfnUserCallback = debug_callback;
-    messenger_info.pUserData = this;
+    const VkDebugUtilsMessengerCreateInfoEXT messenger = messenger_info(this);
 
     VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-    info.pNext = debug_utils ? &messenger_info : nullptr; // also catches messages from create/destroy
+    info.pNext = debug_utils ? &messenger : nullptr; // also catches messages from create/destroy
     info.pApplicationInfo = &app;
     info.enabledLayerCount = std::uint32_t(layers.size());
     info.ppEnabledLayerNames = layers.data();
@@ -180,14 +332,14 @@ Status Context::init(const ContextDesc& desc) {
     if (VkResult r = vk_.vkCreateInstance(&info, nullptr, &instance_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateInstance failed: ") + to_string(r));
 
-#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(instance_, #name));
-    GUST_VK_INSTANCE_FUNCTIONS(GUST_LOAD)
+    if (Status s = load_instance_functions(vk_, instance_); !s) return s;
     if (debug_utils) {
+#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(instance_, #name));
         GUST_VK_DEBUG_FUNCTIONS(GUST_LOAD)
-    }
 #undef GUST_LOAD
+    }
     if (debug_utils && vk_.vkCreateDebugUtilsMessengerEXT)
-        vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger_info, nullptr, &messenger_);
+        vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger, nullptr, &messenger_);
 
     std::string override_spec = desc.device;
     if (override_spec.empty())
@@ -241,82 +393,102 @@ Status Context::pick_device(const std::string& override_spec) {
     return {};
 }
 
+Status Context::init_adopted(const HostDevice& host) {
+    owns_device_ = false;
+    std::string null_fields;
+    if (!host.instance) append(null_fields, "instance");
+    if (!host.physical_device) append(null_fields, "physical_device");
+    if (!host.device) append(null_fields, "device");
+    if (!host.get_instance_proc_addr) append(null_fields, "get_instance_proc_addr");
+    if (!null_fields.empty()) return Status::failure("HostDevice: " + null_fields + " must not be null");
+    on_message_ = host.on_message;
+    queue_mutex_ = host.queue_mutex;
+    instance_ = host.instance;
+    physical_ = host.physical_device;
+
+    vk_.vkGetInstanceProcAddr = host.get_instance_proc_addr;
+#define GUST_LOAD(name)                                                                                      \
+    vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(VK_NULL_HANDLE, #name));
+    GUST_VK_GLOBAL_FUNCTIONS(GUST_LOAD)
+#undef GUST_LOAD
+    if (Status s = load_instance_functions(vk_, instance_); !s) return s;
+    if (host.get_device_proc_addr) vk_.vkGetDeviceProcAddr = host.get_device_proc_addr;
+    if (on_message_) {
+#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(instance_, #name));
+        GUST_VK_DEBUG_FUNCTIONS(GUST_LOAD)
+#undef GUST_LOAD
+        if (!vk_.vkCreateDebugUtilsMessengerEXT || !vk_.vkDestroyDebugUtilsMessengerEXT)
+            return Status::failure("HostDevice::on_message needs VK_EXT_debug_utils enabled on the host's "
+                                   "instance");
+        const VkDebugUtilsMessengerCreateInfoEXT info = messenger_info(this);
+        if (VkResult r = vk_.vkCreateDebugUtilsMessengerEXT(instance_, &info, nullptr, &messenger_);
+            r != VK_SUCCESS)
+            return Status::failure(std::string("vkCreateDebugUtilsMessengerEXT failed: ") + to_string(r));
+    }
+
+    if (Status s = check_support(vk_, physical_); !s) return s;
+    VkPhysicalDeviceProperties props;
+    vk_.vkGetPhysicalDeviceProperties(physical_, &props);
+    const std::string device = std::string("device '") + props.deviceName + "'";
+    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
+    if (host.queue_family >= families.size())
+        return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) +
+                               " out of range (" + device + " has " + std::to_string(families.size()) +
+                               " queue families)");
+    const VkQueueFamilyProperties& family = families[host.queue_family];
+    if (host.queue_index >= family.queueCount)
+        return Status::failure("HostDevice::queue_index " + std::to_string(host.queue_index) +
+                               " out of range (queue family " + std::to_string(host.queue_family) + " has " +
+                               std::to_string(family.queueCount) + " queues)");
+    if (!graphics_and_compute(family))
+        return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) + " of " +
+                               device + " does not support both graphics and compute");
+    queue_family_ = host.queue_family;
+
+    const std::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_);
+    std::string unsupported;
+    for (const std::string& name : host.enabled_extensions)
+        if (!has_extension(exts, name)) append(unsupported, name.c_str());
+    if (!unsupported.empty())
+        return Status::failure("HostDevice::enabled_extensions lists " + unsupported + ", which " + device +
+                               " does not support");
+    info_.conservative_rasterization =
+        std::find(host.enabled_extensions.begin(), host.enabled_extensions.end(),
+                  VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) != host.enabled_extensions.end();
+    device_ = host.device;
+    return finish_device(host.queue_index);
+}
+
 Status Context::create_device() {
+    if (Status s = check_support(vk_, physical_); !s) return s;
     VkPhysicalDeviceProperties props;
     vk_.vkGetPhysicalDeviceProperties(physical_, &props);
 
-    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    f12.pNext = &f13;
-    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    f2.pNext = &f12;
-    vk_.vkGetPhysicalDeviceFeatures2(physical_, &f2);
-    std::string missing;
-    auto need = [&](VkBool32 have, const char* name) {
-        if (!have) missing += std::string(missing.empty() ? "" : ", ") + name;
-    };
-    need(f2.features.geometryShader, "geometryShader");
-    need(f2.features.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
-    need(f2.features.shaderInt64, "shaderInt64");
-    need(f12.bufferDeviceAddress, "bufferDeviceAddress");
-    need(f12.scalarBlockLayout, "scalarBlockLayout");
-    need(f13.synchronization2, "synchronization2");
-    need(f13.dynamicRendering, "dynamicRendering");
-    need(f13.maintenance4, "maintenance4");
-    if (!missing.empty())
-        return Status::failure(std::string("device '") + props.deviceName +
-                               "' lacks required features: " + missing);
-
-    std::uint32_t count = 0;
-    vk_.vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, nullptr);
-    std::vector<VkQueueFamilyProperties> families(count);
-    vk_.vkGetPhysicalDeviceQueueFamilyProperties(physical_, &count, families.data());
-    std::uint32_t family = UINT32_MAX;
-    for (std::uint32_t i = 0; i < count; ++i) {
-        const VkQueueFlags want = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
-        if ((families[i].queueFlags & want) == want) {
-            family = i;
-            break;
-        }
-    }
-    if (family == UINT32_MAX)
+    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
+    const auto family = std::find_if(families.begin(), families.end(), graphics_and_compute);
+    if (family == families.end())
         return Status::failure(std::string("device '") + props.deviceName +
                                "' has no graphics+compute queue");
-    queue_family_ = family;
+    queue_family_ = std::uint32_t(family - families.begin());
 
-    vk_.vkEnumerateDeviceExtensionProperties(physical_, nullptr, &count, nullptr);
-    std::vector<VkExtensionProperties> exts(count);
-    vk_.vkEnumerateDeviceExtensionProperties(physical_, nullptr, &count, exts.data());
-    std::vector<const char*> enabled;
-    for (const auto& e : exts)
-        if (std::strcmp(e.extensionName, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) == 0) {
-            enabled.push_back(VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
-            info_.conservative_rasterization = true;
-        }
+    const DeviceRequirements req = device_requirements();
+    const std::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_);
+    std::vector<const char*> enabled = req.extensions;
+    for (const char* name : req.optional_extensions)
+        if (has_extension(exts, name)) enabled.push_back(name);
+    info_.conservative_rasterization = has_extension(exts, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
 
-    VkPhysicalDeviceVulkan13Features e13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    e13.synchronization2 = VK_TRUE;
-    e13.dynamicRendering = VK_TRUE;
-    e13.maintenance4 = VK_TRUE;
-    VkPhysicalDeviceVulkan12Features e12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    e12.pNext = &e13;
-    e12.bufferDeviceAddress = VK_TRUE;
-    e12.scalarBlockLayout = VK_TRUE;
-    e12.hostQueryReset = f12.hostQueryReset;
-    VkPhysicalDeviceFeatures2 e2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    e2.pNext = &e12;
-    e2.features.geometryShader = VK_TRUE;
-    e2.features.fragmentStoresAndAtomics = VK_TRUE;
-    e2.features.vertexPipelineStoresAndAtomics = f2.features.vertexPipelineStoresAndAtomics;
-    e2.features.shaderInt64 = VK_TRUE;
+    FeatureChain features;
+    for_each_feature(features.f2.features, features.f12, features.f13,
+                     [](VkBool32& enable, const char*) { enable = VK_TRUE; });
 
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-    queue_info.queueFamilyIndex = family;
+    queue_info.queueFamilyIndex = queue_family_;
     queue_info.queueCount = 1;
     queue_info.pQueuePriorities = &priority;
     VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-    info.pNext = &e2;
+    info.pNext = &features.f2;
     info.queueCreateInfoCount = 1;
     info.pQueueCreateInfos = &queue_info;
     info.enabledExtensionCount = std::uint32_t(enabled.size());
@@ -324,13 +496,24 @@ Status Context::create_device() {
     if (VkResult r = vk_.vkCreateDevice(physical_, &info, nullptr, &device_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName +
                                "': " + to_string(r));
+    return finish_device(0);
+}
 
-#define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetDeviceProcAddr(device_, #name));
+Status Context::finish_device(std::uint32_t queue_index) {
+    std::string missing;
+#define GUST_LOAD(name)                                                                                      \
+    vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetDeviceProcAddr(device_, #name));                        \
+    if (!vk_.name) append(missing, #name);
     GUST_VK_DEVICE_FUNCTIONS(GUST_LOAD)
 #undef GUST_LOAD
-    vk_.vkGetDeviceQueue(device_, family, 0, &queue_);
+    if (!missing.empty())
+        return Status::failure("vkGetDeviceProcAddr returned null for " + missing +
+                               " (is the device Vulkan 1.3?)");
+    vk_.vkGetDeviceQueue(device_, queue_family_, queue_index, &queue_);
     vk_.vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
 
+    VkPhysicalDeviceProperties props;
+    vk_.vkGetPhysicalDeviceProperties(physical_, &props);
     VkPhysicalDeviceVulkan11Properties p11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
     VkPhysicalDeviceVulkan12Properties p12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_PROPERTIES};
     p11.pNext = &p12;
@@ -340,6 +523,7 @@ Status Context::create_device() {
     VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     p2.pNext = &m3;
     vk_.vkGetPhysicalDeviceProperties2(physical_, &p2);
+    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
 
     info_.name = props.deviceName;
     info_.type = type_name(props.deviceType);
@@ -347,7 +531,7 @@ Status Context::create_device() {
     info_.vendor_id = props.vendorID;
     info_.driver = std::string(p12.driverName) + " " + p12.driverInfo;
     info_.timestamp_period_ns =
-        (families[family].timestampValidBits > 0 && props.limits.timestampComputeAndGraphics)
+        (families[queue_family_].timestampValidBits > 0 && props.limits.timestampComputeAndGraphics)
             ? props.limits.timestampPeriod
             : 0.0f;
     info_.max_storage_buffer_range = props.limits.maxStorageBufferRange;
@@ -356,7 +540,7 @@ Status Context::create_device() {
 
     VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool_info.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-    pool_info.queueFamilyIndex = family;
+    pool_info.queueFamilyIndex = queue_family_;
     if (VkResult r = vk_.vkCreateCommandPool(device_, &pool_info, nullptr, &pool_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateCommandPool failed: ") + to_string(r));
     VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
@@ -366,14 +550,16 @@ Status Context::create_device() {
 }
 
 Context::~Context() {
-    if (device_) {
-        vk_.vkDeviceWaitIdle(device_);
+    if (device_ && vk_.vkDestroyDevice) {
+        // An adopted device is never waited on: that would touch the host's queues, which the host
+        // synchronizes, and every gust submission has completed when submit_and_wait returns.
+        if (owns_device_) vk_.vkDeviceWaitIdle(device_);
         if (fence_) vk_.vkDestroyFence(device_, fence_, nullptr);
         if (pool_) vk_.vkDestroyCommandPool(device_, pool_, nullptr);
-        vk_.vkDestroyDevice(device_, nullptr);
+        if (owns_device_) vk_.vkDestroyDevice(device_, nullptr);
     }
     if (messenger_) vk_.vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
-    if (instance_) vk_.vkDestroyInstance(instance_, nullptr);
+    if (instance_ && owns_device_) vk_.vkDestroyInstance(instance_, nullptr);
     if (loader_) dlclose(loader_);
 }
 
@@ -398,8 +584,14 @@ Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& reco
     submit.pCommandBufferInfos = &cmd_info;
     Status status;
     vk_.vkResetFences(device_, 1, &fence_);
-    if (VkResult r = vk_.vkQueueSubmit2(queue_, 1, &submit, fence_); r != VK_SUCCESS)
-        status = Status::failure(std::string("vkQueueSubmit2 failed: ") + to_string(r));
+    VkResult submitted = VK_SUCCESS;
+    {
+        std::unique_lock<std::mutex> lock;
+        if (queue_mutex_) lock = std::unique_lock<std::mutex>(*queue_mutex_);
+        submitted = vk_.vkQueueSubmit2(queue_, 1, &submit, fence_);
+    }
+    if (submitted != VK_SUCCESS)
+        status = Status::failure(std::string("vkQueueSubmit2 failed: ") + to_string(submitted));
     else if (VkResult w = vk_.vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX); w != VK_SUCCESS)
         status = Status::failure(std::string("waiting for the GPU failed: ") + to_string(w));
     vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);

@@ -1,5 +1,6 @@
-// A Vulkan 1.3 instance, device and queue for gust's own use (tests, tools, the sample), with
-// validation messages captured so tests can fail on them.
+// A Vulkan 1.3 device and queue: either gust's own instance and device (tests, tools, the sample), with
+// validation messages captured so tests can fail on them, or a host engine's device adopted through
+// the host's entry points (Jolt-style tiered backends).
 #pragma once
 
 #include <atomic>
@@ -31,6 +32,64 @@ struct ContextDesc {
     MessageCallback on_message;
 };
 
+/// What gust needs from a device, for a host that creates the VkDevice gust adopts. Names are static
+/// strings. Context::create() enables the required items and the optional extensions the device has;
+/// Context::adopt() checks the physical device supports the required ones.
+struct DeviceRequirements {
+    /// Lowest VkPhysicalDeviceProperties::apiVersion; the host's instance must ask for it too.
+    std::uint32_t api_version = VK_API_VERSION_1_3;
+    /// Device extensions the host must enable (empty while everything gust needs is core in 1.3).
+    std::vector<const char*> extensions;
+    /// Device extensions gust uses only when the host enabled them and lists them in
+    /// HostDevice::enabled_extensions (VK_EXT_conservative_rasterization).
+    std::vector<const char*> optional_extensions;
+    /// Names of the features the host must enable ("geometryShader", "bufferDeviceAddress", ...);
+    /// add_required_features() sets them.
+    std::vector<const char*> features;
+};
+
+/// The device extensions and features gust needs (the same definition Context::create() enables).
+DeviceRequirements device_requirements();
+
+/// Sets gust's required features to VK_TRUE in `features` and in the VkPhysicalDeviceVulkan12Features
+/// and VkPhysicalDeviceVulkan13Features found on its pNext chain, leaving every other flag as it was.
+/// Fails, changing nothing, when the chain lacks one of those two structs.
+Status add_required_features(VkPhysicalDeviceFeatures2& features);
+
+/// Reports what `physical_device` (of the host's `instance`, queried through `get_instance_proc_addr`)
+/// lacks of device_requirements(): API version, extensions and features, each named. Ok when nothing.
+Status check_device_support(PFN_vkGetInstanceProcAddr get_instance_proc_addr, VkInstance instance,
+                            VkPhysicalDevice physical_device);
+
+/// A host engine's Vulkan objects for Context::adopt(). gust keeps the handles but never destroys them;
+/// the host keeps them alive until the Context is destroyed. The host must have created the instance
+/// with apiVersion >= 1.3 and the device with device_requirements() enabled (add_required_features()):
+/// Vulkan cannot report which features or extensions a device was created with, so gust trusts that.
+struct HostDevice {
+    VkInstance instance = VK_NULL_HANDLE;              ///< the host's instance (required)
+    VkPhysicalDevice physical_device = VK_NULL_HANDLE; ///< the device's physical device (required)
+    VkDevice device = VK_NULL_HANDLE;                  ///< the host's device (required)
+    /// Family of the queue gust submits to; it must support graphics and compute.
+    std::uint32_t queue_family = 0;
+    /// Index of that queue within its family; the host must have created it (queueCount > queue_index).
+    std::uint32_t queue_index = 0;
+    /// The host's loader entry point (required); every instance function is loaded through it, and gust
+    /// loads no Vulkan library of its own.
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
+    /// Loads every device function; null means vkGetDeviceProcAddr from get_instance_proc_addr.
+    PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;
+    /// Device extensions the host enabled; gust uses an optional extension only when it is listed here.
+    std::vector<std::string> enabled_extensions;
+    /// Locked around every gust submission to the queue when not null (the host keeps it alive). Vulkan
+    /// requires a queue to be externally synchronized, so a host that submits to the same queue from
+    /// other threads passes the mutex it holds for its own submissions.
+    std::mutex* queue_mutex = nullptr;
+    /// Receives validation and driver messages through a messenger gust creates on the host's instance
+    /// (which must have VK_EXT_debug_utils enabled); it also sees messages about the host's own calls.
+    /// Null creates no messenger.
+    MessageCallback on_message;
+};
+
 /// What was chosen, for stats and `gust info`.
 struct DeviceInfo {
     std::string name; ///< VkPhysicalDeviceProperties::deviceName
@@ -46,11 +105,19 @@ struct DeviceInfo {
 };
 
 /// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
-/// (one thread records and submits at a time).
+/// (one thread records and submits at a time). With an adopted device, gust submits to the host's
+/// queue, which Vulkan requires to be externally synchronized: the host must not submit to that queue
+/// from another thread while a gust call runs, unless it passes HostDevice::queue_mutex.
 class Context {
   public:
     /// Creates an instance and picks a device per `desc`. Fails with a message naming what is missing.
     static Result<std::unique_ptr<Context>> create(const ContextDesc& desc);
+    /// Uses the host's device and queue; creates only its own command pool, fence and (with
+    /// `host.on_message`) debug messenger, and destroys only those. Fails with a message naming the bad
+    /// field or what the physical device lacks.
+    static Result<std::unique_ptr<Context>> adopt(const HostDevice& host);
+    /// Waits for the device and destroys it and the instance when gust created them; an adopted device
+    /// is left alone (gust's own submissions are already complete when submit_and_wait returns).
     ~Context();
     Context(const Context&) = delete;
     Context& operator=(const Context&) = delete;
@@ -62,8 +129,11 @@ class Context {
     VkDevice device() const { return device_; }
     VkQueue queue() const { return queue_; }
     std::uint32_t queue_family() const { return queue_family_; }
+    /// False for an adopted device: the instance and device belong to the host.
+    bool owns_device() const { return owns_device_; }
     const DeviceInfo& info() const { return info_; }
-    /// Names and types of every device the instance sees, in enumeration order (for errors and `gust info`).
+    /// Names and types of every device the instance sees, in enumeration order (for errors and `gust info`);
+    /// empty for an adopted device.
     const std::vector<std::string>& device_names() const { return device_names_; }
 
     /// Validation-layer messages of warning or error severity seen so far (tests fail when > 0).
@@ -71,7 +141,8 @@ class Context {
     /// The most recent such message (empty if none).
     std::string last_validation_message() const;
 
-    /// Records commands with `record` into a one-time command buffer, submits and waits.
+    /// Records commands with `record` into a one-time command buffer, submits and waits (holding
+    /// HostDevice::queue_mutex, if given, while submitting).
     Status submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
 
     /// Index of a memory type allowed by `type_bits` having all of `required` (and as many of
@@ -87,8 +158,10 @@ class Context {
   private:
     Context() = default;
     Status init(const ContextDesc& desc);
+    Status init_adopted(const HostDevice& host);
     Status pick_device(const std::string& override_spec);
     Status create_device();
+    Status finish_device(std::uint32_t queue_index);
 
     Dispatch vk_;
     void* loader_ = nullptr;
@@ -98,6 +171,8 @@ class Context {
     VkDevice device_ = VK_NULL_HANDLE;
     VkQueue queue_ = VK_NULL_HANDLE;
     std::uint32_t queue_family_ = 0;
+    bool owns_device_ = true;
+    std::mutex* queue_mutex_ = nullptr;
     VkCommandPool pool_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
     VkPhysicalDeviceMemoryProperties memory_{};
