@@ -347,8 +347,9 @@ Status check_json(std::string_view text) {
     if (!root.is_object()) return Status::failure("invalid glTF: the JSON root is not an object");
     // glTF 1.0 keeps its arrays as objects; say so instead of reporting the first schema mismatch.
     if (const auto asset = root.find("asset"); asset != root.end() && asset->is_object())
-        if (const auto version = asset->find("version"); version != asset->end() && version->is_string() &&
-                                                         version->get_ref<const std::string&>().rfind("1.", 0) == 0)
+        if (const auto version = asset->find("version");
+            version != asset->end() && version->is_string() &&
+            version->get_ref<const std::string&>().rfind("1.", 0) == 0)
             return Status::failure("glTF " + version->get<std::string>() +
                                    " is not supported (only glTF 2.0; convert the file first)");
     if (Status status = check_object(root, kRoot, ""); !status) return status;

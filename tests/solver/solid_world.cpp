@@ -4,7 +4,8 @@
 
 namespace gust::test {
 
-SolidWorld::SolidWorld(gpu::Context& ctx, const SolverDesc& desc, std::uint32_t branching) : ctx_(ctx), desc_(desc) {
+SolidWorld::SolidWorld(gpu::Context& ctx, const SolverDesc& desc, std::uint32_t branching)
+    : ctx_(ctx), desc_(desc) {
     auto grid = voxel_grid(desc, branching);
     EXPECT_TRUE(grid) << grid.message();
     if (!grid) return;
@@ -38,7 +39,9 @@ void SolidWorld::update(const std::vector<Body>& bodies, float dt) {
     ASSERT_TRUE(frame) << frame.message();
 }
 
-SolidSource SolidWorld::source() const { return solid_source(*world_); }
+SolidSource SolidWorld::source() const {
+    return solid_source(*world_);
+}
 
 CpuSolid SolidWorld::cpu() const {
     CpuSolid solid;
@@ -59,7 +62,8 @@ CpuSolid SolidWorld::cpu() const {
     if (!fragments || !velocities) return solid;
     for (std::size_t i = 0; i < fragments->size() && i < velocities->size(); ++i) {
         const std::uint32_t key = (*fragments)[i];
-        solid.fragments.emplace_back(glm::ivec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u), (*velocities)[i]);
+        solid.fragments.emplace_back(glm::ivec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u),
+                                     (*velocities)[i]);
     }
     return solid;
 }
@@ -67,9 +71,12 @@ CpuSolid SolidWorld::cpu() const {
 TestMesh box(glm::vec3 lo, glm::vec3 hi) {
     TestMesh mesh;
     for (int i = 0; i < 8; ++i)
-        mesh.positions.push_back(glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
-    const std::uint32_t faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-    for (const auto& q : faces) mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+        mesh.positions.push_back(
+            glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
+    const std::uint32_t faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& q : faces)
+        mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
     return mesh;
 }
 
