@@ -17,7 +17,9 @@ SolverDesc solver_desc(const SceneDesc& scene) {
     desc.advection = s.advection == "none"              ? Advection::None
                      : s.advection == "semi_lagrangian" ? Advection::SemiLagrangian
                                                         : Advection::MacCormack;
-    desc.pressure = s.pressure == "jacobi" ? PressureSolver::Jacobi : PressureSolver::Multigrid;
+    desc.pressure = s.pressure == "jacobi"      ? PressureSolver::Jacobi
+                    : s.pressure == "multigrid" ? PressureSolver::Multigrid
+                                                : PressureSolver::MultigridPCG;
     desc.tolerance = s.tolerance;
     desc.max_cycles = s.max_cycles;
     desc.max_iterations = s.max_iterations;

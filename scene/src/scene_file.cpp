@@ -473,7 +473,8 @@ EmitterDesc read_emitter(const json& value, const std::string& at) {
         const std::string length_at = key_path(at, "length");
         if (!motor) fail(length_at, "only motors have a length");
         emitter.length = float_number(*v, length_at);
-        if (emitter.length < 0.0f) fail(length_at, "must not be negative (found " + format(emitter.length) + ")");
+        if (emitter.length < 0.0f)
+            fail(length_at, "must not be negative (found " + format(emitter.length) + ")");
     }
     if (motor && emitter.shape == "cone" && !(emitter.length > 0.0f))
         fail(key_path(at, "length"), "a cone motor needs a length greater than 0");
@@ -500,27 +501,33 @@ EmitterDesc read_emitter(const json& value, const std::string& at) {
 
 SolverSettings read_solver(const json& value, const std::string& at) {
     object(value, at);
-    allow_keys(value, at, {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity", "viscosity"});
+    allow_keys(
+        value, at,
+        {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity", "viscosity"});
     SolverSettings solver;
     if (const json* v = member(value, "advection")) {
         const std::string advection_at = key_path(at, "advection");
         solver.advection = text(*v, advection_at);
-        if (solver.advection != "maccormack" && solver.advection != "semi_lagrangian" && solver.advection != "none")
+        if (solver.advection != "maccormack" && solver.advection != "semi_lagrangian" &&
+            solver.advection != "none")
             fail(advection_at, "unknown advection '" + solver.advection +
                                    "' (expected maccormack, semi_lagrangian or none)");
     }
     if (const json* v = member(value, "pressure")) {
         const std::string pressure_at = key_path(at, "pressure");
         solver.pressure = text(*v, pressure_at);
-        if (solver.pressure != "multigrid" && solver.pressure != "jacobi")
-            fail(pressure_at, "unknown pressure solver '" + solver.pressure + "' (expected multigrid or jacobi)");
+        if (solver.pressure != "mgpcg" && solver.pressure != "multigrid" && solver.pressure != "jacobi")
+            fail(pressure_at,
+                 "unknown pressure solver '" + solver.pressure + "' (expected mgpcg, multigrid or jacobi)");
     }
     if (const json* v = member(value, "tolerance")) {
         const std::string tolerance_at = key_path(at, "tolerance");
         solver.tolerance = positive_float(*v, tolerance_at);
-        if (!(solver.tolerance < 1.0f)) fail(tolerance_at, "must be less than 1 (found " + format(solver.tolerance) + ")");
+        if (!(solver.tolerance < 1.0f))
+            fail(tolerance_at, "must be less than 1 (found " + format(solver.tolerance) + ")");
     }
-    if (const json* v = member(value, "max_cycles")) solver.max_cycles = integer(*v, key_path(at, "max_cycles"), 1, 1000);
+    if (const json* v = member(value, "max_cycles"))
+        solver.max_cycles = integer(*v, key_path(at, "max_cycles"), 1, 1000);
     if (const json* v = member(value, "max_iterations"))
         solver.max_iterations = integer(*v, key_path(at, "max_iterations"), 1, 1000000);
     if (const json* v = member(value, "vorticity")) {
@@ -532,7 +539,8 @@ SolverSettings read_solver(const json& value, const std::string& at) {
     if (const json* v = member(value, "viscosity")) {
         const std::string viscosity_at = key_path(at, "viscosity");
         solver.viscosity = float_number(*v, viscosity_at);
-        if (solver.viscosity < 0.0f) fail(viscosity_at, "must not be negative (found " + format(solver.viscosity) + ")");
+        if (solver.viscosity < 0.0f)
+            fail(viscosity_at, "must not be negative (found " + format(solver.viscosity) + ")");
     }
     return solver;
 }

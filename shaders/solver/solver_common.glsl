@@ -6,6 +6,7 @@ layout(buffer_reference, scalar) readonly buffer BindingsRef { SolverBindings b;
 layout(buffer_reference, scalar) coherent buffer FloatsRef { float v[]; };
 layout(buffer_reference, scalar) coherent buffer WordsRef { uint v[]; };
 layout(buffer_reference, scalar) buffer Vec4Ref { vec4 v[]; };
+layout(buffer_reference, scalar) buffer Vec2Ref { vec2 v[]; };
 layout(buffer_reference, scalar) buffer IVec4Ref { ivec4 v[]; };
 layout(buffer_reference, scalar) readonly buffer UVec2Ref { uvec2 v[]; };
 layout(buffer_reference, scalar) readonly buffer NodesRef { uvec2 v[]; };
@@ -42,7 +43,9 @@ uint64_t cell_field(uint field) {
     if (field == kCellPressure) return sb().b.pressure;
     if (field == kCellRhs) return sb().b.rhs;
     if (field == kCellResidual) return sb().b.residual;
-    return sb().b.pressure_tmp;
+    if (field == kCellPressureTmp) return sb().b.pressure_tmp;
+    ivec3 n = sb().b.dims;
+    return sb().b.cg_cells + uint64_t(field - kCellSolution) * uint64_t(n.x * n.y * n.z) * 4ul;
 }
 float load_face(uint field, int index) { return FloatsRef(face_field(field)).v[index]; }
 float load_weight(int index) { return FloatsRef(sb().b.weights).v[index]; }
@@ -65,6 +68,20 @@ bool group_max_end(out uint bits) {
     barrier();
     bits = group_max;
     return gl_LocalInvocationIndex == 0u;
+}
+
+// Workgroup sums of two values, stored by thread 0 as the group's entry in partials (summed in a fixed
+// order by cg_scalars, so a step's result does not depend on scheduling). Every thread must call it.
+shared vec2 group_sums[kSolverGroupSize];
+void group_sum_store(vec2 value) {
+    uint t = gl_LocalInvocationIndex;
+    group_sums[t] = value;
+    barrier();
+    [[unroll]] for (uint s = kSolverGroupSize / 2u; s > 0u; s >>= 1u) {
+        if (t < s) group_sums[t] += group_sums[t + s];
+        barrier();
+    }
+    if (t == 0u) Vec2Ref(sb().b.partials).v[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = group_sums[0];
 }
 
 /// A cell's six face layers (−x,+x,−y,+y,−z,+z), made once on the CPU.

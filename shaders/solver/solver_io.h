@@ -60,16 +60,20 @@ struct LevelDispatch {
 
 /// Counters the passes write; the CPU reads them after the step.
 struct SolverState {
-    uint divergence_before; ///< float bits of max |weighted divergence| before projection, 1/s
-    uint divergence_after;  ///< float bits of the same after projection
-    uint residual;          ///< float bits of max |residual| at the last convergence check, 1/s
-    uint residual_scratch;  ///< float bits of max |residual| being gathered
-    uint checks;            ///< convergence checks run that found the solve unfinished
-    uint done;              ///< 1 once the residual met the tolerance
-    uint cut_cells;         ///< cells holding solid voxels
-    uint fluid_cells;       ///< cells with at least one open face
+    uint divergence_before;           ///< float bits of max |weighted divergence| before projection, 1/s
+    uint divergence_after;            ///< float bits of the same after projection
+    uint residual;                    ///< float bits of max |residual| at the last convergence check, 1/s
+    uint residual_scratch;            ///< float bits of max |residual| being gathered
+    uint checks;                      ///< convergence checks run that found the solve unfinished
+    uint done;                        ///< 1 once the residual met the tolerance
+    uint cut_cells;                   ///< cells holding solid voxels
+    uint fluid_cells;                 ///< cells with at least one open face
     LevelDispatch fragments_dispatch; ///< over the moving surfaces' fragments
-    uint fragments;         ///< moving fragments read this step
+    uint fragments;                   ///< moving fragments read this step
+    float cg_rz;                      ///< conjugate gradients: r·z of the last iteration
+    float cg_alpha;                   ///< step length along the search direction
+    float cg_beta;                    ///< weight of the previous search direction
+    uint pad;
 };
 
 /// Slots of the dispatch buffer: one per multigrid level, the coarsest solve, then a full copy that
@@ -85,6 +89,10 @@ GUST_CONST uint kCellPressure = 0u; ///< cell fields for load_cell()
 GUST_CONST uint kCellRhs = 1u;
 GUST_CONST uint kCellResidual = 2u;
 GUST_CONST uint kCellPressureTmp = 3u;
+GUST_CONST uint kCellSolution = 4u;    ///< conjugate gradients: the iterate x
+GUST_CONST uint kCellDirection = 5u;   ///< the search direction p
+GUST_CONST uint kCellTarget = 6u;      ///< the right-hand side b (rhs holds the residual)
+GUST_CONST uint kCellOldResidual = 7u; ///< the residual before this iteration's update
 
 /// Addresses and parameters of one step, in a buffer of their own (push constants stay small).
 struct SolverBindings {
@@ -110,23 +118,26 @@ struct SolverBindings {
     GUST_ADDRESS fragments;       ///< packed voxel keys of moving surfaces, 0 without
     GUST_ADDRESS fragment_count;  ///< uint
     GUST_ADDRESS fragment_motion; ///< uvec2 half-float velocities per fragment
+    GUST_ADDRESS cg_cells;        ///< float[4 * cells]: conjugate gradients' x, p, b, old r
+    GUST_ADDRESS partials;        ///< vec2[partial_count]: per-workgroup sums of a dot product
     ivec3 dims;                   ///< wind cells per axis
     float h;                      ///< cell size, m
     vec3 origin;                  ///< world position of the grid's min corner, m
     uint voxels_per_cell;         ///< tree voxels per cell per axis (1..8)
     vec3 ambient;                 ///< m/s, world
     uint emitter_count;
-    ivec3 voxel_offset;           ///< tree voxel of the grid's min corner
+    ivec3 voxel_offset; ///< tree voxel of the grid's min corner
     uint fragment_capacity;
-    uint tree_levels;             ///< 0 without a tree
+    uint tree_levels; ///< 0 without a tree
     uint tree_log2_branching;
-    uint open_sides;              ///< bit s (−x,+x,−y,+y,−z,+z) set: the side is open (φ = 0)
-    uint levels;                  ///< multigrid levels in use
-    uint mask_words;              ///< words of a leaf layer in the tree's mask blocks
-    uint mask_stride;             ///< words per tree mask block
-    uint cell_words;              ///< words per cell in cell_fluid
-    float tolerance;              ///< relative residual the solve stops at
-    float vorticity_strength;     ///< ε of vorticity confinement
+    uint open_sides;          ///< bit s (−x,+x,−y,+y,−z,+z) set: the side is open (φ = 0)
+    uint levels;              ///< multigrid levels in use
+    uint mask_words;          ///< words of a leaf layer in the tree's mask blocks
+    uint mask_stride;         ///< words per tree mask block
+    uint cell_words;          ///< words per cell in cell_fluid
+    float tolerance;          ///< relative residual the solve stops at
+    float vorticity_strength; ///< ε of vorticity confinement
+    uint partial_count;       ///< workgroups over the level-0 cells (entries in partials)
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -140,7 +151,7 @@ struct SolverPush {
     uint iterations;       ///< sweeps (coarsest solve) or a pass-specific count
     float param;           ///< pass-specific value
     uint pad;
-    ivec3 shift;           ///< scroll: cells the field moves by
+    ivec3 shift; ///< scroll: cells the field moves by
     uint pad2;
 };
 
@@ -222,7 +233,8 @@ struct CellBits {
 
 GUST_INLINE CellBits bits_none() {
     CellBits r;
-    for (uint i = 0u; i < kCellWords; ++i) r.w[i] = 0u;
+    for (uint i = 0u; i < kCellWords; ++i)
+        r.w[i] = 0u;
     return r;
 }
 
@@ -232,8 +244,10 @@ GUST_INLINE CellBits bits_all(uint v) {
     uint n = v * v * v;
     for (uint i = 0u; i < kCellWords; ++i) {
         uint lo = i * 32u;
-        if (n >= lo + 32u) r.w[i] = 0xffffffffu;
-        else if (n > lo) r.w[i] = (1u << (n - lo)) - 1u;
+        if (n >= lo + 32u)
+            r.w[i] = 0xffffffffu;
+        else if (n > lo)
+            r.w[i] = (1u << (n - lo)) - 1u;
     }
     return r;
 }
@@ -244,28 +258,33 @@ GUST_INLINE bool bits_get(CellBits b, uint i) {
 
 GUST_INLINE uint bits_count(CellBits b) {
     uint c = 0u;
-    for (uint i = 0u; i < kCellWords; ++i) c += uint(bitCount(b.w[i]));
+    for (uint i = 0u; i < kCellWords; ++i)
+        c += uint(bitCount(b.w[i]));
     return c;
 }
 
 GUST_INLINE bool bits_equal(CellBits a, CellBits b) {
     bool same = true;
-    for (uint i = 0u; i < kCellWords; ++i) same = same && a.w[i] == b.w[i];
+    for (uint i = 0u; i < kCellWords; ++i)
+        same = same && a.w[i] == b.w[i];
     return same;
 }
 
 GUST_INLINE CellBits bits_and(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i) a.w[i] &= b.w[i];
+    for (uint i = 0u; i < kCellWords; ++i)
+        a.w[i] &= b.w[i];
     return a;
 }
 
 GUST_INLINE CellBits bits_and_not(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i) a.w[i] &= ~b.w[i];
+    for (uint i = 0u; i < kCellWords; ++i)
+        a.w[i] &= ~b.w[i];
     return a;
 }
 
 GUST_INLINE CellBits bits_or(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i) a.w[i] |= b.w[i];
+    for (uint i = 0u; i < kCellWords; ++i)
+        a.w[i] |= b.w[i];
     return a;
 }
 
@@ -412,13 +431,30 @@ GUST_INLINE float emitter_drive(float u, float target, float rate) {
     return u;
 }
 
+// ---- Conjugate gradients ---------------------------------------------------------------------------
+
+/// Weight of the previous search direction. A V-cycle is not an exactly symmetric preconditioner, so
+/// the flexible (Polak–Ribière) form β = z·(r − r_old) / (z_old·r_old) is used (Notay 2000); it equals
+/// Fletcher–Reeves when the preconditioner is symmetric. 0 on the first iteration or a breakdown.
+GUST_INLINE float cg_beta(float rz, float z_dot_old_r, float old_rz) {
+    float beta = old_rz != 0.0f ? (rz - z_dot_old_r) / old_rz : 0.0f;
+    return abs(beta) < 1e30f ? beta : 0.0f;
+}
+
+/// Step length along the search direction p: (r·z) / (p·Lp); 0 when p·Lp vanishes (p is constant over a
+/// closed pocket, where L has no inverse) or the quotient is not finite.
+GUST_INLINE float cg_alpha(float rz, float p_dot_lp) {
+    float alpha = p_dot_lp != 0.0f ? rz / p_dot_lp : 0.0f;
+    return abs(alpha) < 1e30f ? alpha : 0.0f;
+}
+
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
-static_assert(sizeof(gust::shaderio::SolverState) == 48);
+static_assert(sizeof(gust::shaderio::SolverState) == 64);
 #endif
 
 #endif

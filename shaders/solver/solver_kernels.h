@@ -19,7 +19,8 @@ GUST_INLINE vec3 face_position(uint axis, ivec3 f) {
 }
 
 /// The lattice cell of component `axis` holding p (cell units): corners i0..i1 and weights t.
-GUST_INLINE void component_lattice(uint axis, vec3 p, GUST_OUT(ivec3) i0, GUST_OUT(ivec3) i1, GUST_OUT(vec3) t) {
+GUST_INLINE void component_lattice(uint axis, vec3 p, GUST_OUT(ivec3) i0, GUST_OUT(ivec3) i1,
+                                   GUST_OUT(vec3) t) {
     ivec3 m = grid_dims() + axis_unit(axis);
     vec3 q = p - vec3(0.5f) + 0.5f * vec3(axis_unit(axis));
     q = clamp(q, vec3(0.0f), vec3(m - ivec3(1)));
@@ -70,7 +71,8 @@ GUST_INLINE vec2 component_range(uint field, uint axis, vec3 p) {
 }
 
 GUST_INLINE vec3 sample_velocity(uint field, vec3 p) {
-    return vec3(sample_component(field, 0u, p), sample_component(field, 1u, p), sample_component(field, 2u, p));
+    return vec3(sample_component(field, 0u, p), sample_component(field, 1u, p),
+                sample_component(field, 2u, p));
 }
 
 // ---- Advection (Stam 1999; MacCormack after Selle et al. 2008) ---------------------------------------
@@ -91,7 +93,8 @@ GUST_INLINE float advect_face(uint field, uint axis, ivec3 f, float dt) {
 /// (kFieldBack) found, clamped to the values the forward pass interpolated (stays bounded).
 GUST_INLINE float maccormack_face(uint axis, ivec3 f, float dt) {
     int i = face_index(grid_dims(), axis, f);
-    float corrected = load_face(kFieldTmp, i) + 0.5f * (load_face(kFieldVelocity, i) - load_face(kFieldBack, i));
+    float corrected =
+        load_face(kFieldTmp, i) + 0.5f * (load_face(kFieldVelocity, i) - load_face(kFieldBack, i));
     vec2 range = component_range(kFieldVelocity, axis, trace(face_position(axis, f), dt));
     return clamp(corrected, range.x, range.y);
 }
@@ -104,7 +107,8 @@ GUST_INLINE float force_face(uint axis, ivec3 f, float rate) {
     if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
     float u = load_face(kFieldVelocity, face_index(grid_dims(), axis, f));
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
-    for (uint e = 0u; e < emitter_count(); ++e) u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
+    for (uint e = 0u; e < emitter_count(); ++e)
+        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
     return u;
 }
 
@@ -112,7 +116,8 @@ GUST_INLINE vec3 cell_velocity(uint field, ivec3 c) {
     ivec3 n = grid_dims();
     vec3 v = vec3(0.0f);
     for (uint a = 0u; a < 3u; ++a)
-        v[a] = 0.5f * (load_face(field, face_index(n, a, c)) + load_face(field, face_index(n, a, c + axis_unit(a))));
+        v[a] = 0.5f *
+               (load_face(field, face_index(n, a, c)) + load_face(field, face_index(n, a, c + axis_unit(a))));
     return v;
 }
 
@@ -125,7 +130,8 @@ GUST_INLINE vec4 cell_vorticity(ivec3 c) {
         ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
         ivec3 lo = max(c - axis_unit(a), ivec3(0));
         float span = float(hi[a] - lo[a]) * grid_h();
-        d[a] = span > 0.0f ? (cell_velocity(kFieldVelocity, hi) - cell_velocity(kFieldVelocity, lo)) / span : vec3(0.0f);
+        d[a] = span > 0.0f ? (cell_velocity(kFieldVelocity, hi) - cell_velocity(kFieldVelocity, lo)) / span
+                           : vec3(0.0f);
     }
     vec3 w = vec3(d[1].z - d[2].y, d[2].x - d[0].z, d[0].y - d[1].x);
     return vec4(w, length(w));
@@ -140,7 +146,9 @@ GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
         ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
         ivec3 lo = max(c - axis_unit(a), ivec3(0));
         float span = float(hi[a] - lo[a]) * grid_h();
-        g[a] = span > 0.0f ? (load_vorticity(cell_index(n, hi)).w - load_vorticity(cell_index(n, lo)).w) / span : 0.0f;
+        g[a] = span > 0.0f
+                   ? (load_vorticity(cell_index(n, hi)).w - load_vorticity(cell_index(n, lo)).w) / span
+                   : 0.0f;
     }
     float len = length(g);
     if (!(len > 1e-12f)) return vec3(0.0f);
@@ -187,13 +195,18 @@ GUST_INLINE float face_flux(uint axis, ivec3 f) {
 /// The solver's divergence of cell c (1/s): net outward flux over the cell's volume.
 GUST_INLINE float cell_divergence(ivec3 c) {
     float net = 0.0f;
-    for (uint a = 0u; a < 3u; ++a) net += face_flux(a, c + axis_unit(a)) - face_flux(a, c);
+    for (uint a = 0u; a < 3u; ++a)
+        net += face_flux(a, c + axis_unit(a)) - face_flux(a, c);
     return net / grid_h();
 }
 
-/// The weighted Laplacian at cell c of level l, split into the diagonal and the neighbours' sum:
-/// (Lφ)_c = off − diag·φ_c. Open domain sides hold φ = 0 beyond them; inflow sides add nothing.
-GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, GUST_OUT(float) diag, GUST_OUT(float) off) {
+/// The weighted Laplacian at cell c of level l: diag = Σ w over the open faces, off = Σ w·(φ_nb − centre)
+/// (φ = 0 beyond open domain sides; inflow sides add nothing), so (Lφ)_c = off − diag·(φ_c − centre).
+/// With centre = φ_c, off is (Lφ)_c itself, summed from differences: off − diag·φ_c would cancel the
+/// digits that matter once φ is large beside its gradient (float keeps ~7), and stall the solve above
+/// its tolerance. Relaxation likewise adds a small correction to φ_c rather than recomputing it.
+GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, float centre, GUST_OUT(float) diag,
+                               GUST_OUT(float) off) {
     GridLevel level = load_level(l);
     uint open = grid_open_sides();
     diag = 0.0f;
@@ -206,20 +219,31 @@ GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, GUST_OUT(float) diag
             if (w == 0.0f) continue;
             if (inside_cells(level.dims, nb)) {
                 diag += w;
-                off += w * load_cell(field, int(level.cells) + cell_index(level.dims, nb));
+                off += w * (load_cell(field, int(level.cells) + cell_index(level.dims, nb)) - centre);
             } else if ((open >> (2u * a + s) & 1u) != 0u) {
                 diag += w;
+                off -= w * centre;
             }
         }
 }
 
+/// (Lφ)_c at cell c of level l for φ in `field`; 0 where no face is open.
+GUST_INLINE float laplacian_cell(uint l, ivec3 c, uint field) {
+    GridLevel level = load_level(l);
+    float diag, lap;
+    cell_operator(l, c, field, load_cell(field, int(level.cells) + cell_index(level.dims, c)), diag, lap);
+    return diag > 0.0f ? lap : 0.0f;
+}
+
 /// Gauss–Seidel / Jacobi update of φ at cell c of level l from the values in `field`.
 GUST_INLINE float relax_cell(uint l, ivec3 c, uint field) {
-    float diag, off;
-    cell_operator(l, c, field, diag, off);
-    if (!(diag > 0.0f)) return 0.0f;
     GridLevel level = load_level(l);
-    return (off - load_cell(kCellRhs, int(level.cells) + cell_index(level.dims, c))) / diag;
+    int i = int(level.cells) + cell_index(level.dims, c);
+    float phi = load_cell(field, i);
+    float diag, lap;
+    cell_operator(l, c, field, phi, diag, lap);
+    if (!(diag > 0.0f)) return 0.0f;
+    return phi + (lap - load_cell(kCellRhs, i)) / diag;
 }
 
 /// Damped Jacobi update of φ at level-0 cell c from the values in `field`.
@@ -230,12 +254,11 @@ GUST_INLINE float jacobi_cell(ivec3 c, uint field) {
 
 /// Residual b − Lφ at cell c of level l (φ in kCellPressure); 0 where no face is open.
 GUST_INLINE float residual_cell(uint l, ivec3 c) {
-    float diag, off;
-    cell_operator(l, c, kCellPressure, diag, off);
-    if (!(diag > 0.0f)) return 0.0f;
     GridLevel level = load_level(l);
     int i = int(level.cells) + cell_index(level.dims, c);
-    return load_cell(kCellRhs, i) - (off - diag * load_cell(kCellPressure, i));
+    float diag, lap;
+    cell_operator(l, c, kCellPressure, load_cell(kCellPressure, i), diag, lap);
+    return diag > 0.0f ? load_cell(kCellRhs, i) - lap : 0.0f;
 }
 
 /// Right-hand side of coarse cell C of level l (> 0): the mean residual of its children.
@@ -247,7 +270,8 @@ GUST_INLINE float restrict_cell(uint l, ivec3 C) {
         for (int y = 0; y < k.y; ++y)
             for (int x = 0; x < k.x; ++x) {
                 ivec3 c = C * k + ivec3(x, y, z);
-                if (inside_cells(fine.dims, c)) sum += load_cell(kCellResidual, int(fine.cells) + cell_index(fine.dims, c));
+                if (inside_cells(fine.dims, c))
+                    sum += load_cell(kCellResidual, int(fine.cells) + cell_index(fine.dims, c));
             }
     return sum / float(k.x * k.y * k.z);
 }
@@ -294,7 +318,8 @@ GUST_INLINE float prolong_cell(uint l, ivec3 c) {
         }
         if (!used) continue;
         ivec3 q = parent + pick * toward;
-        if (inside_cells(coarse.dims, q)) sum += w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, q));
+        if (inside_cells(coarse.dims, q))
+            sum += w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, q));
     }
     return sum;
 }

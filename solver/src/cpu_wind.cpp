@@ -18,7 +18,7 @@ struct HostKernels {
     std::vector<GpuEmitter> emitters;
     std::vector<float> face[4]; ///< kField*
     std::vector<float> weights;
-    std::vector<float> cell[4]; ///< kCell*
+    std::vector<float> cell[8]; ///< kCell*
     std::vector<vec4> vorticity;
 
     ivec3 grid_dims() const { return dims; }
@@ -64,13 +64,16 @@ struct CpuWind::Impl {
     }
     template <typename F> void each_cell(const GridLevel& level, F&& f) {
         const int n = level.dims.x * level.dims.y * level.dims.z;
-        for (int i = 0; i < n; ++i) f(i, shaderio::cell_from_index(level.dims, i));
+        for (int i = 0; i < n; ++i)
+            f(i, shaderio::cell_from_index(level.dims, i));
     }
 
     void solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells);
     void coarse_weights();
     void smooth(std::uint32_t l);
+    void v_cycle();
     float max_residual();
+    float conjugate_gradients(float goal, float residual, std::uint32_t& checks);
 };
 
 CpuWind::~CpuWind() = default;
@@ -88,9 +91,11 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
     const GridLevel& last = m.k.levels.back();
     const std::size_t all_cells = last.cells + std::size_t(last.dims.x) * last.dims.y * last.dims.z;
     const std::size_t all_faces = last.faces + std::size_t(shaderio::faces_total(last.dims));
-    for (auto& f : m.k.face) f.assign(m.faces(), 0.0f);
+    for (auto& f : m.k.face)
+        f.assign(m.faces(), 0.0f);
     m.k.weights.assign(all_faces, 1.0f);
-    for (auto& c : m.k.cell) c.assign(all_cells, 0.0f);
+    for (auto& c : m.k.cell)
+        c.assign(all_cells, 0.0f);
     m.k.vorticity.assign(m.cells(), glm::vec4(0.0f));
     m.solid_fraction.assign(m.cells(), 0.0f);
     m.cut.assign(m.cells(), 0);
@@ -100,16 +105,18 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
 }
 
 Status CpuWind::set_ambient(glm::vec3 velocity) {
-    if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
-        return Status::failure("ambient wind must be finite");
+    if (Status s = detail::validate_ambient(velocity); !s) return s;
     impl_->k.ambient = velocity;
+    if (impl_->last_dt == 0.0f)
+        impl_->k.face[shaderio::kFieldVelocity] = detail::uniform_faces(impl_->k.dims, velocity);
     return Status{};
 }
 
 Status CpuWind::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
     impl_->k.emitters.clear();
-    for (const Emitter& e : emitters) impl_->k.emitters.push_back(detail::to_gpu(e));
+    for (const Emitter& e : emitters)
+        impl_->k.emitters.push_back(detail::to_gpu(e));
     return Status{};
 }
 
@@ -125,17 +132,25 @@ Status CpuWind::scroll(glm::ivec3 cells) {
     m.each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
         const glm::ivec3 src = f + cells;
         const glm::ivec3 lattice = m.k.dims + shaderio::axis_unit(axis);
-        const bool inside = glm::all(glm::greaterThanEqual(src, glm::ivec3(0))) && glm::all(glm::lessThan(src, lattice));
-        moved[std::size_t(i)] = inside ? m.k.face[0][std::size_t(shaderio::face_index(m.k.dims, axis, src))] : m.k.ambient[axis];
+        const bool inside =
+            glm::all(glm::greaterThanEqual(src, glm::ivec3(0))) && glm::all(glm::lessThan(src, lattice));
+        moved[std::size_t(i)] =
+            inside ? m.k.face[0][std::size_t(shaderio::face_index(m.k.dims, axis, src))] : m.k.ambient[axis];
     });
     m.k.face[0] = std::move(moved);
     m.k.origin += glm::vec3(cells) * m.desc.cell_size;
     return Status{};
 }
 
-const std::vector<float>& CpuWind::velocity() const { return impl_->k.face[shaderio::kFieldVelocity]; }
-const std::vector<float>& CpuWind::solid_velocity() const { return impl_->k.face[shaderio::kFieldSolid]; }
-const std::vector<float>& CpuWind::solid_fraction() const { return impl_->solid_fraction; }
+const std::vector<float>& CpuWind::velocity() const {
+    return impl_->k.face[shaderio::kFieldVelocity];
+}
+const std::vector<float>& CpuWind::solid_velocity() const {
+    return impl_->k.face[shaderio::kFieldSolid];
+}
+const std::vector<float>& CpuWind::solid_fraction() const {
+    return impl_->solid_fraction;
+}
 const std::vector<float>& CpuWind::open_fraction() const {
     return impl_->k.weights;
 }
@@ -143,7 +158,8 @@ std::vector<float> CpuWind::pressure() const {
     const float scale = impl_->last_dt > 0.0f ? detail::kAirDensity / impl_->last_dt : 0.0f;
     std::vector<float> p(impl_->k.cell[shaderio::kCellPressure].begin(),
                          impl_->k.cell[shaderio::kCellPressure].begin() + std::ptrdiff_t(impl_->cells()));
-    for (float& v : p) v *= scale;
+    for (float& v : p)
+        v *= scale;
     return p;
 }
 
@@ -151,7 +167,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
     const std::uint32_t v = desc.voxels_per_cell;
     const glm::ivec3 voxels = k.dims * int(v);
     CellBits faces_layers[6];
-    for (std::uint32_t s = 0; s < 6; ++s) std::copy(face_mask + s * kCellWords, face_mask + (s + 1) * kCellWords, faces_layers[s].w);
+    for (std::uint32_t s = 0; s < 6; ++s)
+        std::copy(face_mask + s * kCellWords, face_mask + (s + 1) * kCellWords, faces_layers[s].w);
     std::vector<glm::ivec4> motion(cells(), glm::ivec4(0));
     cut_cells = 0;
     each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
@@ -163,7 +180,10 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
             for (std::uint32_t y = 0; y < v; ++y)
                 for (std::uint32_t x = 0; x < v; ++x) {
                     const glm::ivec3 p = c * int(v) + glm::ivec3(x, y, z);
-                    if (!solid->occupied[std::size_t(p.x) + std::size_t(voxels.x) * (std::size_t(p.y) + std::size_t(voxels.y) * p.z)]) continue;
+                    if (!solid->occupied[std::size_t(p.x) +
+                                         std::size_t(voxels.x) *
+                                             (std::size_t(p.y) + std::size_t(voxels.y) * p.z)])
+                        continue;
                     const std::uint32_t j = x + v * (y + v * z);
                     occupied.w[j / 32] |= 1u << (j % 32);
                 }
@@ -179,7 +199,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
             if (glm::any(glm::lessThan(voxel, glm::ivec3(0)))) continue;
             const glm::ivec3 c = voxel / int(v);
             if (!shaderio::inside_cells(k.dims, c)) continue;
-            const glm::vec3 clamped = glm::clamp(velocity, glm::vec3(-shaderio::kMaxFragmentSpeed), glm::vec3(shaderio::kMaxFragmentSpeed));
+            const glm::vec3 clamped = glm::clamp(velocity, glm::vec3(-shaderio::kMaxFragmentSpeed),
+                                                 glm::vec3(shaderio::kMaxFragmentSpeed));
             const glm::ivec3 fixed_point(glm::round(clamped * shaderio::kVelocityScale));
             motion[std::size_t(shaderio::cell_index(k.dims, c))] += glm::ivec4(fixed_point, 1);
         }
@@ -189,7 +210,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
         return cut[i] ? fluid[i] : shaderio::bits_all(v);
     };
     auto motion_of = [&](glm::ivec3 c) {
-        return shaderio::inside_cells(k.dims, c) ? motion[std::size_t(shaderio::cell_index(k.dims, c))] : glm::ivec4(0);
+        return shaderio::inside_cells(k.dims, c) ? motion[std::size_t(shaderio::cell_index(k.dims, c))]
+                                                 : glm::ivec4(0);
     };
     auto is_cut = [&](glm::ivec3 c) {
         return shaderio::inside_cells(k.dims, c) && cut[std::size_t(shaderio::cell_index(k.dims, c))];
@@ -197,10 +219,12 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
     each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
         const glm::ivec3 lo = f - shaderio::axis_unit(axis);
         float open = 1.0f;
-        if (is_cut(lo) || is_cut(f)) open = shaderio::face_open_fraction(fluid_of(lo), fluid_of(f), axis, v, faces_layers);
+        if (is_cut(lo) || is_cut(f))
+            open = shaderio::face_open_fraction(fluid_of(lo), fluid_of(f), axis, v, faces_layers);
         k.weights[std::size_t(i)] = open;
         const glm::ivec4 m = motion_of(lo) + motion_of(f);
-        k.face[shaderio::kFieldSolid][std::size_t(i)] = m.w > 0 ? float(m[int(axis)]) / (shaderio::kVelocityScale * float(m.w)) : 0.0f;
+        k.face[shaderio::kFieldSolid][std::size_t(i)] =
+            m.w > 0 ? float(m[int(axis)]) / (shaderio::kVelocityScale * float(m.w)) : 0.0f;
     });
 }
 
@@ -221,8 +245,90 @@ void CpuWind::Impl::smooth(std::uint32_t l) {
         for (std::uint32_t colour = 0; colour < 2; ++colour)
             each_cell(level, [&](int i, glm::ivec3 c) {
                 if (std::uint32_t(c.x + c.y + c.z) % 2 != colour) return;
-                k.cell[shaderio::kCellPressure][level.cells + std::size_t(i)] = k.relax_cell(l, c, shaderio::kCellPressure);
+                k.cell[shaderio::kCellPressure][level.cells + std::size_t(i)] =
+                    k.relax_cell(l, c, shaderio::kCellPressure);
             });
+}
+
+void CpuWind::Impl::v_cycle() {
+    std::vector<float>& phi = k.cell[shaderio::kCellPressure];
+    std::vector<float>& rhs = k.cell[shaderio::kCellRhs];
+    const std::uint32_t levels = std::uint32_t(k.levels.size());
+    for (std::uint32_t l = 0; l + 1 < levels; ++l) {
+        smooth(l);
+        const GridLevel& level = k.levels[l];
+        each_cell(level, [&](int i, glm::ivec3 c) {
+            k.cell[shaderio::kCellResidual][level.cells + std::size_t(i)] = k.residual_cell(l, c);
+        });
+        const GridLevel& coarse = k.levels[l + 1];
+        each_cell(coarse, [&](int i, glm::ivec3 c) {
+            rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(l + 1, c);
+            phi[coarse.cells + std::size_t(i)] = 0.0f;
+        });
+    }
+    const GridLevel& coarsest = k.levels[levels - 1];
+    for (std::uint32_t sweep = 0; sweep < 2 * detail::kCoarseSweeps; ++sweep)
+        each_cell(coarsest, [&](int i, glm::ivec3 c) {
+            if (std::uint32_t(c.x + c.y + c.z) % 2 == sweep % 2)
+                phi[coarsest.cells + std::size_t(i)] = k.relax_cell(levels - 1, c, shaderio::kCellPressure);
+        });
+    for (std::uint32_t l = levels - 1; l-- > 0;) {
+        const GridLevel& level = k.levels[l];
+        std::vector<float> add(std::size_t(level.dims.x) * level.dims.y * level.dims.z);
+        each_cell(level, [&](int i, glm::ivec3 c) { add[std::size_t(i)] = k.prolong_cell(l, c); });
+        for (std::size_t i = 0; i < add.size(); ++i)
+            phi[level.cells + i] += add[i];
+        smooth(l);
+    }
+}
+
+// The GPU's passes in the GPU's order (wind_solver.cpp), with the dot products summed in double. The
+// residual is recomputed from x each iteration rather than updated: the update drifts from b − Lx in
+// float by more than the tolerance.
+float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32_t& checks) {
+    using namespace shaderio;
+    std::vector<float>& z = k.cell[kCellPressure];
+    std::vector<float>& r = k.cell[kCellRhs];
+    std::vector<float>& x = k.cell[kCellSolution];
+    std::vector<float>& p = k.cell[kCellDirection];
+    std::vector<float>& b = k.cell[kCellTarget];
+    std::vector<float>& old_r = k.cell[kCellOldResidual];
+    const std::size_t n = cells();
+    std::fill_n(x.begin(), n, 0.0f);
+    std::fill_n(p.begin(), n, 0.0f);
+    std::fill_n(old_r.begin(), n, 0.0f);
+    std::copy_n(r.begin(), n, b.begin());
+    float old_rz = 0.0f;
+    for (std::uint32_t it = 0; it < desc.max_cycles && residual > goal; ++it) {
+        v_cycle();
+        double rz = 0.0, z_old_r = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            rz += double(r[i]) * z[i];
+            z_old_r += double(old_r[i]) * z[i];
+        }
+        const float beta = cg_beta(float(rz), float(z_old_r), old_rz);
+        old_rz = float(rz);
+        for (std::size_t i = 0; i < n; ++i)
+            p[i] = z[i] + beta * p[i];
+        double pq = 0.0;
+        each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+            pq += double(p[std::size_t(i)]) * k.laplacian_cell(0, c, kCellDirection);
+        });
+        const float alpha = cg_alpha(old_rz, float(pq));
+        for (std::size_t i = 0; i < n; ++i) {
+            x[i] += alpha * p[i];
+            old_r[i] = r[i];
+            z[i] = 0.0f;
+        }
+        residual = 0.0f;
+        each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+            r[std::size_t(i)] = b[std::size_t(i)] - k.laplacian_cell(0, c, kCellSolution);
+            residual = std::max(residual, std::abs(r[std::size_t(i)]));
+        });
+        if (residual > goal) ++checks;
+    }
+    std::copy_n(x.begin(), n, z.begin());
+    return residual;
 }
 
 float CpuWind::Impl::max_residual() {
@@ -255,11 +361,17 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
     std::vector<float>& back = k.face[shaderio::kFieldBack];
     if (desc.advection != Advection::None) {
-        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt); });
+        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+            tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt);
+        });
         if (desc.advection == Advection::MacCormack) {
-            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { back[std::size_t(i)] = k.advect_face(shaderio::kFieldTmp, a, f, -dt); });
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+                back[std::size_t(i)] = k.advect_face(shaderio::kFieldTmp, a, f, -dt);
+            });
             std::vector<float> out(m.faces());
-            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { out[std::size_t(i)] = k.maccormack_face(a, f, dt); });
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+                out[std::size_t(i)] = k.maccormack_face(a, f, dt);
+            });
             tmp = std::move(out);
         }
         u = tmp;
@@ -267,15 +379,20 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     const float rate = detail::emitter_rate(dt, desc.emitter_response);
     m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { u[std::size_t(i)] = k.force_face(a, f, rate); });
     if (desc.vorticity > 0.0f) {
-        m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) { k.vorticity[std::size_t(i)] = k.cell_vorticity(c); });
-        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { tmp[std::size_t(i)] = k.confine_face(a, f, dt, desc.vorticity); });
+        m.each_cell(k.levels[0],
+                    [&](int i, glm::ivec3 c) { k.vorticity[std::size_t(i)] = k.cell_vorticity(c); });
+        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+            tmp[std::size_t(i)] = k.confine_face(a, f, dt, desc.vorticity);
+        });
         u = tmp;
     }
     if (desc.viscosity > 0.0f) {
         const float alpha = desc.viscosity * dt / (desc.cell_size * desc.cell_size);
         std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
         for (std::uint32_t it = 0; it < detail::kViscosityIterations; ++it) {
-            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { k.face[to][std::size_t(i)] = k.diffuse_face(from, a, f, alpha); });
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+                k.face[to][std::size_t(i)] = k.diffuse_face(from, a, f, alpha);
+            });
             from = to;
             to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
         }
@@ -288,7 +405,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     float before = 0.0f;
     m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
         float diag, off;
-        k.cell_operator(0, c, shaderio::kCellPressure, diag, off);
+        k.cell_operator(0, c, shaderio::kCellPressure, 0.0f, diag, off);
         const float d = diag > 0.0f ? k.cell_divergence(c) : 0.0f;
         rhs[std::size_t(i)] = d;
         phi[std::size_t(i)] = 0.0f;
@@ -300,38 +417,17 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     std::uint32_t checks = 0;
     bool done = residual <= goal;
     if (!done) ++checks;
-    const std::uint32_t levels = std::uint32_t(k.levels.size());
     if (desc.pressure == PressureSolver::Multigrid) {
         for (std::uint32_t cycle = 0; cycle < desc.max_cycles && !done; ++cycle) {
-            for (std::uint32_t l = 0; l + 1 < levels; ++l) {
-                m.smooth(l);
-                const GridLevel& level = k.levels[l];
-                m.each_cell(level, [&](int i, glm::ivec3 c) {
-                    k.cell[shaderio::kCellResidual][level.cells + std::size_t(i)] = k.residual_cell(l, c);
-                });
-                const GridLevel& coarse = k.levels[l + 1];
-                m.each_cell(coarse, [&](int i, glm::ivec3 c) {
-                    rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(l + 1, c);
-                    phi[coarse.cells + std::size_t(i)] = 0.0f;
-                });
-            }
-            const GridLevel& coarsest = k.levels[levels - 1];
-            for (std::uint32_t sweep = 0; sweep < 2 * detail::kCoarseSweeps; ++sweep)
-                m.each_cell(coarsest, [&](int i, glm::ivec3 c) {
-                    if (std::uint32_t(c.x + c.y + c.z) % 2 == sweep % 2)
-                        phi[coarsest.cells + std::size_t(i)] = k.relax_cell(levels - 1, c, shaderio::kCellPressure);
-                });
-            for (std::uint32_t l = levels - 1; l-- > 0;) {
-                const GridLevel& level = k.levels[l];
-                std::vector<float> add(std::size_t(level.dims.x) * level.dims.y * level.dims.z);
-                m.each_cell(level, [&](int i, glm::ivec3 c) { add[std::size_t(i)] = k.prolong_cell(l, c); });
-                for (std::size_t i = 0; i < add.size(); ++i) phi[level.cells + i] += add[i];
-                m.smooth(l);
-            }
+            m.v_cycle();
             residual = m.max_residual();
             done = residual <= goal;
             if (!done) ++checks;
         }
+        stats.cycles = std::min(checks, desc.max_cycles);
+    } else if (desc.pressure == PressureSolver::MultigridPCG) {
+        residual = m.conjugate_gradients(goal, residual, checks);
+        done = residual <= goal;
         stats.cycles = std::min(checks, desc.max_cycles);
     } else {
         std::vector<float>& other = k.cell[shaderio::kCellPressureTmp];
@@ -341,7 +437,8 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             for (std::uint32_t it = 0; it < detail::kJacobiBlock; ++it) {
                 const std::uint32_t from = (it & 1) ? shaderio::kCellPressureTmp : shaderio::kCellPressure;
                 std::vector<float>& to = (it & 1) ? phi : other;
-                m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
+                m.each_cell(k.levels[0],
+                            [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
                 std::copy(next.begin(), next.end(), to.begin());
             }
             residual = m.max_residual();
@@ -354,12 +451,13 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     stats.converged = done;
     stats.divergence_before = before;
     std::vector<float> projected(m.faces());
-    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { projected[std::size_t(i)] = k.project_face(a, f); });
+    m.each_face(
+        [&](int i, std::uint32_t a, glm::ivec3 f) { projected[std::size_t(i)] = k.project_face(a, f); });
     u = std::move(projected);
     float after = 0.0f;
     m.each_cell(k.levels[0], [&](int, glm::ivec3 c) {
         float diag, off;
-        k.cell_operator(0, c, shaderio::kCellPressure, diag, off);
+        k.cell_operator(0, c, shaderio::kCellPressure, 0.0f, diag, off);
         if (diag > 0.0f) after = std::max(after, std::abs(k.cell_divergence(c)));
     });
     stats.divergence_after = after;

@@ -25,7 +25,8 @@ std::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size) {
         level.factor = glm::ivec3(1);
         cell_offset += std::uint32_t(dims.x * dims.y * dims.z);
         face_offset += std::uint32_t(shaderio::faces_total(dims));
-        const bool last = std::max({dims.x, dims.y, dims.z}) <= 4 || levels.size() + 1 == shaderio::kMaxGridLevels;
+        const bool last =
+            std::max({dims.x, dims.y, dims.z}) <= 4 || levels.size() + 1 == shaderio::kMaxGridLevels;
         if (!last) {
             for (int a = 0; a < 3; ++a)
                 if (dims[a] > 1) {
@@ -47,7 +48,9 @@ void face_masks(std::uint32_t v, std::uint32_t* out) {
     }
 }
 
-std::uint32_t cell_words(std::uint32_t v) { return (v * v * v + 31) / 32; }
+std::uint32_t cell_words(std::uint32_t v) {
+    return (v * v * v + 31) / 32;
+}
 
 shaderio::GpuEmitter to_gpu(const Emitter& e) {
     shaderio::GpuEmitter g{};
@@ -58,16 +61,28 @@ shaderio::GpuEmitter to_gpu(const Emitter& e) {
     g.falloff = e.falloff;
     g.extent = e.length;
     switch (e.type) {
-    case EmitterType::Directional: g.type = shaderio::kEmitterDirectional; break;
-    case EmitterType::Omni: g.type = shaderio::kEmitterOmni; break;
-    case EmitterType::Vortex: g.type = shaderio::kEmitterVortex; break;
-    case EmitterType::CapsuleMotor: g.type = shaderio::kEmitterCapsule; break;
-    case EmitterType::ConeMotor: g.type = shaderio::kEmitterCone; break;
+    case EmitterType::Directional:
+        g.type = shaderio::kEmitterDirectional;
+        break;
+    case EmitterType::Omni:
+        g.type = shaderio::kEmitterOmni;
+        break;
+    case EmitterType::Vortex:
+        g.type = shaderio::kEmitterVortex;
+        break;
+    case EmitterType::CapsuleMotor:
+        g.type = shaderio::kEmitterCapsule;
+        break;
+    case EmitterType::ConeMotor:
+        g.type = shaderio::kEmitterCone;
+        break;
     }
     return g;
 }
 
-float emitter_rate(float dt, float response) { return 1.0f - std::exp(-dt / response); }
+float emitter_rate(float dt, float response) {
+    return 1.0f - std::exp(-dt / response);
+}
 
 Status validate_dt(float dt) {
     if (!std::isfinite(dt) || !(dt > 0.0f) || dt > 10.0f)
@@ -75,10 +90,29 @@ Status validate_dt(float dt) {
     return Status{};
 }
 
+Status validate_ambient(glm::vec3 velocity) {
+    if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
+        return Status::failure("ambient wind must be finite");
+    if (glm::length(velocity) > 1e4f) return Status::failure("ambient wind must be below 10000 m/s");
+    return Status{};
+}
+
+std::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity) {
+    std::vector<float> out(std::size_t(shaderio::faces_total(cells)));
+    for (int i = 0; i < int(out.size()); ++i) {
+        std::uint32_t axis;
+        shaderio::face_from_index(cells, i, axis);
+        out[std::size_t(i)] = velocity[int(axis)];
+    }
+    return out;
+}
+
 } // namespace detail
 
 namespace {
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 } // namespace
 
 Result<GridDesc> voxel_grid(const SolverDesc& desc, std::uint32_t branching) {
@@ -117,16 +151,19 @@ SolidSource solid_source(const VoxelWorld& world) {
 Status validate(const SolverDesc& desc) {
     for (int a = 0; a < 3; ++a)
         if (desc.cells[a] < 8 || desc.cells[a] > 256)
-            return Status::failure("wind cells per axis must be in 8..256, got " + std::to_string(desc.cells.x) + " x " +
-                                   std::to_string(desc.cells.y) + " x " + std::to_string(desc.cells.z));
+            return Status::failure("wind cells per axis must be in 8..256, got " +
+                                   std::to_string(desc.cells.x) + " x " + std::to_string(desc.cells.y) +
+                                   " x " + std::to_string(desc.cells.z));
     if (!std::isfinite(desc.cell_size) || !(desc.cell_size > 0.0f))
         return Status::failure("cell_size must be a positive number of metres");
     if (!finite(desc.origin)) return Status::failure("origin must be finite");
     if (desc.voxels_per_cell < 1 || desc.voxels_per_cell > shaderio::kMaxVoxelsPerCell)
-        return Status::failure("voxels_per_cell must be in 1..8, got " + std::to_string(desc.voxels_per_cell));
+        return Status::failure("voxels_per_cell must be in 1..8, got " +
+                               std::to_string(desc.voxels_per_cell));
     if (!std::isfinite(desc.tolerance) || !(desc.tolerance > 0.0f) || desc.tolerance >= 1.0f)
         return Status::failure("tolerance must be in (0, 1)");
-    if (desc.max_cycles < 1 || desc.max_cycles > 1000) return Status::failure("max_cycles must be in 1..1000");
+    if (desc.max_cycles < 1 || desc.max_cycles > 1000)
+        return Status::failure("max_cycles must be in 1..1000");
     if (desc.max_iterations < 1 || desc.max_iterations > 1000000)
         return Status::failure("max_iterations must be in 1..1000000");
     if (desc.smoothing < 1 || desc.smoothing > 16) return Status::failure("smoothing must be in 1..16");
@@ -149,12 +186,14 @@ Status validate(std::span<const Emitter> emitters) {
         if (!finite(e.position)) return Status::failure(at + "position must be finite");
         if (!finite(e.direction) || std::abs(glm::length(e.direction) - 1.0f) > 1e-3f)
             return Status::failure(at + "direction must be a finite unit vector");
-        if (!std::isfinite(e.radius) || !(e.radius > 0.0f)) return Status::failure(at + "radius must be finite and > 0");
+        if (!std::isfinite(e.radius) || !(e.radius > 0.0f))
+            return Status::failure(at + "radius must be finite and > 0");
         if (!std::isfinite(e.strength) || std::abs(e.strength) > 1e4f)
             return Status::failure(at + "strength must be finite, within ±10000 m/s");
         if (!std::isfinite(e.falloff) || e.falloff < 0.0f || e.falloff > 64.0f)
             return Status::failure(at + "falloff must be finite, in [0, 64]");
-        if (!std::isfinite(e.length) || e.length < 0.0f) return Status::failure(at + "length must be finite and >= 0");
+        if (!std::isfinite(e.length) || e.length < 0.0f)
+            return Status::failure(at + "length must be finite and >= 0");
         const bool motor = e.type == EmitterType::CapsuleMotor || e.type == EmitterType::ConeMotor;
         if (e.type == EmitterType::ConeMotor && !(e.length > 0.0f))
             return Status::failure(at + "a cone motor needs a length > 0");

@@ -25,5 +25,9 @@ inline constexpr std::uint32_t kViscosityIterations = 4;
 /// Air density for reporting pressure, kg/m^3.
 inline constexpr float kAirDensity = 1.2f;
 Status validate_dt(float dt);
+/// Face velocities of a uniform flow over a grid of `cells`.
+std::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity);
+/// An ambient wind: finite and below 10,000 m/s.
+Status validate_ambient(glm::vec3 velocity);
 
 } // namespace gust::detail

@@ -10,6 +10,8 @@ namespace gust {
 
 namespace {
 #include "gust_shaders/advect_comp.h"
+#include "gust_shaders/cg_comp.h"
+#include "gust_shaders/cg_scalars_comp.h"
 #include "gust_shaders/check_comp.h"
 #include "gust_shaders/coarse_solve_comp.h"
 #include "gust_shaders/coarse_weights_comp.h"
@@ -43,19 +45,23 @@ template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_
 
 LevelDispatch groups_for(std::uint64_t items) {
     const std::uint64_t groups = (items + shaderio::kSolverGroupSize - 1) / shaderio::kSolverGroupSize;
-    return {std::uint32_t(std::min<std::uint64_t>(groups, 65535)), std::uint32_t((groups + 65534) / 65535), 1};
+    return {std::uint32_t(std::min<std::uint64_t>(groups, 65535)), std::uint32_t((groups + 65534) / 65535),
+            1};
 }
 
-float from_bits(std::uint32_t bits) { return std::bit_cast<float>(bits); }
+float from_bits(std::uint32_t bits) {
+    return std::bit_cast<float>(bits);
+}
 
 } // namespace
 
 struct WindSolver::Impl {
-    gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces, vorticity,
-        confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, project, scroll;
+    gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces,
+        vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
+        cg_scalars, project, scroll;
     gpu::Buffer velocity, velocity_tmp, velocity_back, weights, solid_velocity, pressure, pressure_tmp, rhs,
-        residual_buf, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf, emitters, state, dispatch,
-        bindings;
+        residual_buf, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf,
+        emitters, state, dispatch, bindings;
     gpu::Profiler profiler;
     std::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -65,7 +71,9 @@ struct WindSolver::Impl {
 WindSolver::WindSolver(gpu::Context& ctx) : ctx_(ctx) {}
 WindSolver::~WindSolver() = default;
 
-std::size_t WindSolver::face_count() const { return std::size_t(shaderio::faces_total(glm::ivec3(desc_.cells))); }
+std::size_t WindSolver::face_count() const {
+    return std::size_t(shaderio::faces_total(glm::ivec3(desc_.cells)));
+}
 std::size_t WindSolver::cell_count() const {
     return std::size_t(desc_.cells.x) * desc_.cells.y * desc_.cells.z;
 }
@@ -84,17 +92,27 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         gpu::Pipeline* pipeline;
         std::span<const std::uint32_t> code;
     };
-    const Stage stages[] = {
-        {&m.solid_cells, words(solid_cells_comp)},   {&m.fragment_args, words(fragment_args_comp)},
-        {&m.solid_motion, words(solid_motion_comp)}, {&m.solid_faces, words(solid_faces_comp)},
-        {&m.coarse_weights, words(coarse_weights_comp)}, {&m.advect, words(advect_comp)},
-        {&m.forces, words(forces_comp)},             {&m.vorticity, words(vorticity_comp)},
-        {&m.confine, words(confine_comp)},           {&m.diffuse, words(diffuse_comp)},
-        {&m.divergence, words(divergence_comp)},     {&m.relax, words(relax_comp)},
-        {&m.residual, words(residual_comp)},         {&m.restrict_, words(restrict_comp)},
-        {&m.prolong, words(prolong_comp)},           {&m.coarse_solve, words(coarse_solve_comp)},
-        {&m.check, words(check_comp)},               {&m.project, words(project_comp)},
-        {&m.scroll, words(scroll_comp)}};
+    const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp)},
+                            {&m.fragment_args, words(fragment_args_comp)},
+                            {&m.solid_motion, words(solid_motion_comp)},
+                            {&m.solid_faces, words(solid_faces_comp)},
+                            {&m.coarse_weights, words(coarse_weights_comp)},
+                            {&m.advect, words(advect_comp)},
+                            {&m.forces, words(forces_comp)},
+                            {&m.vorticity, words(vorticity_comp)},
+                            {&m.confine, words(confine_comp)},
+                            {&m.diffuse, words(diffuse_comp)},
+                            {&m.divergence, words(divergence_comp)},
+                            {&m.relax, words(relax_comp)},
+                            {&m.residual, words(residual_comp)},
+                            {&m.restrict_, words(restrict_comp)},
+                            {&m.prolong, words(prolong_comp)},
+                            {&m.coarse_solve, words(coarse_solve_comp)},
+                            {&m.check, words(check_comp)},
+                            {&m.cg, words(cg_comp)},
+                            {&m.cg_scalars, words(cg_scalars_comp)},
+                            {&m.project, words(project_comp)},
+                            {&m.scroll, words(scroll_comp)}};
     for (const Stage& stage : stages) {
         auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(SolverPush));
         if (!pipeline) return pipeline.status();
@@ -106,6 +124,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t all_faces = last.faces + std::uint64_t(shaderio::faces_total(last.dims));
     const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
+    const LevelDispatch level0_groups = groups_for(cells);
     struct Want {
         gpu::Buffer* buffer;
         std::uint64_t bytes;
@@ -122,6 +141,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.pressure_tmp, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.rhs, all_cells * 4, gpu::MemoryUse::Device, 0},
         {&m.residual_buf, all_cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.cg_cells, 4 * cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.partials, std::uint64_t(level0_groups.x) * level0_groups.y * 8, gpu::MemoryUse::Device, 0},
         {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_fluid, cells * words_per_cell * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
@@ -159,6 +180,9 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.pressure_tmp = m.pressure_tmp.address();
     b.rhs = m.rhs.address();
     b.residual = m.residual_buf.address();
+    b.cg_cells = m.cg_cells.address();
+    b.partials = m.partials.address();
+    b.partial_count = level0_groups.x * level0_groups.y;
     b.cell_solid = m.cell_solid.address();
     b.cell_fluid = m.cell_fluid.address();
     b.cell_flags = m.cell_flags.address();
@@ -180,24 +204,26 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
         for (gpu::Buffer* buffer : {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid})
             ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
-        ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE, std::bit_cast<std::uint32_t>(1.0f));
+        ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE,
+                                 std::bit_cast<std::uint32_t>(1.0f));
     });
     if (!cleared) return cleared;
     return solver;
 }
 
 Status WindSolver::set_ambient(glm::vec3 velocity) {
-    if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
-        return Status::failure("ambient wind must be finite");
-    if (glm::length(velocity) > 1e4f) return Status::failure("ambient wind must be below 10000 m/s");
+    if (Status s = detail::validate_ambient(velocity); !s) return s;
     ambient_ = velocity;
-    return Status{};
+    if (last_dt_ > 0.0f) return Status{};
+    const std::vector<float> faces = detail::uniform_faces(glm::ivec3(desc_.cells), velocity);
+    return upload(ctx_, impl_->velocity, faces.data(), faces.size() * sizeof(float));
 }
 
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
     auto* out = static_cast<shaderio::GpuEmitter*>(impl_->emitters.mapped());
-    for (std::size_t i = 0; i < emitters.size(); ++i) out[i] = detail::to_gpu(emitters[i]);
+    for (std::size_t i = 0; i < emitters.size(); ++i)
+        out[i] = detail::to_gpu(emitters[i]);
     impl_->emitter_count = std::uint32_t(emitters.size());
     return Status{};
 }
@@ -219,7 +245,9 @@ Result<std::vector<float>> read_floats(gpu::Context& ctx, const gpu::Buffer& buf
 }
 } // namespace
 
-Result<std::vector<float>> WindSolver::read_velocity() const { return read_floats(ctx_, impl_->velocity, face_count()); }
+Result<std::vector<float>> WindSolver::read_velocity() const {
+    return read_floats(ctx_, impl_->velocity, face_count());
+}
 Result<std::vector<float>> WindSolver::read_open_fraction() const {
     return read_floats(ctx_, impl_->weights, face_count());
 }
@@ -233,7 +261,8 @@ Result<std::vector<float>> WindSolver::read_pressure() const {
     auto phi = read_floats(ctx_, impl_->pressure, cell_count());
     if (!phi) return phi;
     const float scale = last_dt_ > 0.0f ? detail::kAirDensity / last_dt_ : 0.0f;
-    for (float& p : *phi) p *= scale;
+    for (float& p : *phi)
+        p *= scale;
     return phi;
 }
 
@@ -317,12 +346,32 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
                 run_slot(cmd, m.relax, l);
             }
     };
+    // One V-cycle on rhs at level 0, improving φ there (levels below start from 0).
+    auto v_cycle = [&](VkCommandBuffer cmd) {
+        for (std::uint32_t l = 0; l + 1 < levels; ++l) {
+            smooth(cmd, l);
+            push.level = l;
+            push.parity = 0;
+            run_slot(cmd, m.residual, l);
+            push.level = l + 1;
+            run_slot(cmd, m.restrict_, l + 1);
+        }
+        push.level = levels - 1;
+        push.iterations = detail::kCoarseSweeps;
+        run_slot(cmd, m.coarse_solve, shaderio::kCoarseSlot);
+        for (std::uint32_t l = levels - 1; l-- > 0;) {
+            push.level = l;
+            run_slot(cmd, m.prolong, l);
+            smooth(cmd, l);
+        }
+    };
 
     Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.profiler.reset(cmd);
         vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
         vk.vkCmdFillBuffer(cmd, m.cell_motion.handle(), 0, VK_WHOLE_SIZE, 0);
-        const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0, kDispatchSlots * sizeof(LevelDispatch)};
+        const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0,
+                                 kDispatchSlots * sizeof(LevelDispatch)};
         vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
         gpu::barrier(ctx_, cmd);
 
@@ -387,30 +436,33 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
         run(cmd, m.check, {1, 1, 1});
         if (desc_.pressure == PressureSolver::Multigrid) {
             for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
-                for (std::uint32_t l = 0; l + 1 < levels; ++l) {
-                    smooth(cmd, l);
-                    push.level = l;
-                    push.parity = 0;
-                    run_slot(cmd, m.residual, l);
-                    push.level = l + 1;
-                    run_slot(cmd, m.restrict_, l + 1);
-                }
-                push.level = levels - 1;
-                push.iterations = detail::kCoarseSweeps;
-                run_slot(cmd, m.coarse_solve, shaderio::kCoarseSlot);
-                for (std::uint32_t l = levels - 1; l-- > 0;) {
-                    push.level = l;
-                    run_slot(cmd, m.prolong, l);
-                    smooth(cmd, l);
-                }
+                v_cycle(cmd);
                 push.level = 0;
                 push.parity = 1;
                 run_slot(cmd, m.residual, 0);
                 run(cmd, m.check, {1, 1, 1});
             }
+        } else if (desc_.pressure == PressureSolver::MultigridPCG) {
+            for (std::uint32_t iteration = 0; iteration < desc_.max_cycles; ++iteration) {
+                v_cycle(cmd);
+                push.level = 0;
+                for (std::uint32_t stage = 0; stage < 5; ++stage) {
+                    push.parity = stage;
+                    run_slot(cmd, m.cg, 0);
+                    if (stage == 0 || stage == 2) {
+                        push.parity = stage / 2;
+                        run_slot(cmd, m.cg_scalars, shaderio::kCoarseSlot);
+                    }
+                }
+                run(cmd, m.check, {1, 1, 1});
+            }
+            const VkBufferCopy solution{0, 0, cell_count() * sizeof(float)};
+            vk.vkCmdCopyBuffer(cmd, m.cg_cells.handle(), m.pressure.handle(), 1, &solution);
+            gpu::barrier(ctx_, cmd);
         } else {
             push.level = 0;
-            const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+            const std::uint32_t blocks =
+                (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
             for (std::uint32_t block = 0; block < blocks; ++block) {
                 for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
                     push.parity = 2 + (i & 1);
@@ -439,10 +491,10 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     stats.divergence_after = from_bits(st.divergence_after);
     stats.residual = from_bits(st.residual);
     stats.converged = st.done != 0;
-    const std::uint32_t per_check = desc_.pressure == PressureSolver::Multigrid ? 1 : detail::kJacobiBlock;
-    const std::uint32_t limit = desc_.pressure == PressureSolver::Multigrid
-                                    ? desc_.max_cycles
-                                    : (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+    const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
+    const std::uint32_t per_check = jacobi ? detail::kJacobiBlock : 1;
+    const std::uint32_t limit =
+        jacobi ? (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock : desc_.max_cycles;
     stats.cycles = std::min(st.checks, limit) * per_check;
     stats.cut_cells = st.cut_cells;
     stats.fluid_cells = st.fluid_cells;

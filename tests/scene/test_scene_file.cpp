@@ -1,5 +1,6 @@
 // Scene files: DESIGN.md's core example, the documented extensions and defaults, transform and
 // keyframe math, and every kind of bad file failing with its file, key path and reason.
+#include "gust/scene/domain_grid.hpp"
 #include "gust/scene/scene_file.hpp"
 #include "scene_test_support.hpp"
 
@@ -170,6 +171,18 @@ TEST_F(SceneFile, readsMovingMotorsAndSolverSettings) {
     EXPECT_EQ(scene.solver.max_iterations, 100u);
     EXPECT_EQ(scene.solver.vorticity, 0.5f);
     EXPECT_EQ(scene.solver.viscosity, 0.01f);
+}
+
+TEST_F(SceneFile, pressureSolverNamesMapOntoTheSolversDescription) {
+    EXPECT_EQ(gust::solver_desc(load_ok("{}")).pressure, gust::PressureSolver::MultigridPCG);
+    const std::pair<const char*, gust::PressureSolver> names[] = {
+        {"mgpcg", gust::PressureSolver::MultigridPCG},
+        {"multigrid", gust::PressureSolver::Multigrid},
+        {"jacobi", gust::PressureSolver::Jacobi}};
+    for (const auto& [name, solver] : names) {
+        const gust::SceneDesc scene = load_ok(std::string(R"({"solver": {"pressure": ")") + name + "\"}}");
+        EXPECT_EQ(gust::solver_desc(scene).pressure, solver) << name;
+    }
 }
 
 TEST_F(SceneFile, resolvesAbsoluteMeshPathsAsGiven) {
@@ -458,7 +471,7 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
     BadScene{"UnknownAdvection", R"({"solver": {"advection": "bfecc2"}})",
              "solver.advection: unknown advection 'bfecc2' (expected maccormack, semi_lagrangian or none)"},
     BadScene{"UnknownPressureSolver", R"({"solver": {"pressure": "cg"}})",
-             "solver.pressure: unknown pressure solver 'cg' (expected multigrid or jacobi)"},
+             "solver.pressure: unknown pressure solver 'cg' (expected mgpcg, multigrid or jacobi)"},
     BadScene{"ToleranceOfOne", R"({"solver": {"tolerance": 1}})", "solver.tolerance: must be less than 1 (found 1.0)"},
     BadScene{"ZeroCycles", R"({"solver": {"max_cycles": 0}})", "solver.max_cycles: must be an integer from 1 to 1000 (found 0.0)"},
     BadScene{"NegativeViscosity", R"({"solver": {"viscosity": -1}})", "solver.viscosity: must not be negative (found -1.0)"},

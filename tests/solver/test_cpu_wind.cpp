@@ -1,7 +1,8 @@
 // The shared per-cell kernels on their own, and every solver pass on the CPU (same kernels, host
 // arrays) against the GPU on a 16^3 grid with static and moving solids.
-#include "support/gpu_env.hpp"
 #include "solver/solid_world.hpp"
+#include "solver/solver_io.h"
+#include "support/gpu_env.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,6 @@
 #include <gtest/gtest.h>
 #include <gust/solver/cpu_wind.hpp>
 #include <random>
-#include "solver/solver_io.h"
 
 namespace gust::test {
 namespace {
@@ -17,7 +17,8 @@ namespace {
 using namespace shaderio;
 
 CellBits layers(std::uint32_t v, CellBits (&faces)[6]) {
-    for (std::uint32_t s = 0; s < 6; ++s) faces[s] = bits_layer(s / 2, (s & 1) ? v - 1 : 0, v);
+    for (std::uint32_t s = 0; s < 6; ++s)
+        faces[s] = bits_layer(s / 2, (s & 1) ? v - 1 : 0, v);
     return bits_all(v);
 }
 
@@ -110,24 +111,29 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
     SolidWorld solids(ctx(), desc);
     const float dt = 0.1f;
     solids.update({{icosphere(2, {5.2f, 7.9f, 8.3f}, 2.6f), glm::mat4(1.0f), std::nullopt},
-                   {box({9.3f, 4.1f, 4.4f}, {12.6f, 11.2f, 10.7f}), glm::translate(glm::mat4(1.0f), {0.2f, 0.1f, 0.0f}),
-                    glm::mat4(1.0f)}},
+                   {box({9.3f, 4.1f, 4.4f}, {12.6f, 11.2f, 10.7f}),
+                    glm::translate(glm::mat4(1.0f), {0.2f, 0.1f, 0.0f}), glm::mat4(1.0f)}},
                   dt);
     const glm::vec3 ambient(2.0f, 0.5f, 0.0f);
-    for (auto set : {gpu.set_ambient(ambient), cpu.set_ambient(ambient)}) ASSERT_TRUE(set);
+    for (auto set : {gpu.set_ambient(ambient), cpu.set_ambient(ambient)})
+        ASSERT_TRUE(set);
     if (pass.emitters) {
-        const Emitter emitters[] = {{EmitterType::Directional, {4, 4, 4}, {0, 1, 0}, 3.0f, 5.0f, 1.0f, 0.0f},
-                                    {EmitterType::Omni, {12, 12, 12}, {1, 0, 0}, 3.0f, -4.0f, 2.0f, 0.0f},
-                                    {EmitterType::Vortex, {8, 12, 4}, {1, 0, 0}, 3.0f, 4.0f, 0.5f, 0.0f},
-                                    {EmitterType::CapsuleMotor, {2, 13, 2}, {0, 0, 1}, 1.5f, 6.0f, 1.0f, 10.0f},
-                                    {EmitterType::ConeMotor, {14, 2, 2}, {0, 0, 1}, 3.0f, 6.0f, 0.0f, 10.0f}};
-        for (auto set : {gpu.set_emitters(emitters), cpu.set_emitters(emitters)}) ASSERT_TRUE(set);
+        const Emitter emitters[] = {
+            {EmitterType::Directional, {4, 4, 4}, {0, 1, 0}, 3.0f, 5.0f, 1.0f, 0.0f},
+            {EmitterType::Omni, {12, 12, 12}, {1, 0, 0}, 3.0f, -4.0f, 2.0f, 0.0f},
+            {EmitterType::Vortex, {8, 12, 4}, {1, 0, 0}, 3.0f, 4.0f, 0.5f, 0.0f},
+            {EmitterType::CapsuleMotor, {2, 13, 2}, {0, 0, 1}, 1.5f, 6.0f, 1.0f, 10.0f},
+            {EmitterType::ConeMotor, {14, 2, 2}, {0, 0, 1}, 3.0f, 6.0f, 0.0f, 10.0f}};
+        for (auto set : {gpu.set_emitters(emitters), cpu.set_emitters(emitters)})
+            ASSERT_TRUE(set);
     }
     std::mt19937 rng(9);
     std::uniform_real_distribution<float> d(-2.0f, 2.0f);
     std::vector<float> field(gpu.face_count());
-    for (float& v : field) v = d(rng);
-    for (auto set : {gpu.set_velocity(field), cpu.set_velocity(field)}) ASSERT_TRUE(set);
+    for (float& v : field)
+        v = d(rng);
+    for (auto set : {gpu.set_velocity(field), cpu.set_velocity(field)})
+        ASSERT_TRUE(set);
 
     const SolidSource source = solids.source();
     const CpuSolid host_solid = solids.cpu();
@@ -142,7 +148,8 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
     EXPECT_TRUE(gs->converged && cs->converged);
     EXPECT_NEAR(gs->divergence_before, cs->divergence_before, 1e-4 * cs->divergence_before);
 
-    auto expect_close = [](const std::vector<float>& a, const std::vector<float>& b, float tolerance, const char* what) {
+    auto expect_close = [](const std::vector<float>& a, const std::vector<float>& b, float tolerance,
+                           const char* what) {
         ASSERT_EQ(a.size(), b.size()) << what;
         float scale = 0.0f, worst = 0.0f;
         std::size_t at = 0;
@@ -153,7 +160,8 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
                 at = i;
             }
         }
-        EXPECT_LE(worst, tolerance * std::max(scale, 1.0f)) << what << ": worst at " << at << " gpu " << a[at] << " cpu " << b[at];
+        EXPECT_LE(worst, tolerance * std::max(scale, 1.0f))
+            << what << ": worst at " << at << " gpu " << a[at] << " cpu " << b[at];
     };
     auto open = gpu.read_open_fraction();
     auto solid_velocity = gpu.read_solid_velocity();
@@ -161,7 +169,8 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
     auto velocity = gpu.read_velocity();
     auto pressure = gpu.read_pressure();
     ASSERT_TRUE(open && solid_velocity && solid_fraction && velocity && pressure);
-    const std::vector<float> cpu_open(cpu.open_fraction().begin(), cpu.open_fraction().begin() + std::ptrdiff_t(open->size()));
+    const std::vector<float> cpu_open(cpu.open_fraction().begin(),
+                                      cpu.open_fraction().begin() + std::ptrdiff_t(open->size()));
     expect_close(*open, cpu_open, 0.0f, "open fraction");
     expect_close(*solid_fraction, cpu.solid_fraction(), 0.0f, "solid fraction");
     expect_close(*solid_velocity, cpu.solid_velocity(), 1e-5f, "solid velocity");
@@ -171,14 +180,16 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
 
 INSTANTIATE_TEST_SUITE_P(
     Passes, CpuMatchesGpu,
-    ::testing::Values(PassCase{"solidAndProjection", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, false},
-                      PassCase{"semiLagrangian", Advection::SemiLagrangian, 0.0f, 0.0f, PressureSolver::Multigrid, false},
-                      PassCase{"macCormack", Advection::MacCormack, 0.0f, 0.0f, PressureSolver::Multigrid, false},
-                      PassCase{"emitters", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, true},
-                      PassCase{"vorticity", Advection::None, 0.5f, 0.0f, PressureSolver::Multigrid, false},
-                      PassCase{"viscosity", Advection::None, 0.0f, 0.2f, PressureSolver::Multigrid, false},
-                      PassCase{"jacobi", Advection::None, 0.0f, 0.0f, PressureSolver::Jacobi, false},
-                      PassCase{"everything", Advection::MacCormack, 0.3f, 0.05f, PressureSolver::Multigrid, true}),
+    ::testing::Values(
+        PassCase{"conjugateGradients", Advection::None, 0.0f, 0.0f, PressureSolver::MultigridPCG, false},
+        PassCase{"solidAndProjection", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, false},
+        PassCase{"semiLagrangian", Advection::SemiLagrangian, 0.0f, 0.0f, PressureSolver::Multigrid, false},
+        PassCase{"macCormack", Advection::MacCormack, 0.0f, 0.0f, PressureSolver::Multigrid, false},
+        PassCase{"emitters", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, true},
+        PassCase{"vorticity", Advection::None, 0.5f, 0.0f, PressureSolver::Multigrid, false},
+        PassCase{"viscosity", Advection::None, 0.0f, 0.2f, PressureSolver::Multigrid, false},
+        PassCase{"jacobi", Advection::None, 0.0f, 0.0f, PressureSolver::Jacobi, false},
+        PassCase{"everything", Advection::MacCormack, 0.3f, 0.05f, PressureSolver::MultigridPCG, true}),
     [](const ::testing::TestParamInfo<PassCase>& param) { return std::string(param.param.name); });
 
 } // namespace

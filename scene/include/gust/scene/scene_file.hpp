@@ -68,7 +68,7 @@ struct EmitterDesc {
 /// Numerics of the wind solver (all optional in the file; defaults as in gust::SolverDesc).
 struct SolverSettings {
     std::string advection = "maccormack"; ///< "maccormack", "semi_lagrangian" or "none"
-    std::string pressure = "multigrid";   ///< "multigrid" or "jacobi"
+    std::string pressure = "mgpcg";       ///< "mgpcg", "multigrid" or "jacobi"
     float tolerance = 1e-5f;              ///< relative residual, in (0, 1)
     std::uint32_t max_cycles = 20;        ///< multigrid V-cycles per step, 1..1000
     std::uint32_t max_iterations = 4000;  ///< Jacobi iterations per step, 1..1000000

@@ -26,8 +26,9 @@ enum class Advection {
 
 /// How the pressure equation is solved.
 enum class PressureSolver {
-    Multigrid, ///< geometric V-cycles, red-black Gauss–Seidel smoothing
-    Jacobi     ///< the baseline
+    MultigridPCG, ///< conjugate gradients preconditioned by one V-cycle each (McAdams et al. 2010)
+    Multigrid,    ///< geometric V-cycles alone, red-black Gauss–Seidel smoothing
+    Jacobi        ///< the baseline
 };
 
 /// Wind-source profiles (see emitter_velocity in shaders/solver/solver_io.h).
@@ -52,10 +53,10 @@ struct SolverDesc {
     glm::vec3 origin{0.0f};            ///< world position of the grid's min corner, metres
     std::uint32_t voxels_per_cell = 4; ///< tree voxels per cell per axis, 1..8
     Advection advection = Advection::MacCormack;
-    PressureSolver pressure = PressureSolver::Multigrid;
+    PressureSolver pressure = PressureSolver::MultigridPCG;
     /// The solve stops when max |residual| <= tolerance · max |divergence before projection|.
     float tolerance = 1e-5f;
-    std::uint32_t max_cycles = 20;       ///< multigrid V-cycles per step at most
+    std::uint32_t max_cycles = 20;       ///< V-cycles (conjugate-gradient iterations) per step at most
     std::uint32_t max_iterations = 4000; ///< Jacobi iterations per step at most
     std::uint32_t smoothing = 2;         ///< Gauss–Seidel sweeps before and after each coarse correction
     float vorticity = 0.2f;              ///< confinement strength ε (0: off)
@@ -66,11 +67,11 @@ struct SolverDesc {
 /// Where the solid boundary comes from: a tree over a voxel grid of cell_size / voxels_per_cell
 /// voxels, and the moving surfaces' fragments with their velocities (as the voxelizer leaves them).
 struct SolidSource {
-    const SparseTree* tree = nullptr;          ///< null: no solids
-    glm::ivec3 voxel_offset{0};                ///< tree voxel at the wind grid's min corner
-    VkDeviceAddress fragments = 0;             ///< packed voxel keys of moving surfaces (0: none)
-    VkDeviceAddress fragment_count = 0;        ///< uint counter
-    VkDeviceAddress fragment_velocities = 0;   ///< uvec2 half-float velocity per fragment, m/s
+    const SparseTree* tree = nullptr;        ///< null: no solids
+    glm::ivec3 voxel_offset{0};              ///< tree voxel at the wind grid's min corner
+    VkDeviceAddress fragments = 0;           ///< packed voxel keys of moving surfaces (0: none)
+    VkDeviceAddress fragment_count = 0;      ///< uint counter
+    VkDeviceAddress fragment_velocities = 0; ///< uvec2 half-float velocity per fragment, m/s
     std::uint64_t fragment_capacity = 0;
 };
 
@@ -104,10 +105,12 @@ Status validate(std::span<const Emitter> emitters);
 /// The solver. Thread-compatible; the Context must outlive it.
 class WindSolver {
   public:
-    /// Starts with the air at rest.
+    /// Starts with the air at rest (see set_ambient).
     static Result<std::unique_ptr<WindSolver>> create(gpu::Context& ctx, const SolverDesc& desc);
 
     /// Ambient wind, m/s: enters through the domain's upwind faces, fills new cells when scrolling.
+    /// Before the first step it also sets the air everywhere: a level loads into wind already blowing,
+    /// rather than into still air that the first projection must set moving (a large, slow solve).
     Status set_ambient(glm::vec3 velocity);
     /// Replaces the emitters (at most 64). Rejected whole when any is invalid.
     Status set_emitters(std::span<const Emitter> emitters);

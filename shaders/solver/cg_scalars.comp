@@ -1,0 +1,29 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// One workgroup: sums the per-group partials of cg.comp in a fixed order, then pc.parity 0 sets β (and
+// keeps r·z for the next iteration), 1 sets α.
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+void main() {
+    uint t = gl_LocalInvocationIndex;
+    Vec2Ref partials = Vec2Ref(sb().b.partials);
+    vec2 sum = vec2(0.0);
+    for (uint g = t; g < sb().b.partial_count; g += kSolverGroupSize) sum += partials.v[g];
+    group_sums[t] = sum;
+    barrier();
+    [[unroll]] for (uint s = kSolverGroupSize / 2u; s > 0u; s >>= 1u) {
+        if (t < s) group_sums[t] += group_sums[t + s];
+        barrier();
+    }
+    if (t != 0u) return;
+    StateRef st = state();
+    vec2 total = group_sums[0];
+    if (pc.parity == 0u) {
+        st.s.cg_beta = cg_beta(total.x, total.y, st.s.cg_rz);
+        st.s.cg_rz = total.x;
+    } else {
+        st.s.cg_alpha = cg_alpha(st.s.cg_rz, total.x);
+    }
+}
