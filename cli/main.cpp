@@ -128,7 +128,7 @@ int run_voxelize(const VoxelizeArgs& args) {
     ms["unique"] = ms_since(start);
 
     start = Clock::now();
-    if (gust::Status s = gust::cli::write_occupancy_vdb(args.out, keys, grid); !s) return fail(s.message());
+    if (gust::Status s = gust::vdb::write_occupancy_vdb(args.out, keys, grid); !s) return fail(s.message());
     ms["write"] = ms_since(start);
     if (ctx->validation_messages() > 0)
         return fail(std::to_string(ctx->validation_messages()) +

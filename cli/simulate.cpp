@@ -90,7 +90,8 @@ int run_simulate(const SimulateArgs& args) {
     if (!world) return fail(world.message());
     auto wind = WindSolver::create(**ctx, solver_desc(*scene));
     if (!wind) return fail(args.scene + ": " + wind.message());
-    if (Status s = (*wind)->set_ambient(scene->ambient_velocity); !s) return fail(args.scene + ": ambient: " + s.message());
+    if (Status s = (*wind)->set_ambient(scene->ambient_velocity); !s)
+        return fail(args.scene + ": ambient: " + s.message());
 
     // Objects showing the same mesh share one device copy (and one `auto` measurement); deforming
     // objects get their own, since their vertex buffers change every frame.
@@ -189,11 +190,17 @@ int run_simulate(const SimulateArgs& args) {
             auto faces = (*wind)->read_velocity();
             auto solid_fraction = (*wind)->read_solid_fraction();
             auto pressure = (*wind)->read_pressure();
-            if (!faces || !solid_fraction || !pressure) return fail("frame " + std::to_string(frame) + ": wind readback failed");
+            if (!faces || !solid_fraction || !pressure)
+                return fail("frame " + std::to_string(frame) + ": wind readback failed");
             const std::vector<glm::vec3> velocity = cell_velocities(scene->domain.cells, *faces);
-            WindGrids grids{scene->domain.cells, scene->domain.cell_size, (*wind)->origin(), *solid_fraction, velocity, *pressure};
+            vdb::WindGrids grids{scene->domain.cells,
+                                 scene->domain.cell_size,
+                                 (*wind)->origin(),
+                                 *solid_fraction,
+                                 velocity,
+                                 *pressure};
             const fs::path path = fs::path(args.out) / frame_file(frame);
-            if (Status s = write_frame_vdb(path, *voxels, *grid, grids); !s) return fail(s.message());
+            if (Status s = vdb::write_frame_vdb(path, *voxels, *grid, grids); !s) return fail(s.message());
         }
         if ((frame + 1) % std::max<std::uint64_t>(1, args.frames / 10) == 0 || frame + 1 == args.frames) {
             const double seconds =

@@ -1,7 +1,9 @@
 # gust_embed_shaders(TARGET <name> NAMESPACE <ns> SOURCES <files...> [INCLUDE_DIRS <dirs...>])
 # Compiles each GLSL file to SPIR-V with glslangValidator at build time and emits a header
 # <binary>/gust_shaders/<stem>_<stage>.h holding `const uint32_t <stem>_<stage>[]`, so the library
-# ships no loose shader files. The target becomes an INTERFACE library carrying the include path.
+# ships no loose shader files. The target becomes an INTERFACE library carrying the include path (build
+# tree only); it is listed in the global property GUST_SHADER_TARGETS so that cmake/GustInstall.cmake can
+# export it beside the static libraries that name it as a private dependency.
 function(gust_embed_shaders)
   cmake_parse_arguments(ARG "" "TARGET" "SOURCES;DEPENDS" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/gust_shaders)
@@ -25,5 +27,7 @@ function(gust_embed_shaders)
   add_custom_target(${ARG_TARGET}_spirv DEPENDS ${headers})
   add_library(${ARG_TARGET} INTERFACE)
   add_dependencies(${ARG_TARGET} ${ARG_TARGET}_spirv)
-  target_include_directories(${ARG_TARGET} INTERFACE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_SOURCE_DIR})
+  target_include_directories(${ARG_TARGET} INTERFACE
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_BINARY_DIR}> $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}>)
+  set_property(GLOBAL APPEND PROPERTY GUST_SHADER_TARGETS ${ARG_TARGET})
 endfunction()

@@ -120,6 +120,9 @@ struct SolverBindings {
     GUST_ADDRESS fragment_motion; ///< uvec2 half-float velocities per fragment
     GUST_ADDRESS cg_cells;        ///< float[4 * cells]: conjugate gradients' x, p, b, old r
     GUST_ADDRESS partials;        ///< vec2[partial_count]: per-workgroup sums of a dot product
+    GUST_ADDRESS points;          ///< vec3[point_count]: world positions to sample (sample.comp)
+    GUST_ADDRESS samples;         ///< vec3[point_count]: their velocities, m/s
+    GUST_ADDRESS texels;          ///< uvec2[cells]: half-float velocity xyz and open fraction per cell
     ivec3 dims;                   ///< wind cells per axis
     float h;                      ///< cell size, m
     vec3 origin;                  ///< world position of the grid's min corner, m
@@ -138,6 +141,7 @@ struct SolverBindings {
     float tolerance;          ///< relative residual the solve stops at
     float vorticity_strength; ///< ε of vorticity confinement
     uint partial_count;       ///< workgroups over the level-0 cells (entries in partials)
+    uint point_count;         ///< entries in points
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };

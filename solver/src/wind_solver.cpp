@@ -25,6 +25,7 @@ namespace {
 #include "gust_shaders/relax_comp.h"
 #include "gust_shaders/residual_comp.h"
 #include "gust_shaders/restrict_comp.h"
+#include "gust_shaders/sample_comp.h"
 #include "gust_shaders/scroll_comp.h"
 #include "gust_shaders/solid_cells_comp.h"
 #include "gust_shaders/solid_faces_comp.h"
@@ -58,10 +59,10 @@ float from_bits(std::uint32_t bits) {
 struct WindSolver::Impl {
     gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces,
         vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
-        cg_scalars, project, scroll;
+        cg_scalars, project, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, weights, solid_velocity, pressure, pressure_tmp, rhs,
         residual_buf, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf,
-        emitters, state, dispatch, bindings;
+        emitters, state, dispatch, bindings, points, samples;
     gpu::Profiler profiler;
     std::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -112,7 +113,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                             {&m.cg, words(cg_comp)},
                             {&m.cg_scalars, words(cg_scalars_comp)},
                             {&m.project, words(project_comp)},
-                            {&m.scroll, words(scroll_comp)}};
+                            {&m.scroll, words(scroll_comp)},
+                            {&m.sample, words(sample_comp)}};
     for (const Stage& stage : stages) {
         auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(SolverPush));
         if (!pipeline) return pipeline.status();
@@ -264,6 +266,64 @@ Result<std::vector<float>> WindSolver::read_pressure() const {
     for (float& p : *phi)
         p *= scale;
     return phi;
+}
+
+Result<std::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points) {
+    std::vector<glm::vec3> out(points.size());
+    if (points.empty()) return out;
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y) || !std::isfinite(points[i].z))
+            return Status::failure("point " + std::to_string(i) + " is not finite");
+    if (points.size() > 0xffffffffu / sizeof(glm::vec3))
+        return Status::failure("too many points in one call");
+    Impl& m = *impl_;
+    const std::size_t bytes = points.size() * sizeof(glm::vec3);
+    if (m.points.size() < bytes) {
+        for (auto [buffer, use] : {std::pair(&m.points, gpu::MemoryUse::Upload),
+                                   std::pair(&m.samples, gpu::MemoryUse::Readback)}) {
+            auto grown = gpu::Buffer::create(ctx_, std::max<std::size_t>(bytes, 4096), use);
+            if (!grown) return grown.status();
+            *buffer = std::move(*grown);
+        }
+    }
+    std::memcpy(m.points.mapped(), points.data(), bytes);
+    m.b.origin = origin_;
+    m.b.ambient = ambient_;
+    m.b.points = m.points.address();
+    m.b.samples = m.samples.address();
+    m.b.point_count = std::uint32_t(points.size());
+    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
+    SolverPush push{};
+    push.bindings = m.bindings.address();
+    push.parity = 0;
+    const LevelDispatch g = groups_for(points.size());
+    Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        m.sample.bind(cmd, &push, sizeof(push));
+        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    });
+    if (!s) return s;
+    std::memcpy(out.data(), m.samples.mapped(), bytes);
+    return out;
+}
+
+Status WindSolver::write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then) {
+    if (texels.size() < cell_count() * 8)
+        return Status::failure("texel buffer holds " + std::to_string(texels.size()) + " bytes, needs " +
+                               std::to_string(cell_count() * 8));
+    Impl& m = *impl_;
+    m.b.origin = origin_;
+    m.b.texels = texels.address();
+    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
+    SolverPush push{};
+    push.bindings = m.bindings.address();
+    push.parity = 1;
+    const LevelDispatch g = groups_for(cell_count());
+    return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        m.sample.bind(cmd, &push, sizeof(push));
+        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx_, cmd);
+        if (then) then(cmd);
+    });
 }
 
 Status WindSolver::scroll(glm::ivec3 cells) {

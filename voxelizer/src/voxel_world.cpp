@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <gust/voxelizer/voxel_world.hpp>
 
 namespace gust {
@@ -38,6 +39,15 @@ void VoxelWorld::set_static(std::vector<GpuInstance> instances) {
                       std::equal(instances.begin(), instances.end(), static_set_.begin(), same_instance);
     if (!same) static_dirty_ = true;
     static_set_ = std::move(instances);
+}
+
+Status VoxelWorld::move_grid(glm::vec3 origin) {
+    if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z))
+        return Status::failure("grid origin must be finite");
+    if (origin == desc_.grid.origin) return Status{};
+    desc_.grid.origin = origin;
+    static_dirty_ = true;
+    return Status{};
 }
 
 Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float dt) {

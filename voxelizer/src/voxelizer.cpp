@@ -170,11 +170,7 @@ Status Voxelizer::ensure_instances(std::size_t count) {
     return {};
 }
 
-Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
-    if (positions.size() != mesh.vertices_)
-        return Status::failure("got " + std::to_string(positions.size()) + " positions for a mesh of " +
-                               std::to_string(mesh.vertices_) + " vertices");
-    if (mesh.triangles_ == 0) return {};
+Status Voxelizer::rotate_positions(GpuMesh& mesh) {
     if (!mesh.prev_positions_) {
         auto buffer = gpu::Buffer::create(ctx_, mesh.positions_.size(), gpu::MemoryUse::Device);
         if (!buffer) return buffer.status();
@@ -182,7 +178,26 @@ Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> pos
     }
     // Last frame's positions become the previous ones; the older buffer takes this frame's.
     std::swap(mesh.positions_, mesh.prev_positions_);
+    return {};
+}
+
+Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
+    if (positions.size() != mesh.vertices_)
+        return Status::failure("got " + std::to_string(positions.size()) + " positions for a mesh of " +
+                               std::to_string(mesh.vertices_) + " vertices");
+    if (mesh.triangles_ == 0) return {};
+    if (Status s = rotate_positions(mesh); !s) return s;
     return gpu::upload(ctx_, mesh.positions_, positions.data(), positions.size_bytes());
+}
+
+Status Voxelizer::copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset) {
+    if (source == VK_NULL_HANDLE) return Status::failure("the source buffer is null");
+    if (mesh.triangles_ == 0) return {};
+    if (Status s = rotate_positions(mesh); !s) return s;
+    return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        const VkBufferCopy region{offset, 0, mesh.positions_.size()};
+        ctx_.vk().vkCmdCopyBuffer(cmd, source, mesh.positions_.handle(), 1, &region);
+    });
 }
 
 Status Voxelizer::ensure_large_list(std::uint64_t items) {

@@ -54,6 +54,8 @@ namespace gust::gpu {
     X(vkBindImageMemory)                                                                                     \
     X(vkCreateImageView)                                                                                     \
     X(vkDestroyImageView)                                                                                    \
+    X(vkCreateSampler)                                                                                       \
+    X(vkDestroySampler)                                                                                      \
     X(vkCmdCopyBufferToImage)                                                                                \
     X(vkCmdCopyImageToBuffer)                                                                                \
     X(vkCreateShaderModule)                                                                                  \

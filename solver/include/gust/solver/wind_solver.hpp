@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <glm/glm.hpp>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/pipeline.hpp>
@@ -132,6 +133,14 @@ class WindSolver {
     Result<std::vector<float>> read_pressure() const;
     /// Fraction of each cell's voxels that are solid, of the last step.
     Result<std::vector<float>> read_solid_fraction() const;
+
+    /// Velocity (m/s, world) at each world point: trilinear on the faces, the ambient wind outside the
+    /// grid. Points must be finite. Blocks.
+    Result<std::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
+    /// Writes each cell's texel into `texels` (8 bytes per cell, index x + X·(y + Y·z)): the velocity at
+    /// the cell's centre (m/s) and 1 − its solid fraction, as four half floats; then records `then`
+    /// (may be empty) into the same submission, after a barrier. Blocks.
+    Status write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then);
 
     const SolverDesc& desc() const { return desc_; }
     glm::vec3 origin() const { return origin_; }

@@ -41,10 +41,18 @@ class VoxelWorld {
     Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
         return dynamic_->update_positions(mesh, positions);
     }
+    /// The same from a device buffer (see Voxelizer::copy_positions).
+    Status copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset) {
+        return dynamic_->copy_positions(mesh, source, offset);
+    }
 
     /// Sets the static instances; the next step voxelizes them again only if they differ from the last
     /// set (meshes or matrices). Meshes must stay alive and unchanged while in the set.
     void set_static(std::vector<GpuInstance> instances);
+
+    /// Moves the grid's min corner to `origin` (world, m, finite); the next step voxelizes the static set
+    /// again and rebuilds the tree, whose voxels then index the moved grid.
+    Status move_grid(glm::vec3 origin);
 
     /// Voxelizes the dynamic instances (with velocities over `dt` seconds, > 0), updates the tree, and
     /// grows its pools and redoes the update when they ran out. Blocks until the GPU is done.

@@ -89,6 +89,9 @@ class Voxelizer {
     /// Replaces a mesh's vertex positions (a skinned pose) with `positions` (mesh space, one per vertex);
     /// the previous ones are kept for velocities. Blocks until uploaded.
     Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions);
+    /// The same from a device buffer of the same Context's device holding vertex_count() float3 at
+    /// `offset` (the caller checked its size). Blocks until copied.
+    Status copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset);
 
     /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
     Result<std::vector<std::uint32_t>> read_fragments() const;
@@ -110,6 +113,7 @@ class Voxelizer {
   private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
     Status ensure_capacity(std::uint64_t fragments);
+    Status rotate_positions(GpuMesh& mesh);
     Status ensure_large_list(std::uint64_t items);
     Status ensure_velocity_capacity();
     Status ensure_instances(std::size_t count);

@@ -10,7 +10,7 @@
 #include <gust/voxelizer/grid.hpp>
 #include <span>
 
-namespace gust::cli {
+namespace gust::vdb {
 
 /// One frame's wind, cell-centred, index x + X·(y + Y·z).
 struct WindGrids {
@@ -31,4 +31,4 @@ Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const st
 Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
                        const GridDesc& grid, const WindGrids& wind);
 
-} // namespace gust::cli
+} // namespace gust::vdb

@@ -2,7 +2,7 @@
 
 #include <openvdb/openvdb.h>
 
-namespace gust::cli {
+namespace gust::vdb {
 
 namespace {
 
@@ -78,4 +78,4 @@ Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::u
     return write_grids(path, {occupancy_grid(voxels, grid), solid, velocity, pressure});
 }
 
-} // namespace gust::cli
+} // namespace gust::vdb

@@ -1,0 +1,360 @@
+/* gust: GPU wind for game engines, C ABI. The same API as gust/gust.hpp (which is the manual for what each
+ * call does); this header says how it looks from C.
+ *
+ * Every function returns a gust_result (GUST_OK is 0), except the version and message getters. When a call
+ * on a live system fails, gust_system_last_error(system) says which argument and why; when there is no live
+ * system to hold the message (gust_system_create, calls given a NULL or destroyed system, free functions),
+ * gust_last_create_error() holds it, per thread. Nothing crashes on NULL pointers, unknown ids or destroyed
+ * systems. Units are metres, seconds and m/s; positions and directions are world space; matrices are
+ * float[16], column-major. A system is thread-compatible: one thread calls it at a time; different systems
+ * may be used from different threads.
+ *
+ * HelloWorld:
+ *     gust_system_desc desc;
+ *     gust_system_desc_defaults(&desc);
+ *     gust_system sys;
+ *     if (gust_system_create(&desc, &sys) != GUST_OK) { puts(gust_last_create_error()); return 1; }
+ *     gust_vec3 wind = {4, 0, 0};
+ *     gust_system_set_ambient(sys, wind);
+ *     gust_system_step(sys, 1.0f / 60.0f);
+ *     gust_system_destroy(sys);
+ */
+#ifndef GUST_GUST_H
+#define GUST_GUST_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <vulkan/vulkan_core.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Major version of this header (gust::kVersionMajor).
+#define GUST_VERSION_MAJOR 0
+/// Minor version of this header (gust::kVersionMinor).
+#define GUST_VERSION_MINOR 1
+/// Patch version of this header (gust::kVersionPatch).
+#define GUST_VERSION_PATCH 0
+/// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
+#define GUST_HEADER_VERSION                                                                                  \
+    ((((uint32_t)GUST_VERSION_MAJOR) << 22) | (((uint32_t)GUST_VERSION_MINOR) << 12) |                       \
+     ((uint32_t)GUST_VERSION_PATCH))
+/// Most emitters gust_system_set_emitters takes at once.
+#define GUST_MAX_EMITTERS 64
+
+/// What went wrong; the same numbers as gust::ErrorCode.
+typedef enum gust_result {
+    GUST_OK = 0,                     ///< success
+    GUST_ERROR_INVALID_ARGUMENT = 1, ///< a NULL pointer; a value out of range, not finite or of a wrong size
+    GUST_ERROR_INVALID_HANDLE = 2,   ///< a NULL or destroyed system; a dead mesh, instance or query id
+    GUST_ERROR_VERSION_MISMATCH = 3, ///< header and library differ in major or minor version
+    GUST_ERROR_DEVICE_UNSUPPORTED = 4, ///< the device lacks a required feature, or no device was found
+    GUST_ERROR_DEVICE_FAILURE = 5,     ///< a Vulkan call failed, or host memory ran out
+    GUST_ERROR_NOT_READY = 6,          ///< an asynchronous answer is not there yet
+    GUST_ERROR_IO = 7,                 ///< a file could not be written
+    GUST_ERROR_UNSUPPORTED = 8,        ///< built without the optional part this call needs (OpenVDB)
+} gust_result;
+
+/// The wind subsystem (opaque). Create one per world; a destroyed handle is never reused.
+typedef struct gust_system_t* gust_system;
+/// A mesh id: 0 is never valid; a destroyed id is never reused.
+typedef uint64_t gust_mesh;
+/// An instance id: 0 is never valid; a destroyed id is never reused.
+typedef uint64_t gust_instance;
+/// Ticket of an asynchronous query: 0 is never valid.
+typedef uint64_t gust_query;
+
+/// A point, direction or velocity (m, unit, m/s; world space unless stated).
+typedef struct gust_vec3 {
+    float x, y, z;
+} gust_vec3;
+
+/// Severity of a log message.
+typedef enum gust_log_level {
+    GUST_LOG_INFO = 0,    ///< progress, pool growth
+    GUST_LOG_WARNING = 1, ///< something the host may want to fix (dropped queries, validation warnings)
+    GUST_LOG_ERROR = 2,   ///< validation-layer and driver errors
+} gust_log_level;
+
+/// Host hooks, as plain function pointers with a user pointer; each may be NULL (zero the struct).
+typedef struct gust_hooks {
+    /// Passed back to every hook; gust never dereferences it.
+    void* user;
+    /// Host memory for gust's own objects (system, meshes, query buffers), aligned to `alignment` (a power of
+    /// two), or NULL; a NULL hook uses the default heap.
+    void* (*allocate)(void* user, size_t bytes, size_t alignment);
+    /// Frees what `allocate` returned; required when `allocate` is given.
+    void (*free)(void* user, void* memory);
+    /// Validation-layer and driver messages, pool growth, dropped queries; `message` lives for the call only.
+    /// Any thread.
+    void (*log)(void* user, gust_log_level level, const char* message);
+    /// An internal invariant failed (the call then returns an error); strings live for the call only.
+    void (*assert_failed)(void* user, const char* expression, const char* file, int line);
+} gust_hooks;
+
+/// A host engine's Vulkan device for gust to run on (the host keeps every handle alive until
+/// gust_system_destroy).
+typedef struct gust_host_device {
+    VkInstance instance;                              ///< the host's instance (apiVersion >= 1.3)
+    VkPhysicalDevice physical_device;                 ///< the device's physical device
+    VkDevice device;                                  ///< created with gust_add_required_features
+    uint32_t queue_family;                            ///< a family with graphics and compute
+    uint32_t queue_index;                             ///< gust submits to this queue of the family
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr; ///< required
+    PFN_vkGetDeviceProcAddr get_device_proc_addr;     ///< NULL: loaded through get_instance_proc_addr
+    const char* const* enabled_extensions;            ///< device extensions the host enabled; read in create
+    uint32_t enabled_extension_count;                 ///< entries in enabled_extensions
+} gust_host_device;
+
+/// What a host enables on its instance and device before gust can adopt it (arrays and strings are static).
+typedef struct gust_device_requirements {
+    uint32_t api_version;                   ///< lowest Vulkan API version (VK_API_VERSION_1_3)
+    uint32_t extension_count;               ///< entries in extensions
+    const char* const* extensions;          ///< required device extensions
+    uint32_t optional_extension_count;      ///< entries in optional_extensions
+    const char* const* optional_extensions; ///< used when the host enables and lists them
+    uint32_t feature_count;                 ///< entries in features
+    const char* const* features;            ///< names of required VkPhysicalDevice*Features members
+} gust_device_requirements;
+
+/// Where the wind is simulated and how finely.
+typedef struct gust_wind_domain {
+    uint32_t cells[3];        ///< wind cells per axis, each 8..256
+    float cell_size;          ///< metres
+    uint32_t voxels_per_cell; ///< voxels of the solid boundary per cell per axis, 1..8
+    uint32_t branching;       ///< the voxel tree's branching per axis: 2, 4 or 8
+    gust_vec3 focus;          ///< the domain's first centre (player or camera), world m
+} gust_wind_domain;
+
+/// Numerics of the wind (the defaults suit game wind; docs/solver.md explains each).
+typedef struct gust_wind_settings {
+    float tolerance;     ///< relative residual the pressure solve stops at
+    uint32_t max_cycles; ///< V-cycles per step at most
+    float vorticity;     ///< vorticity confinement epsilon (0: off)
+    float viscosity;     ///< m^2/s (0: off)
+} gust_wind_settings;
+
+/// How a system's GPU work reaches a queue.
+typedef enum gust_submission {
+    GUST_SUBMISSION_OWN_QUEUE = 0,     ///< step submits and waits on gust's queue or the host's queue
+    GUST_SUBMISSION_HOST_COMMANDS = 1, ///< host device only: gust_system_record records into host commands
+} gust_submission;
+
+/// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
+typedef enum gust_voxelize_path {
+    GUST_VOXELIZE_AUTO = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    GUST_VOXELIZE_RASTER = 1,  ///< the hardware rasterizer
+    GUST_VOXELIZE_COMPUTE = 2, ///< a thread per triangle
+} gust_voxelize_path;
+
+/// Everything a system is created from; fill with gust_system_desc_defaults, then change what differs.
+typedef struct gust_system_desc {
+    uint32_t header_version;      ///< GUST_HEADER_VERSION (set by gust_system_desc_defaults); keep first
+    const gust_host_device* host; ///< NULL: gust creates its own instance and device; read in create
+    bool validation;              ///< own device: enable the Khronos validation layer
+    const char* device;           ///< own device: index or name substring (NULL: GUST_DEVICE, then best)
+    gust_submission submission;   ///< how GPU work reaches a queue
+    gust_voxelize_path voxelize;  ///< voxelizer path
+    gust_wind_domain domain;      ///< the simulated box
+    gust_wind_settings wind;      ///< solver numerics
+    gust_hooks hooks;             ///< host hooks (copied; the functions must stay valid until destroy)
+} gust_system_desc;
+
+/// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices; read during the call.
+typedef struct gust_mesh_desc {
+    const float* positions;  ///< vertex_count positions, x y z floats, `stride` bytes apart
+    uint32_t vertex_count;   ///< positions
+    uint32_t stride;         ///< bytes between consecutive positions
+    const uint32_t* indices; ///< index_count indices, each < vertex_count
+    uint32_t index_count;    ///< a multiple of 3
+    bool deforming;          ///< true: vertices may change every frame (gust_system_set_vertices)
+} gust_mesh_desc;
+
+/// A wind source's profile (docs/solver.md "Emitters" draws each).
+typedef enum gust_wind_emitter_type {
+    GUST_WIND_EMITTER_DIRECTIONAL = 0,   ///< flow along direction within radius
+    GUST_WIND_EMITTER_OMNI = 1,          ///< outward from position
+    GUST_WIND_EMITTER_VORTEX = 2,        ///< swirl about direction
+    GUST_WIND_EMITTER_CAPSULE_MOTOR = 3, ///< flow along a capsule from position, length along direction
+    GUST_WIND_EMITTER_CONE_MOTOR = 4,    ///< flow along a cone from position, length along direction
+} gust_wind_emitter_type;
+
+/// A wind source; fill with gust_wind_emitter_defaults, then change what differs.
+typedef struct gust_wind_emitter {
+    gust_wind_emitter_type type; ///< profile
+    gust_vec3 position;          ///< centre, or a motor's start (world m)
+    gust_vec3 direction;         ///< unit: flow (directional, motors) or axis (vortex)
+    float radius;                ///< m, > 0
+    float strength;              ///< m/s at the centre (negative reverses)
+    float falloff;               ///< exponent of (1 - d/radius), >= 0
+    float length;                ///< motors: m along direction
+} gust_wind_emitter;
+
+/// Wind at a point as engines' wind sources take it.
+typedef struct gust_wind_sample {
+    gust_vec3 direction; ///< unit (0 when still)
+    float speed;         ///< m/s
+    float gust;          ///< short-term variation, m/s: |velocity - its mean over the neighbouring cells|
+} gust_wind_sample;
+
+/// The velocity field as a sampled 3D image for the host's shaders; handles owned by the system.
+typedef struct gust_wind_texture {
+    VkImage image;              ///< valid until gust_system_destroy; contents change at each step
+    VkImageView view;           ///< 3D view of image
+    VkSampler sampler;          ///< linear, clamp to edge
+    VkFormat format;            ///< rgb: m/s, a: 1 - solid fraction
+    uint32_t extent[3];         ///< texels per axis
+    float world_to_texture[16]; ///< column-major: uvw = world_to_texture * (p, 1), domain -> [0, 1]^3
+    VkImageLayout layout;       ///< VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step and record
+    uint64_t frame;             ///< the frame whose wind it holds
+} gust_wind_texture;
+
+/// What one step did; per-pass GPU milliseconds via gust_system_stats_pass.
+typedef struct gust_frame_stats {
+    uint64_t frame;              ///< the frame these statistics describe
+    uint64_t fragments;          ///< voxel fragments this frame
+    uint64_t voxels;             ///< occupied voxels
+    uint64_t nodes;              ///< tree nodes
+    uint64_t refined;            ///< nodes refined this frame
+    uint64_t coarsened;          ///< nodes coarsened this frame
+    uint64_t pool_bytes;         ///< bytes of the tree's node pool
+    uint64_t fragment_bytes;     ///< bytes of the fragment list
+    uint64_t dense_bytes;        ///< bytes a dense voxel grid of the domain would take
+    float divergence_before;     ///< max |divergence| before projection, 1/s
+    float divergence_after;      ///< max |divergence| after projection, 1/s
+    float residual;              ///< max |residual| at the solve's last check, 1/s
+    uint32_t cycles;             ///< V-cycles (or iterations) the pressure solve ran
+    uint32_t rejected_triangles; ///< triangles with non-finite vertices after transform this frame
+    bool converged;              ///< the pressure solve reached the tolerance
+} gust_frame_stats;
+
+/// The version the library was built as (compare with GUST_HEADER_VERSION). Any thread.
+uint32_t gust_library_version(void);
+
+/// This thread's message of the last failure that had no live system to hold it ("" if none); valid until
+/// this thread's next such failure.
+const char* gust_last_create_error(void);
+
+/// Fills `requirements` with what a host device needs (static arrays, valid for the process). Any thread.
+gust_result gust_get_device_requirements(gust_device_requirements* requirements);
+
+/// Sets gust's required features in `features` and the Vulkan 1.2 and 1.3 feature structs on its pNext chain
+/// (which must hold both), leaving the host's other flags as they are. Any thread.
+gust_result gust_add_required_features(VkPhysicalDeviceFeatures2* features);
+
+/// Fills `desc` with the library's defaults stamped with `header_version`; refuses (writing only
+/// header_version) when that differs from the library in major or minor. Use gust_system_desc_defaults.
+gust_result gust_system_desc_init(gust_system_desc* desc, uint32_t header_version);
+
+/// Fills `desc` with gust::SystemDesc's defaults (own device, 32x16x32 cells of 1 m, own queue, automatic
+/// voxelizer path, no hooks) stamped with this header's version.
+static inline gust_result gust_system_desc_defaults(gust_system_desc* desc) {
+    return gust_system_desc_init(desc, GUST_HEADER_VERSION);
+}
+
+/// Fills `desc` with the defaults (no geometry, stride 12, not deforming).
+gust_result gust_mesh_desc_defaults(gust_mesh_desc* desc);
+
+/// Fills `emitter` with the defaults (omni at the origin, direction +x, radius 1, strength 0, falloff 1).
+gust_result gust_wind_emitter_defaults(gust_wind_emitter* emitter);
+
+/// Creates the device (or adopts desc->host), the voxel tree and the solver into `*system`; on failure
+/// `*system` is NULL and gust_last_create_error() says why. Any thread.
+gust_result gust_system_create(const gust_system_desc* desc, gust_system* system);
+
+/// Waits for the GPU and destroys `system` and everything it owns; the handle is dead afterwards.
+gust_result gust_system_destroy(gust_system system);
+
+/// The message of the last failed call on `system` ("" if none), owned by the system and valid until the
+/// next call on it; for a NULL or destroyed handle, gust_last_create_error().
+const char* gust_system_last_error(gust_system system);
+
+/// Uploads a mesh (read during the call); `*mesh` receives its id. Indices are checked against vertex_count.
+gust_result gust_system_create_mesh(gust_system system, const gust_mesh_desc* desc, gust_mesh* mesh);
+
+/// Destroys a mesh; GUST_ERROR_INVALID_HANDLE while an instance still uses it.
+gust_result gust_system_destroy_mesh(gust_system system, gust_mesh mesh);
+
+/// New mesh-space positions for a deforming mesh (vertex_count of them, `stride` bytes apart, read during the
+/// call), used from the next step on; the previous pose gives the surface velocity.
+gust_result gust_system_set_vertices(gust_system system, gust_mesh mesh, const float* positions,
+                                     uint32_t vertex_count, uint32_t stride);
+
+/// The same from a host VkBuffer (host device only): vertex_count packed float3 at `offset` bytes, copied on
+/// gust's queue at the next step; the host keeps the buffer unchanged until gust_system_step returns.
+gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, VkBuffer buffer,
+                                            VkDeviceSize offset, uint32_t vertex_count);
+
+/// Places `mesh` with a column-major mesh-to-world `transform` (16 finite floats); moving instances are
+/// voxelized every frame, static ones once. `*instance` receives its id.
+gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, const float transform[16],
+                                        bool moving, gust_instance* instance);
+
+/// Sets an instance's column-major mesh-to-world transform (16 finite floats).
+gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16]);
+
+/// Removes an instance; its id is dead afterwards.
+gust_result gust_system_destroy_instance(gust_system system, gust_instance instance);
+
+/// Replaces the emitters with `count` (<= GUST_MAX_EMITTERS) copied from `emitters` (NULL when count is 0);
+/// rejected whole, keeping the old ones, if any is invalid.
+gust_result gust_system_set_emitters(gust_system system, const gust_wind_emitter* emitters, size_t count);
+
+/// Prevailing wind, m/s world: enters through the upwind sides of the domain.
+gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
+
+/// Centre of interest (world m); the domain follows it in whole cells at the next step.
+gust_result gust_system_set_focus(gust_system system, gust_vec3 position);
+
+/// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh the wind
+/// texture and answer pending queries. Blocks until the GPU is done.
+gust_result gust_system_step(gust_system system, float dt);
+
+/// With GUST_SUBMISSION_HOST_COMMANDS: records the wind texture's layout transition into the host's
+/// `commands` (recording state); call after gust_system_step and before the host's draws.
+gust_result gust_system_record(gust_system system, VkCommandBuffer commands);
+
+/// Wind velocity (m/s) at `count` points into `velocities` (count entries, caller-owned); points outside
+/// the domain get the ambient wind. Blocks for a GPU round trip.
+gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,
+                              gust_vec3* velocities);
+
+/// Queues `count` points (copied); the answer is ready after the next step and is fetched with
+/// gust_system_fetch. `*query` receives its ticket.
+gust_result gust_system_query_async(gust_system system, const gust_vec3* points, size_t count,
+                                    gust_query* query);
+
+/// Writes the answer to `query` (count = the queued points' count, caller-owned) and forgets it;
+/// GUST_ERROR_NOT_READY before the next step.
+gust_result gust_system_fetch(gust_system system, gust_query query, gust_vec3* velocities, size_t count);
+
+/// Wind at one world point (m) in the form engines' wind sources use.
+gust_result gust_system_wind_at(gust_system system, gust_vec3 point, gust_wind_sample* sample);
+
+/// Fills `texture` with the wind texture's handles and mapping (handles owned by the system).
+gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* texture);
+
+/// Fills `stats` with the last step's statistics.
+gust_result gust_system_stats(gust_system system, gust_frame_stats* stats);
+
+/// `*count` receives how many timed GPU passes the last step's statistics hold (0 without timestamps).
+gust_result gust_system_stats_pass_count(gust_system system, uint32_t* count);
+
+/// Pass `index` (< gust_system_stats_pass_count) of the last step: `*name` (owned by the system, valid until
+/// the next step) and `*ms` (GPU milliseconds); either output may be NULL.
+gust_result gust_system_stats_pass(gust_system system, uint32_t index, const char** name, double* ms);
+
+/// `*origin` receives the domain's min corner (world m) after the last step.
+gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
+
+/// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; DESIGN.md layout);
+/// GUST_ERROR_UNSUPPORTED when built without OpenVDB.
+gust_result gust_system_export_vdb(gust_system system, const char* path);
+
+#ifdef __cplusplus
+} // extern "C"
+#endif
+
+#endif /* GUST_GUST_H */

@@ -1,0 +1,294 @@
+// gust: GPU wind for game engines. This header is the manual (docs/api.md has the integration guide).
+//
+// Every frame the engine tells gust where its meshes are, calls System::step(dt), and reads the wind:
+// at points (blocking, or one frame late without a stall), as a 3D texture for its shaders, or as a
+// wind-source sample (direction, speed, gust). Nothing here throws: calls return a gust::Outcome whose
+// message names the argument and the reason. Units are metres, seconds and m/s; positions and
+// directions are world space; matrices are column-major (as GLM, Vulkan and OpenGL store them).
+// A System is thread-compatible: one thread calls it at a time.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+#include <vulkan/vulkan_core.h>
+
+namespace gust {
+
+/// The header's version, passed in SystemDesc so a library built from another version refuses to run.
+inline constexpr std::uint32_t kVersionMajor = 0;
+inline constexpr std::uint32_t kVersionMinor = 1;
+inline constexpr std::uint32_t kVersionPatch = 0;
+/// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
+inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
+/// The version the library was built as (compare with kHeaderVersion).
+std::uint32_t library_version();
+
+/// What went wrong; Ok is 0 (the C ABI uses the same numbers).
+enum class ErrorCode : std::int32_t {
+    Ok = 0,
+    InvalidArgument = 1,   ///< a value out of range, not finite, or of the wrong size
+    InvalidHandle = 2,     ///< a mesh, instance or query id that is not (or no longer) alive
+    VersionMismatch = 3,   ///< header and library versions differ in major or minor
+    DeviceUnsupported = 4, ///< the device lacks a required feature, or no device was found
+    DeviceFailure = 5,     ///< a Vulkan call failed (out of device memory, device lost)
+    NotReady = 6,          ///< an asynchronous answer is not there yet
+    IoError = 7,           ///< a file could not be written
+    Unsupported = 8,       ///< built without the optional part this call needs (OpenVDB)
+};
+
+/// The outcome of a call: a code and, when not Ok, a message naming the argument and the reason.
+/// (Named apart from the library's internal Status so both can meet in one translation unit.)
+class Outcome {
+  public:
+    Outcome() = default;
+    Outcome(ErrorCode code, std::string message) : code_(code), message_(std::move(message)) {}
+    explicit operator bool() const { return code_ == ErrorCode::Ok; }
+    ErrorCode code() const { return code_; }
+    const std::string& message() const { return message_; }
+
+  private:
+    ErrorCode code_ = ErrorCode::Ok;
+    std::string message_;
+};
+
+struct Vec3 {
+    float x = 0.0f, y = 0.0f, z = 0.0f;
+};
+
+/// Column-major 4x4 matrix (m[12..14] is the translation); identity by default.
+struct Mat4 {
+    float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+};
+
+/// Severity of a log message.
+enum class LogLevel : std::int32_t { Info = 0, Warning = 1, Error = 2 };
+
+/// Host hooks, as plain function pointers with a user pointer (each may be null).
+struct Hooks {
+    void* user = nullptr;
+    /// Host memory for gust's own objects (the System, meshes, query buffers); null uses operator new.
+    /// Must return memory aligned to `alignment` (a power of two) or null.
+    void* (*allocate)(void* user, std::size_t bytes, std::size_t alignment) = nullptr;
+    /// Frees what `allocate` returned; required when `allocate` is given.
+    void (*free)(void* user, void* memory) = nullptr;
+    /// Validation-layer and driver messages, pool growth, dropped queries; null drops them. Any thread.
+    void (*log)(void* user, LogLevel level, const char* message) = nullptr;
+    /// Called when one of gust's internal invariants fails, before the call returns an error; null ignores.
+    void (*assert_failed)(void* user, const char* expression, const char* file, int line) = nullptr;
+};
+
+/// A host engine's Vulkan device for gust to run on (the second tier; docs/api.md "Devices").
+struct HostDevice {
+    VkInstance instance = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_device = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    std::uint32_t queue_family = 0; ///< a family with graphics and compute
+    std::uint32_t queue_index = 0;  ///< gust submits to this queue (see docs/api.md "Submission")
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr; ///< required
+    PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;     ///< null: loaded through the above
+    /// Device extensions the host enabled (gust uses VK_EXT_conservative_rasterization when listed).
+    std::span<const char* const> enabled_extensions;
+};
+
+/// What a host must enable on its instance and device before gust can adopt it.
+struct DeviceRequirements {
+    std::uint32_t api_version = VK_API_VERSION_1_3;
+    std::vector<const char*> extensions;          ///< required device extensions
+    std::vector<const char*> optional_extensions; ///< used when the host enables them
+    std::vector<const char*> features;            ///< names of required VkPhysicalDevice*Features members
+};
+/// The list a host enables (static strings).
+DeviceRequirements device_requirements();
+/// Sets gust's required features in `features` and the Vulkan 1.2 and 1.3 feature structs on its pNext
+/// chain (which must hold both), leaving the host's other flags as they are.
+Outcome add_required_features(VkPhysicalDeviceFeatures2& features);
+
+/// Where the wind is simulated and how finely.
+struct WindDomain {
+    std::uint32_t cells[3] = {32, 16, 32}; ///< wind cells per axis, each 8..256
+    float cell_size = 1.0f;                ///< metres
+    std::uint32_t voxels_per_cell = 4;     ///< voxels of the solid boundary per cell per axis, 1..8
+    std::uint32_t branching = 4;           ///< the voxel tree's branching per axis: 2, 4 or 8
+    Vec3 focus{};                          ///< the domain's first centre (player or camera)
+};
+
+/// Numerics of the wind (defaults suit game wind; docs/solver.md explains each).
+struct WindSettings {
+    float tolerance = 1e-5f;       ///< relative residual the pressure solve stops at
+    std::uint32_t max_cycles = 20; ///< V-cycles per step at most
+    float vorticity = 0.2f;        ///< vorticity confinement ε (0: off)
+    float viscosity = 0.0f;        ///< m^2/s (0: off)
+};
+
+/// How a System's GPU work reaches a queue.
+enum class Submission : std::int32_t {
+    OwnQueue = 0,     ///< step() submits and waits on gust's queue (own device) or the host's queue
+    HostCommands = 1, ///< the per-frame wind texture update is recorded by record() into the host's buffer
+};
+
+/// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
+enum class VoxelizePath : std::int32_t {
+    Auto = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    Raster = 1,  ///< the hardware rasterizer
+    Compute = 2, ///< a thread per triangle
+};
+
+/// Everything a System is created from.
+struct SystemDesc {
+    std::uint32_t header_version = kHeaderVersion; ///< leave as is: checked against the library
+    const HostDevice* host = nullptr;              ///< null: gust creates its own instance and device
+    bool validation = false;                       ///< own device: enable the Khronos validation layer
+    const char* device = nullptr; ///< own device: index or name substring (null: GUST_DEVICE, then best)
+    Submission submission = Submission::OwnQueue;
+    VoxelizePath voxelize = VoxelizePath::Auto;
+    WindDomain domain;
+    WindSettings wind;
+    Hooks hooks;
+};
+
+/// Ids of meshes and instances: 0 is never valid; a destroyed id is never reused.
+using MeshId = std::uint64_t;
+using InstanceId = std::uint64_t;
+
+/// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices.
+struct MeshDesc {
+    const float* positions = nullptr;
+    std::uint32_t vertex_count = 0;
+    std::uint32_t stride = 12; ///< bytes between consecutive positions
+    const std::uint32_t* indices = nullptr;
+    std::uint32_t index_count = 0; ///< a multiple of 3
+    /// Dynamic meshes may change their vertices every frame (set_vertices); static ones never do.
+    bool deforming = false;
+};
+
+/// A wind source (docs/solver.md "Emitters" draws each profile).
+enum class WindEmitterType : std::int32_t {
+    Directional = 0,
+    Omni = 1,
+    Vortex = 2,
+    CapsuleMotor = 3,
+    ConeMotor = 4
+};
+struct WindEmitter {
+    WindEmitterType type = WindEmitterType::Omni;
+    Vec3 position{};         ///< centre, or a motor's start
+    Vec3 direction{1, 0, 0}; ///< unit: flow (directional, motors) or axis (vortex)
+    float radius = 1.0f;     ///< m, > 0
+    float strength = 0.0f;   ///< m/s at the centre (negative reverses)
+    float falloff = 1.0f;    ///< exponent of (1 − d/radius), >= 0
+    float length = 0.0f;     ///< motors: m along direction
+};
+
+/// Wind at a point as engines' wind sources take it.
+struct WindSample {
+    Vec3 direction{};   ///< unit (0 when still)
+    float speed = 0.0f; ///< m/s
+    /// Short-term variation, m/s: |velocity − its mean over the neighbouring cells| (what a gust
+    /// parameter of a foliage or cloth wind source wants).
+    float gust = 0.0f;
+};
+
+/// The velocity field as a sampled 3D image for the host's shaders (docs/api.md "Wind texture").
+struct WindTexture {
+    VkImage image = VK_NULL_HANDLE;
+    VkImageView view = VK_NULL_HANDLE;
+    VkSampler sampler = VK_NULL_HANDLE;              ///< linear, clamp to edge
+    VkFormat format = VK_FORMAT_R16G16B16A16_SFLOAT; ///< rgb: m/s, a: 1 − solid fraction
+    std::uint32_t extent[3] = {};
+    /// World position → texture coordinates in [0, 1]^3 (uvw = world_to_texture · (p, 1)).
+    Mat4 world_to_texture;
+    /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step (and after record()).
+    VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    std::uint64_t frame = 0; ///< the frame whose wind it holds
+};
+
+/// What one step did (GPU milliseconds per pass where the device has timestamps).
+struct FrameStats {
+    std::uint64_t frame = 0;
+    std::uint64_t fragments = 0, voxels = 0, nodes = 0, refined = 0, coarsened = 0;
+    std::uint64_t pool_bytes = 0, fragment_bytes = 0, dense_bytes = 0;
+    float divergence_before = 0.0f, divergence_after = 0.0f, residual = 0.0f;
+    std::uint32_t cycles = 0;
+    bool converged = false;
+    std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
+    std::vector<std::pair<std::string, double>> ms;
+};
+
+/// Ticket of an asynchronous query (0 is never valid).
+using QueryId = std::uint64_t;
+
+/// The wind subsystem. Create one per world.
+class System {
+  public:
+    /// Creates the device (or adopts desc.host), the voxel tree and the solver. On failure `out` stays
+    /// null and the Outcome says why.
+    static Outcome create(const SystemDesc& desc, std::unique_ptr<System>& out);
+    ~System();
+    System(const System&) = delete;
+    System& operator=(const System&) = delete;
+
+    /// Uploads a mesh; `id` receives its handle. Indices are checked against vertex_count.
+    Outcome create_mesh(const MeshDesc& desc, MeshId& id);
+    /// Destroys a mesh; fails with InvalidHandle while an instance still uses it.
+    Outcome destroy_mesh(MeshId mesh);
+    /// New positions for a deforming mesh (a skinned pose), vertex_count of them with `stride` bytes
+    /// between; used from the next step on, the previous pose gives the surface velocity.
+    Outcome set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
+                         std::uint32_t stride = 12);
+    /// The same from a host VkBuffer (host device only): vertex_count tightly packed float3 at `offset`,
+    /// copied on gust's queue at the next step; the host keeps the buffer unchanged until step() returns.
+    Outcome set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count);
+
+    /// Places a mesh. Static instances are voxelized once (again only when the static set changes);
+    /// moving ones every frame, with velocities from their last transform.
+    Outcome create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id);
+    /// Sets an instance's mesh-to-world transform (finite; a static instance's move re-voxelizes the set).
+    Outcome set_transform(InstanceId instance, const Mat4& transform);
+    Outcome destroy_instance(InstanceId instance);
+
+    /// Replaces the emitters (at most 64); rejected whole, keeping the old ones, if any is invalid.
+    Outcome set_emitters(std::span<const WindEmitter> emitters);
+    /// Prevailing wind, m/s: enters through the upwind sides of the domain.
+    Outcome set_ambient(const Vec3& velocity);
+    /// Centre of interest; the domain follows it in whole cells at the next step.
+    Outcome set_focus(const Vec3& position);
+
+    /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
+    /// the wind texture and answer pending queries. Blocks until the GPU is done.
+    Outcome step(float dt);
+    /// With Submission::HostCommands: records the wind texture's layout transition for the host's
+    /// command buffer (barriers in docs/api.md); call after step() and before the host's draws.
+    Outcome record(VkCommandBuffer commands);
+
+    /// Wind velocity at each point (m/s), sampled from the current field; points outside the domain
+    /// get the ambient wind. `velocities` must hold points.size() entries. Blocks for a GPU round trip.
+    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities);
+    /// Queues the points; the answer is ready after the next step() (frame N's question is answered
+    /// with frame N+1's field) and is fetched with fetch(). Points are copied.
+    Outcome query_async(std::span<const Vec3> points, QueryId& id);
+    /// The answer to `id` (then forgotten); NotReady before the next step().
+    Outcome fetch(QueryId id, std::span<Vec3> velocities);
+    /// Wind at one point in the form engines' wind sources use.
+    Outcome wind_at(const Vec3& point, WindSample& sample);
+
+    /// The wind texture (valid until the System is destroyed; contents change at each step).
+    const WindTexture& wind_texture() const;
+    /// The last step's statistics.
+    const FrameStats& stats() const;
+    /// The domain's min corner (world, m) after the last step.
+    Vec3 domain_origin() const;
+    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; DESIGN.md layout).
+    Outcome export_vdb(const char* path);
+
+    struct Impl;
+
+  private:
+    System() = default;
+    Impl* impl_ = nullptr;
+};
+
+} // namespace gust

@@ -1,0 +1,675 @@
+// gust::System: one frame of DESIGN.md ("One frame") over the voxel world and the wind solver, behind the
+// engine-facing API of include/gust/gust.hpp.
+#include "vdb_writer.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <glm/gtc/type_ptr.hpp>
+#include <gust/gpu/context.hpp>
+#include <gust/gpu/image.hpp>
+#include <gust/gust.hpp>
+#include <gust/solver/wind_solver.hpp>
+#include <gust/voxelizer/voxel_world.hpp>
+#include <map>
+#include <memory_resource>
+#include <new>
+#include <optional>
+
+namespace gust {
+
+std::uint32_t library_version() {
+    return kHeaderVersion;
+}
+
+namespace {
+
+Outcome invalid(std::string message) {
+    return Outcome(ErrorCode::InvalidArgument, std::move(message));
+}
+Outcome device_failure(const Status& s) {
+    return Outcome(ErrorCode::DeviceFailure, s.message());
+}
+
+bool finite(const Vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+bool finite(const Mat4& m) {
+    for (float f : m.m)
+        if (!std::isfinite(f)) return false;
+    return true;
+}
+glm::vec3 to_glm(const Vec3& v) {
+    return {v.x, v.y, v.z};
+}
+Vec3 to_vec3(const glm::vec3& v) {
+    return {v.x, v.y, v.z};
+}
+glm::mat4 to_glm(const Mat4& m) {
+    return glm::make_mat4(m.m);
+}
+
+/// Host memory through Hooks::allocate/free (operator new without them).
+class HookResource final : public std::pmr::memory_resource {
+  public:
+    explicit HookResource(const Hooks& hooks) : hooks_(hooks) {}
+
+  private:
+    void* do_allocate(std::size_t bytes, std::size_t alignment) override {
+        if (!hooks_.allocate) return ::operator new(bytes, std::align_val_t(alignment));
+        void* memory = hooks_.allocate(hooks_.user, bytes, alignment);
+        if (!memory) throw std::bad_alloc();
+        return memory;
+    }
+    void do_deallocate(void* memory, std::size_t bytes, std::size_t alignment) override {
+        if (!hooks_.allocate) return ::operator delete(memory, bytes, std::align_val_t(alignment));
+        hooks_.free(hooks_.user, memory);
+    }
+    bool do_is_equal(const std::pmr::memory_resource& other) const noexcept override {
+        return this == &other;
+    }
+
+    Hooks hooks_;
+};
+
+/// Runs `body`, turning an exception from below (allocation) into an error: none crosses the API.
+template <class F> Outcome guarded(F&& body) {
+    try {
+        return body();
+    } catch (const std::bad_alloc&) {
+        return Outcome(ErrorCode::DeviceFailure, "out of host memory");
+    } catch (const std::exception& e) {
+        return Outcome(ErrorCode::DeviceFailure, e.what());
+    }
+}
+
+} // namespace
+
+struct System::Impl {
+    explicit Impl(const Hooks& h)
+        : hooks(h), memory(h), meshes(&memory), instances(&memory), queries(&memory) {}
+
+    Hooks hooks;
+    HookResource memory;
+    std::unique_ptr<gpu::Context> ctx;
+    SolverDesc solver_desc;
+    std::uint32_t branching = 4;
+    Submission submission = Submission::OwnQueue;
+    std::unique_ptr<VoxelWorld> world;
+    std::unique_ptr<WindSolver> solver;
+
+    struct Mesh {
+        GpuMesh gpu;
+        bool deforming = false;
+        std::uint32_t instances = 0;
+    };
+    struct Instance {
+        MeshId mesh = 0;
+        glm::mat4 model{1.0f};
+        std::optional<glm::mat4> prev;
+        bool moving = false;
+    };
+    struct Pending {
+        std::vector<glm::vec3> points;
+        std::vector<glm::vec3> answer;
+        bool ready = false;
+    };
+    std::pmr::map<MeshId, Mesh> meshes;
+    std::pmr::map<InstanceId, Instance> instances;
+    std::pmr::map<QueryId, Pending> queries;
+    std::uint64_t next_id = 1;
+    glm::vec3 focus{0.0f};
+
+    gpu::Buffer texels;
+    gpu::Image image;
+    VkSampler sampler = VK_NULL_HANDLE;
+    WindTexture texture;
+    FrameStats stats;
+    std::uint64_t frame = 0;
+
+    ~Impl() {
+        if (sampler) ctx->vk().vkDestroySampler(ctx->device(), sampler, nullptr);
+    }
+
+    void log(LogLevel level, const std::string& message) const {
+        if (hooks.log) hooks.log(hooks.user, level, message.c_str());
+    }
+    Outcome check(bool condition, const char* expression, int line) const {
+        if (condition) return {};
+        if (hooks.assert_failed) hooks.assert_failed(hooks.user, expression, __FILE__, line);
+        return Outcome(ErrorCode::DeviceFailure, std::string("internal check failed: ") + expression);
+    }
+
+    glm::mat4 world_to_texture() const {
+        const glm::vec3 size = glm::vec3(solver_desc.cells) * solver_desc.cell_size;
+        const glm::vec3 origin = solver->origin();
+        glm::mat4 m(1.0f);
+        for (int a = 0; a < 3; ++a) {
+            m[a][a] = 1.0f / size[a];
+            m[3][a] = -origin[a] / size[a];
+        }
+        return m;
+    }
+    Outcome refresh_texture();
+};
+
+namespace {
+
+Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::unique_ptr<gpu::Context>& out) {
+    gpu::MessageCallback on_message;
+    if (hooks.log)
+        on_message = [hooks](gpu::Severity severity, const std::string& message) {
+            const LogLevel level = severity == gpu::Severity::Error     ? LogLevel::Error
+                                   : severity == gpu::Severity::Warning ? LogLevel::Warning
+                                                                        : LogLevel::Info;
+            hooks.log(hooks.user, level, message.c_str());
+        };
+    if (desc.host) {
+        const HostDevice& h = *desc.host;
+        gpu::HostDevice host;
+        host.instance = h.instance;
+        host.physical_device = h.physical_device;
+        host.device = h.device;
+        host.queue_family = h.queue_family;
+        host.queue_index = h.queue_index;
+        host.get_instance_proc_addr = h.get_instance_proc_addr;
+        host.get_device_proc_addr = h.get_device_proc_addr;
+        for (const char* name : h.enabled_extensions)
+            if (name) host.enabled_extensions.emplace_back(name);
+        auto ctx = gpu::Context::adopt(host);
+        if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
+        out = std::move(*ctx);
+        return {};
+    }
+    gpu::ContextDesc own;
+    own.validation = desc.validation;
+    own.device = desc.device ? desc.device : "";
+    own.on_message = on_message;
+    auto ctx = gpu::Context::create(own);
+    if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
+    out = std::move(*ctx);
+    return {};
+}
+
+Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
+    const WindDomain& d = desc.domain;
+    out.cells = {d.cells[0], d.cells[1], d.cells[2]};
+    out.cell_size = d.cell_size;
+    out.voxels_per_cell = d.voxels_per_cell;
+    out.tolerance = desc.wind.tolerance;
+    out.max_cycles = desc.wind.max_cycles;
+    out.vorticity = desc.wind.vorticity;
+    out.viscosity = desc.wind.viscosity;
+    if (!finite(d.focus)) return invalid("domain.focus must be finite");
+    if (!std::isfinite(d.cell_size) || !(d.cell_size > 0.0f)) return invalid("domain.cell_size must be > 0");
+    out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
+    if (Status s = validate(out); !s) return invalid(s.message());
+    return {};
+}
+
+} // namespace
+
+DeviceRequirements device_requirements() {
+    const gpu::DeviceRequirements r = gpu::device_requirements();
+    DeviceRequirements out;
+    out.api_version = r.api_version;
+    out.extensions = r.extensions;
+    out.optional_extensions = r.optional_extensions;
+    out.features = r.features;
+    return out;
+}
+
+Outcome add_required_features(VkPhysicalDeviceFeatures2& features) {
+    if (Status s = gpu::add_required_features(features); !s) return invalid(s.message());
+    return {};
+}
+
+Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
+    out.reset();
+    const auto major_minor = [](std::uint32_t v) { return v >> 12; };
+    if (major_minor(desc.header_version) != major_minor(kHeaderVersion))
+        return Outcome(ErrorCode::VersionMismatch,
+                       "the header is version " + std::to_string(desc.header_version >> 22) + "." +
+                           std::to_string((desc.header_version >> 12) & 0x3ff) + ", the library " +
+                           std::to_string(kVersionMajor) + "." + std::to_string(kVersionMinor));
+    if ((desc.hooks.allocate == nullptr) != (desc.hooks.free == nullptr))
+        return invalid("hooks.allocate and hooks.free must be given together");
+    if (desc.submission != Submission::OwnQueue && desc.submission != Submission::HostCommands)
+        return invalid("submission must be OwnQueue or HostCommands");
+    if (int(desc.voxelize) < 0 || int(desc.voxelize) > int(VoxelizePath::Compute))
+        return invalid("voxelize must be Auto, Raster or Compute");
+    if (desc.submission == Submission::HostCommands && !desc.host)
+        return invalid("submission HostCommands needs a host device");
+    SolverDesc solver_desc;
+    if (Outcome o = solver_desc_from(desc, solver_desc); !o) return o;
+    const std::uint32_t b = desc.domain.branching;
+    if (b != 2 && b != 4 && b != 8) return invalid("domain.branching must be 2, 4 or 8");
+
+    return guarded([&]() -> Outcome {
+        HookResource memory(desc.hooks);
+        void* place = memory.allocate(sizeof(Impl), alignof(Impl));
+        std::unique_ptr<System> system(new System());
+        system->impl_ = new (place) Impl(desc.hooks);
+        Impl& m = *system->impl_;
+        m.solver_desc = solver_desc;
+        m.branching = b;
+        m.submission = desc.submission;
+        m.focus = to_glm(desc.domain.focus);
+        if (Outcome o = create_context(desc, desc.hooks, m.ctx); !o) return o;
+
+        auto grid = voxel_grid(solver_desc, b);
+        if (!grid) return invalid(grid.message());
+        WorldDesc world_desc;
+        world_desc.grid = *grid;
+        world_desc.tree.branching = b;
+        world_desc.method = desc.voxelize == VoxelizePath::Raster    ? VoxelizeMethod::Raster
+                            : desc.voxelize == VoxelizePath::Compute ? VoxelizeMethod::Compute
+                                                                     : VoxelizeMethod::Auto;
+        auto world = VoxelWorld::create(*m.ctx, world_desc);
+        if (!world) return device_failure(world.status());
+        m.world = std::move(*world);
+        auto solver = WindSolver::create(*m.ctx, solver_desc);
+        if (!solver) return device_failure(solver.status());
+        m.solver = std::move(*solver);
+
+        const std::size_t cells = m.solver->cell_count();
+        auto texels = gpu::Buffer::create(*m.ctx, cells * 8, gpu::MemoryUse::Device);
+        if (!texels) return device_failure(texels.status());
+        m.texels = std::move(*texels);
+        gpu::ImageDesc image;
+        image.extent = {solver_desc.cells.x, solver_desc.cells.y, solver_desc.cells.z};
+        image.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+        image.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+        image.volume = true;
+        auto created = gpu::Image::create(*m.ctx, image);
+        if (!created) return device_failure(created.status());
+        m.image = std::move(*created);
+        VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+        sampler.magFilter = sampler.minFilter = VK_FILTER_LINEAR;
+        sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+        sampler.addressModeU = sampler.addressModeV = sampler.addressModeW =
+            VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+        if (m.ctx->vk().vkCreateSampler(m.ctx->device(), &sampler, nullptr, &m.sampler) != VK_SUCCESS)
+            return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
+        if (Outcome o = m.refresh_texture(); !o) return o;
+        out = std::move(system);
+        return {};
+    });
+}
+
+System::~System() {
+    if (!impl_) return;
+    const Hooks hooks = impl_->hooks;
+    impl_->~Impl();
+    HookResource memory(hooks);
+    memory.deallocate(impl_, sizeof(Impl), alignof(Impl));
+}
+
+Outcome System::Impl::refresh_texture() {
+    Status s = solver->write_texels(texels, [&](VkCommandBuffer cmd) {
+        image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+        image.copy_from(cmd, texels);
+        image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    });
+    if (!s) return device_failure(s);
+    texture.image = image.handle();
+    texture.view = image.view();
+    texture.sampler = sampler;
+    texture.format = image.format();
+    texture.extent[0] = solver_desc.cells.x;
+    texture.extent[1] = solver_desc.cells.y;
+    texture.extent[2] = solver_desc.cells.z;
+    const glm::mat4 w = world_to_texture();
+    std::memcpy(texture.world_to_texture.m, glm::value_ptr(w), sizeof(texture.world_to_texture.m));
+    texture.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    texture.frame = frame;
+    return {};
+}
+
+Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
+    id = 0;
+    if (desc.vertex_count > 0 && !desc.positions) return invalid("positions is null");
+    if (desc.index_count > 0 && !desc.indices) return invalid("indices is null");
+    if (desc.stride < 12)
+        return invalid("stride must be at least 12 bytes, got " + std::to_string(desc.stride));
+    const MeshView view{desc.positions, desc.vertex_count, desc.stride, desc.indices, desc.index_count};
+    for (std::uint32_t v = 0; v < desc.vertex_count; ++v) {
+        const glm::vec3 p = view.position(v);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return invalid("vertex " + std::to_string(v) + " is not finite");
+    }
+    return guarded([&]() -> Outcome {
+        auto mesh = impl_->world->upload(view);
+        if (!mesh) return invalid(mesh.message());
+        const MeshId next = impl_->next_id++;
+        impl_->meshes.emplace(next, Impl::Mesh{std::move(*mesh), desc.deforming, 0});
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::destroy_mesh(MeshId mesh) {
+    auto it = impl_->meshes.find(mesh);
+    if (it == impl_->meshes.end())
+        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
+    if (it->second.instances > 0)
+        return Outcome(ErrorCode::InvalidHandle, "mesh " + std::to_string(mesh) + " is still used by " +
+                                                     std::to_string(it->second.instances) + " instances");
+    impl_->meshes.erase(it);
+    return {};
+}
+
+Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
+                             std::uint32_t stride) {
+    auto it = impl_->meshes.find(mesh);
+    if (it == impl_->meshes.end())
+        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
+    Impl::Mesh& m = it->second;
+    if (!m.deforming) return invalid("mesh " + std::to_string(mesh) + " was not created as deforming");
+    if (vertex_count != m.gpu.vertex_count())
+        return invalid("got " + std::to_string(vertex_count) + " vertices for a mesh of " +
+                       std::to_string(m.gpu.vertex_count()));
+    if (vertex_count > 0 && !positions) return invalid("positions is null");
+    if (stride < 12) return invalid("stride must be at least 12 bytes, got " + std::to_string(stride));
+    return guarded([&]() -> Outcome {
+        std::vector<glm::vec3> packed(vertex_count);
+        for (std::uint32_t v = 0; v < vertex_count; ++v) {
+            const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(positions) +
+                                                           std::size_t(v) * stride);
+            packed[v] = {p[0], p[1], p[2]};
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+                return invalid("vertex " + std::to_string(v) + " is not finite");
+        }
+        if (Status s = impl_->world->update_positions(m.gpu, packed); !s) return device_failure(s);
+        return {};
+    });
+}
+
+Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count) {
+    auto it = impl_->meshes.find(mesh);
+    if (it == impl_->meshes.end())
+        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
+    Impl::Mesh& m = it->second;
+    if (impl_->ctx->owns_device()) return invalid("vertex buffers need a host device (SystemDesc::host)");
+    if (!m.deforming) return invalid("mesh " + std::to_string(mesh) + " was not created as deforming");
+    if (vertex_count != m.gpu.vertex_count())
+        return invalid("got " + std::to_string(vertex_count) + " vertices for a mesh of " +
+                       std::to_string(m.gpu.vertex_count()));
+    if (buffer == VK_NULL_HANDLE) return invalid("buffer is null");
+    if (offset % 4 != 0) return invalid("offset must be a multiple of 4");
+    return guarded([&]() -> Outcome {
+        if (Status s = impl_->world->copy_positions(m.gpu, buffer, offset); !s) return device_failure(s);
+        return {};
+    });
+}
+
+Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
+    id = 0;
+    auto it = impl_->meshes.find(mesh);
+    if (it == impl_->meshes.end())
+        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
+    if (!finite(transform)) return invalid("transform must be finite");
+    return guarded([&]() -> Outcome {
+        const InstanceId next = impl_->next_id++;
+        impl_->instances.emplace(next, Impl::Instance{mesh, to_glm(transform), std::nullopt, moving});
+        ++it->second.instances;
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::set_transform(InstanceId instance, const Mat4& transform) {
+    auto it = impl_->instances.find(instance);
+    if (it == impl_->instances.end())
+        return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
+    if (!finite(transform)) return invalid("transform must be finite");
+    it->second.model = to_glm(transform);
+    return {};
+}
+
+Outcome System::destroy_instance(InstanceId instance) {
+    auto it = impl_->instances.find(instance);
+    if (it == impl_->instances.end())
+        return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
+    --impl_->meshes.at(it->second.mesh).instances;
+    impl_->instances.erase(it);
+    return {};
+}
+
+Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
+    return guarded([&]() -> Outcome {
+        std::vector<Emitter> out;
+        for (const WindEmitter& e : emitters) {
+            const int type = int(e.type);
+            if (type < 0 || type > int(WindEmitterType::ConeMotor))
+                return invalid("emitter " + std::to_string(out.size()) + ": unknown type " +
+                               std::to_string(type));
+            out.push_back(Emitter{EmitterType(type), to_glm(e.position), to_glm(e.direction), e.radius,
+                                  e.strength, e.falloff, e.length});
+        }
+        if (Status s = impl_->solver->set_emitters(out); !s) return invalid(s.message());
+        return {};
+    });
+}
+
+Outcome System::set_ambient(const Vec3& velocity) {
+    if (Status s = impl_->solver->set_ambient(to_glm(velocity)); !s) return invalid(s.message());
+    return {};
+}
+
+Outcome System::set_focus(const Vec3& position) {
+    if (!finite(position)) return invalid("focus must be finite");
+    impl_->focus = to_glm(position);
+    return {};
+}
+
+Outcome System::step(float dt) {
+    if (!std::isfinite(dt) || !(dt > 0.0f) || dt > 10.0f)
+        return invalid("dt must be a finite number of seconds in (0, 10], got " + std::to_string(dt));
+    return guarded([&]() -> Outcome {
+        Impl& m = *impl_;
+        // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
+        const float h = m.solver_desc.cell_size;
+        const glm::vec3 wanted = m.focus - 0.5f * glm::vec3(m.solver_desc.cells) * h;
+        const glm::vec3 shift = glm::round((wanted - m.solver->origin()) / h);
+        if (shift != glm::vec3(0.0f)) {
+            if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f))))
+                return invalid("the focus moved more than a million cells in one step");
+            if (Status s = m.solver->scroll(glm::ivec3(shift)); !s) return device_failure(s);
+            if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
+        }
+
+        std::vector<GpuInstance> fixed, dynamic;
+        for (auto& [id, instance] : m.instances) {
+            const Impl::Mesh& mesh = m.meshes.at(instance.mesh);
+            if (instance.moving || mesh.deforming)
+                dynamic.push_back({&mesh.gpu, instance.model, instance.prev});
+            else
+                fixed.push_back({&mesh.gpu, instance.model, std::nullopt});
+        }
+        m.world->set_static(std::move(fixed));
+        auto frame = m.world->step(dynamic, dt);
+        if (!frame) return device_failure(frame.status());
+        for (auto& [id, instance] : m.instances)
+            instance.prev = instance.model;
+
+        const SolidSource solid = solid_source(*m.world);
+        auto wind = m.solver->step(dt, &solid);
+        if (!wind) return device_failure(wind.status());
+        ++m.frame;
+        if (Outcome o = m.refresh_texture(); !o) return o;
+
+        std::vector<glm::vec3> points;
+        for (const auto& [id, pending] : m.queries)
+            if (!pending.ready) points.insert(points.end(), pending.points.begin(), pending.points.end());
+        if (!points.empty()) {
+            auto answers = m.solver->sample(points);
+            if (!answers) return device_failure(answers.status());
+            std::size_t at = 0;
+            for (auto& [id, pending] : m.queries)
+                if (!pending.ready) {
+                    pending.answer.assign(answers->begin() + std::ptrdiff_t(at),
+                                          answers->begin() + std::ptrdiff_t(at + pending.points.size()));
+                    pending.ready = true;
+                    at += pending.points.size();
+                }
+            if (Outcome o = m.check(at == answers->size(), "every queued point answered", __LINE__); !o)
+                return o;
+        }
+
+        FrameStats& st = m.stats;
+        const TreeStats& tree = frame->tree;
+        st.frame = frame->frame;
+        st.fragments = frame->static_voxelize.fragments + frame->dynamic_voxelize.fragments;
+        st.voxels = tree.voxels;
+        st.nodes = tree.nodes;
+        st.refined = tree.refined;
+        st.coarsened = tree.coarsened;
+        st.pool_bytes = tree.pool_bytes;
+        st.fragment_bytes = st.fragments * 4 + frame->dynamic_voxelize.fragments * 8;
+        const std::uint64_t res = m.world->grid().res;
+        st.dense_bytes = res * res * res * 4;
+        st.divergence_before = float(wind->divergence_before);
+        st.divergence_after = float(wind->divergence_after);
+        st.residual = float(wind->residual);
+        st.cycles = wind->cycles;
+        st.converged = wind->converged;
+        st.rejected_triangles = std::uint32_t(frame->dynamic_voxelize.rejected +
+                                              (frame->static_rebuilt ? frame->static_voxelize.rejected : 0));
+        st.ms = frame->ms;
+        for (const auto& [pass, ms] : wind->ms)
+            st.ms.emplace_back("wind_" + pass, ms);
+        if (frame->pool_growths > 0)
+            m.log(LogLevel::Info,
+                  "the voxel tree's pools grew " + std::to_string(frame->pool_growths) + " times");
+        return {};
+    });
+}
+
+Outcome System::record(VkCommandBuffer commands) {
+    if (impl_->submission != Submission::HostCommands)
+        return invalid("record() needs Submission::HostCommands");
+    if (commands == VK_NULL_HANDLE) return invalid("commands is null");
+    // gust's own submission wrote the texture and waited on its fence; this makes those writes visible
+    // to the host's shaders in the host's submission order.
+    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+    barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
+    barrier.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+    barrier.dstStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                           VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT;
+    barrier.dstAccessMask = VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
+    VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dependency.memoryBarrierCount = 1;
+    dependency.pMemoryBarriers = &barrier;
+    impl_->ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
+    return {};
+}
+
+namespace {
+Outcome check_points(std::span<const Vec3> points) {
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!finite(points[i])) return invalid("point " + std::to_string(i) + " is not finite");
+    return {};
+}
+} // namespace
+
+Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
+    if (velocities.size() != points.size())
+        return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
+                       std::to_string(points.size()) + " points");
+    if (Outcome o = check_points(points); !o) return o;
+    return guarded([&]() -> Outcome {
+        std::vector<glm::vec3> at(points.size());
+        for (std::size_t i = 0; i < points.size(); ++i)
+            at[i] = to_glm(points[i]);
+        auto answers = impl_->solver->sample(at);
+        if (!answers) return device_failure(answers.status());
+        for (std::size_t i = 0; i < points.size(); ++i)
+            velocities[i] = to_vec3((*answers)[i]);
+        return {};
+    });
+}
+
+Outcome System::query_async(std::span<const Vec3> points, QueryId& id) {
+    id = 0;
+    if (Outcome o = check_points(points); !o) return o;
+    return guarded([&]() -> Outcome {
+        Impl::Pending pending;
+        pending.points.reserve(points.size());
+        for (const Vec3& p : points)
+            pending.points.push_back(to_glm(p));
+        const QueryId next = impl_->next_id++;
+        impl_->queries.emplace(next, std::move(pending));
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::fetch(QueryId id, std::span<Vec3> velocities) {
+    auto it = impl_->queries.find(id);
+    if (it == impl_->queries.end())
+        return Outcome(ErrorCode::InvalidHandle, "no query " + std::to_string(id));
+    if (!it->second.ready)
+        return Outcome(ErrorCode::NotReady, "query " + std::to_string(id) + " is answered by the next step");
+    if (velocities.size() != it->second.answer.size())
+        return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
+                       std::to_string(it->second.answer.size()) + " points");
+    for (std::size_t i = 0; i < velocities.size(); ++i)
+        velocities[i] = to_vec3(it->second.answer[i]);
+    impl_->queries.erase(it);
+    return {};
+}
+
+Outcome System::wind_at(const Vec3& point, WindSample& sample) {
+    sample = {};
+    if (!finite(point)) return invalid("point is not finite");
+    const float h = impl_->solver_desc.cell_size;
+    Vec3 points[7];
+    for (int i = 0; i < 7; ++i)
+        points[i] = point;
+    for (int a = 0; a < 3; ++a) {
+        (&points[1 + 2 * a].x)[a] -= h;
+        (&points[2 + 2 * a].x)[a] += h;
+    }
+    Vec3 v[7];
+    if (Outcome o = query(points, v); !o) return o;
+    glm::vec3 mean(0.0f);
+    for (int i = 1; i < 7; ++i)
+        mean += to_glm(v[i]) / 6.0f;
+    const glm::vec3 here = to_glm(v[0]);
+    sample.speed = glm::length(here);
+    sample.direction = sample.speed > 0.0f ? to_vec3(here / sample.speed) : Vec3{};
+    sample.gust = glm::length(here - mean);
+    return {};
+}
+
+const WindTexture& System::wind_texture() const {
+    return impl_->texture;
+}
+const FrameStats& System::stats() const {
+    return impl_->stats;
+}
+Vec3 System::domain_origin() const {
+    return to_vec3(impl_->solver->origin());
+}
+
+Outcome System::export_vdb(const char* path) {
+    if (!path || !*path) return invalid("path is empty");
+    return guarded([&]() -> Outcome {
+        Impl& m = *impl_;
+        auto voxels = m.world->tree().leaf_voxels();
+        auto faces = m.solver->read_velocity();
+        auto solid = m.solver->read_solid_fraction();
+        auto pressure = m.solver->read_pressure();
+        for (const Status* s : {&voxels.status(), &faces.status(), &solid.status(), &pressure.status()})
+            if (!*s) return device_failure(*s);
+        const std::vector<glm::vec3> velocity = cell_velocities(m.solver_desc.cells, *faces);
+        const vdb::WindGrids grids{
+            m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, velocity, *pressure};
+        if (Status s = vdb::write_frame_vdb(path, *voxels, m.world->grid(), grids); !s)
+            return Outcome(ErrorCode::IoError, s.message());
+        return {};
+    });
+}
+
+} // namespace gust

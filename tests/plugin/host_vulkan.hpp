@@ -1,0 +1,41 @@
+// A host engine's Vulkan setup as a test plays it: its own loader, instance (validation on, messages
+// counted), device with gust's required features, and one graphics+compute queue.
+#pragma once
+
+#include <atomic>
+#include <gust/gust.hpp>
+#include <string>
+
+namespace gust::test {
+
+class HostVulkan {
+  public:
+    /// Creates everything; ok() says whether it worked and error() why not.
+    HostVulkan();
+    ~HostVulkan();
+    HostVulkan(const HostVulkan&) = delete;
+    HostVulkan& operator=(const HostVulkan&) = delete;
+
+    bool ok() const { return error_.empty(); }
+    const std::string& error() const { return error_; }
+    /// What gust::SystemDesc::host points at.
+    const HostDevice& device() const { return host_; }
+    /// Validation-layer warnings and errors seen so far.
+    int messages() const { return messages_.load(); }
+    /// Records `record` into a command buffer of the host's own pool, submits it and waits.
+    bool run(void (*record)(VkCommandBuffer, void*), void* user);
+
+  private:
+    static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                                     VkDebugUtilsMessageTypeFlagsEXT,
+                                                     const VkDebugUtilsMessengerCallbackDataEXT*, void*);
+    void* loader_ = nullptr;
+    HostDevice host_;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    VkCommandPool pool_ = VK_NULL_HANDLE;
+    std::atomic<int> messages_{0};
+    std::string error_;
+};
+
+} // namespace gust::test
