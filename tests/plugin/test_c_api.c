@@ -1,7 +1,9 @@
 /* The C ABI (gust.h) driven from C: a small world on the validated own device (lavapipe in CI) with a
- * static and a moving box, queries, the wind texture and stats, and every error path the header promises
- * (each failing call returns its code and a message that names the function). No test framework: CHECK
- * prints file:line and the expression, and main returns 1 if any failed. */
+ * static and a moving box, queries, the wind texture and stats; a host engine's device with host commands and
+ * a vertex buffer; and every error path the header promises (each failing call returns its code and a
+ * message that names the function). No test framework: CHECK prints file:line and the expression, and main
+ * returns 1 if any failed. */
+#include <dlfcn.h>
 #include <gust/gust.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -285,6 +287,12 @@ static void rejects_bad_creation_without_touching_the_device(void) {
     desc = small_world_desc(NULL);
     desc.submission = GUST_SUBMISSION_HOST_COMMANDS; /* needs a host device */
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
+    gust_host_device host;
+    memset(&host, 0, sizeof host);
+    host.enabled_extension_count = 1;
+    desc = small_world_desc(NULL);
+    desc.host = &host;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
     CHECK(system == NULL);
 }
 
@@ -546,8 +554,11 @@ static void simulates_a_small_world(void) {
     CHECK_RESULT(system, gust_system_stats(system, &stats), GUST_OK);
     CHECK(stats.frame > 0);
     CHECK(stats.fragments > 0 && stats.fragment_bytes > 0);
-    /* At least the one-voxel shell of the static box: 12 voxels (3 m / 0.25 m) a side, 12^3 - 10^3. */
-    CHECK(stats.voxels >= 12 * 12 * 12 - 10 * 10 * 10);
+    /* Both boxes have their faces on voxel boundaries (0.25 m voxels from the corner (-8, 0, -8)), and a
+     * voxel is occupied when its closed box meets a triangle, so each face occupies the voxel layers on both
+     * sides of it: a cube n voxels wide covers (n + 2)^3 - (n - 2)^3 voxels. Static: 3 m, n = 12; moving: 1
+     * m, n = 4. */
+    CHECK(stats.voxels == (14 * 14 * 14 - 10 * 10 * 10) + (6 * 6 * 6 - 2 * 2 * 2));
     CHECK(stats.nodes > 0 && stats.pool_bytes > 0 && stats.dense_bytes > 0);
     CHECK(stats.cycles > 0 && isfinite(stats.residual));
     CHECK(stats.divergence_after <= stats.divergence_before);
@@ -610,11 +621,268 @@ static void simulates_a_small_world(void) {
     CHECK(gust_system_last_error(NULL) == gust_last_create_error());
 }
 
+/* A host engine written in C: it loads Vulkan itself, creates a validated instance and a device with gust's
+ * requirements, and hands them to gust, which records into the host's command buffer. */
+typedef struct host_engine {
+    void* loader;
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr;
+    VkInstance instance;
+    VkDebugUtilsMessengerEXT messenger;
+    VkPhysicalDevice physical_device;
+    uint32_t queue_family;
+    VkDevice device;
+    VkQueue queue;
+    atomic_int validation_messages;
+} host_engine;
+
+/// An instance or device function of the host's loader, cast to its type.
+#define HOST_LOAD(host, name) ((PFN_##name)(host)->get_instance_proc_addr((host)->instance, #name))
+
+static VKAPI_ATTR VkBool32 VKAPI_CALL host_on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                      VkDebugUtilsMessageTypeFlagsEXT types,
+                                                      const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                      void* user) {
+    (void)severity;
+    (void)types;
+    host_engine* host = (host_engine*)user;
+    atomic_fetch_add(&host->validation_messages, 1);
+    fprintf(stderr, "[host validation] %s\n", data->pMessage ? data->pMessage : "");
+    return VK_FALSE;
+}
+
+/* Returns 0 (after a failed CHECK) when the host could not be set up. */
+static int host_start(host_engine* host) {
+    memset(host, 0, sizeof *host);
+    atomic_init(&host->validation_messages, 0);
+    host->loader = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
+    CHECK(host->loader != NULL);
+    if (!host->loader) return 0;
+    /* ISO C has no cast from an object pointer to a function pointer; dlsym's result is copied instead. */
+    void* symbol = dlsym(host->loader, "vkGetInstanceProcAddr");
+    CHECK(symbol != NULL);
+    if (!symbol) return 0;
+    memcpy(&host->get_instance_proc_addr, &symbol, sizeof symbol);
+
+    const char* layer = "VK_LAYER_KHRONOS_validation";
+    const char* extension = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+    VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "gust C host";
+    app.apiVersion = VK_API_VERSION_1_3;
+    VkDebugUtilsMessengerCreateInfoEXT messenger = {VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messenger.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    messenger.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+    messenger.pfnUserCallback = host_on_message;
+    messenger.pUserData = host;
+    VkInstanceCreateInfo instance_info = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    instance_info.pNext = &messenger;
+    instance_info.pApplicationInfo = &app;
+    instance_info.enabledLayerCount = 1;
+    instance_info.ppEnabledLayerNames = &layer;
+    instance_info.enabledExtensionCount = 1;
+    instance_info.ppEnabledExtensionNames = &extension;
+    CHECK(HOST_LOAD(host, vkCreateInstance)(&instance_info, NULL, &host->instance) == VK_SUCCESS);
+    if (!host->instance) return 0;
+    CHECK(HOST_LOAD(host, vkCreateDebugUtilsMessengerEXT)(host->instance, &messenger, NULL,
+                                                          &host->messenger) == VK_SUCCESS);
+
+    /* The first Vulkan 1.3 device with a graphics and compute queue family. */
+    VkPhysicalDevice devices[16];
+    uint32_t count = 16;
+    HOST_LOAD(host, vkEnumeratePhysicalDevices)(host->instance, &count, devices);
+    for (uint32_t d = 0; d < count && !host->physical_device; ++d) {
+        VkPhysicalDeviceProperties properties;
+        HOST_LOAD(host, vkGetPhysicalDeviceProperties)(devices[d], &properties);
+        if (properties.apiVersion < VK_API_VERSION_1_3) continue;
+        VkQueueFamilyProperties families[16];
+        uint32_t family_count = 16;
+        HOST_LOAD(host, vkGetPhysicalDeviceQueueFamilyProperties)(devices[d], &family_count, families);
+        for (uint32_t f = 0; f < family_count && !host->physical_device; ++f) {
+            if ((families[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) &&
+                (families[f].queueFlags & VK_QUEUE_COMPUTE_BIT)) {
+                host->physical_device = devices[d];
+                host->queue_family = f;
+            }
+        }
+    }
+    CHECK(host->physical_device != VK_NULL_HANDLE);
+    if (!host->physical_device) return 0;
+
+    VkPhysicalDeviceVulkan13Features features13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features features12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    features12.pNext = &features13;
+    VkPhysicalDeviceFeatures2 features = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    features.pNext = &features12;
+    CHECK_FREE_RESULT(gust_add_required_features(&features), GUST_OK);
+    const float priority = 1.0f;
+    VkDeviceQueueCreateInfo queue = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    queue.queueFamilyIndex = host->queue_family;
+    queue.queueCount = 1;
+    queue.pQueuePriorities = &priority;
+    VkDeviceCreateInfo device_info = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    device_info.pNext = &features;
+    device_info.queueCreateInfoCount = 1;
+    device_info.pQueueCreateInfos = &queue;
+    CHECK(HOST_LOAD(host, vkCreateDevice)(host->physical_device, &device_info, NULL, &host->device) ==
+          VK_SUCCESS);
+    if (!host->device) return 0;
+    HOST_LOAD(host, vkGetDeviceQueue)(host->device, host->queue_family, 0, &host->queue);
+    return 1;
+}
+
+static void host_stop(host_engine* host) {
+    if (host->device) HOST_LOAD(host, vkDestroyDevice)(host->device, NULL);
+    if (host->messenger)
+        HOST_LOAD(host, vkDestroyDebugUtilsMessengerEXT)(host->instance, host->messenger, NULL);
+    if (host->instance) HOST_LOAD(host, vkDestroyInstance)(host->instance, NULL);
+    if (host->loader) dlclose(host->loader);
+}
+
+/* A host-visible buffer the host fills with `bytes` of `data` (usable as a transfer source). */
+typedef struct host_buffer {
+    VkBuffer buffer;
+    VkDeviceMemory memory;
+} host_buffer;
+
+static host_buffer host_buffer_create(host_engine* host, const void* data, VkDeviceSize bytes) {
+    host_buffer out = {VK_NULL_HANDLE, VK_NULL_HANDLE};
+    VkBufferCreateInfo info = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = bytes;
+    info.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    CHECK(HOST_LOAD(host, vkCreateBuffer)(host->device, &info, NULL, &out.buffer) == VK_SUCCESS);
+    VkMemoryRequirements needs;
+    HOST_LOAD(host, vkGetBufferMemoryRequirements)(host->device, out.buffer, &needs);
+    VkPhysicalDeviceMemoryProperties memory;
+    HOST_LOAD(host, vkGetPhysicalDeviceMemoryProperties)(host->physical_device, &memory);
+    const VkMemoryPropertyFlags wanted =
+        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    uint32_t type = UINT32_MAX;
+    for (uint32_t t = 0; t < memory.memoryTypeCount && type == UINT32_MAX; ++t)
+        if ((needs.memoryTypeBits & (1u << t)) && (memory.memoryTypes[t].propertyFlags & wanted) == wanted)
+            type = t;
+    CHECK(type != UINT32_MAX);
+    VkMemoryAllocateInfo allocate = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    allocate.allocationSize = needs.size;
+    allocate.memoryTypeIndex = type;
+    CHECK(HOST_LOAD(host, vkAllocateMemory)(host->device, &allocate, NULL, &out.memory) == VK_SUCCESS);
+    CHECK(HOST_LOAD(host, vkBindBufferMemory)(host->device, out.buffer, out.memory, 0) == VK_SUCCESS);
+    void* mapped = NULL;
+    CHECK(HOST_LOAD(host, vkMapMemory)(host->device, out.memory, 0, bytes, 0, &mapped) == VK_SUCCESS);
+    if (mapped) memcpy(mapped, data, (size_t)bytes);
+    HOST_LOAD(host, vkUnmapMemory)(host->device, out.memory);
+    return out;
+}
+
+static void host_buffer_destroy(host_engine* host, host_buffer* buffer) {
+    HOST_LOAD(host, vkDestroyBuffer)(host->device, buffer->buffer, NULL);
+    HOST_LOAD(host, vkFreeMemory)(host->device, buffer->memory, NULL);
+}
+
+/* Records gust_system_record into a one-time command buffer and runs it on the host's queue. */
+static void host_record_and_submit(host_engine* host, gust_system system) {
+    VkCommandPoolCreateInfo pool_info = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.queueFamilyIndex = host->queue_family;
+    VkCommandPool pool = VK_NULL_HANDLE;
+    CHECK(HOST_LOAD(host, vkCreateCommandPool)(host->device, &pool_info, NULL, &pool) == VK_SUCCESS);
+    VkCommandBufferAllocateInfo allocate = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer commands = VK_NULL_HANDLE;
+    CHECK(HOST_LOAD(host, vkAllocateCommandBuffers)(host->device, &allocate, &commands) == VK_SUCCESS);
+    VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    CHECK(HOST_LOAD(host, vkBeginCommandBuffer)(commands, &begin) == VK_SUCCESS);
+    CHECK_RESULT(system, gust_system_record(system, commands), GUST_OK);
+    CHECK(HOST_LOAD(host, vkEndCommandBuffer)(commands) == VK_SUCCESS);
+    VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &commands;
+    CHECK(HOST_LOAD(host, vkQueueSubmit)(host->queue, 1, &submit, VK_NULL_HANDLE) == VK_SUCCESS);
+    CHECK(HOST_LOAD(host, vkQueueWaitIdle)(host->queue) == VK_SUCCESS);
+    HOST_LOAD(host, vkDestroyCommandPool)(host->device, pool, NULL);
+}
+
+static void runs_on_a_host_device_with_host_commands(void) {
+    host_engine host;
+    if (!host_start(&host)) {
+        host_stop(&host);
+        return;
+    }
+    hook_counts counts = {0};
+    gust_system_desc desc = small_world_desc(&counts);
+    /* Nothing listed: lavapipe has no optional extension, and gust must not use one the host did not enable.
+     */
+    const gust_host_device device = {host.instance,
+                                     host.physical_device,
+                                     host.device,
+                                     host.queue_family,
+                                     0,
+                                     host.get_instance_proc_addr,
+                                     NULL,
+                                     NULL,
+                                     0};
+    desc.host = &device;
+    desc.submission = GUST_SUBMISSION_HOST_COMMANDS;
+    gust_system system = NULL;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
+    if (system) {
+        /* A skinned mesh posed as the 2 m box, then as a 4 m box from the host's vertex buffer: the voxels
+         * show the buffer was copied. */
+        gust_mesh_desc mesh_desc = box_desc();
+        mesh_desc.deforming = true;
+        gust_mesh skinned = 0;
+        CHECK_RESULT(system, gust_system_create_mesh(system, &mesh_desc, &skinned), GUST_OK);
+        float transform[16];
+        scale_translate(transform, 1.0f, vec3(0.0f, 4.0f, 0.0f));
+        gust_instance instance = 0;
+        CHECK_RESULT(system, gust_system_create_instance(system, skinned, transform, true, &instance),
+                     GUST_OK);
+        CHECK_RESULT(system, gust_system_set_ambient(system, kAmbient), GUST_OK);
+        CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+        gust_frame_stats before;
+        CHECK_RESULT(system, gust_system_stats(system, &before), GUST_OK);
+
+        float doubled[8 * 3];
+        for (int v = 0; v < 8; ++v)
+            for (int a = 0; a < 3; ++a)
+                doubled[3 * v + a] = 2.0f * kBoxPositions[4 * v + a];
+        host_buffer vertices = host_buffer_create(&host, doubled, sizeof doubled);
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 2, 8),
+                     GUST_ERROR_INVALID_ARGUMENT);
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 9),
+                     GUST_ERROR_INVALID_ARGUMENT);
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 8),
+                     GUST_OK);
+        CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+        gust_frame_stats after;
+        CHECK_RESULT(system, gust_system_stats(system, &after), GUST_OK);
+        /* As in simulates_a_small_world: (n + 2)^3 - (n - 2)^3 voxels for n = 8, then n = 16. */
+        CHECK(before.voxels == 10 * 10 * 10 - 6 * 6 * 6);
+        CHECK(after.voxels == 18 * 18 * 18 - 14 * 14 * 14);
+
+        host_record_and_submit(&host, system);
+        CHECK_RESULT(system, gust_system_record(system, VK_NULL_HANDLE), GUST_ERROR_INVALID_ARGUMENT);
+        gust_vec3 outside = vec3(100.0f, 4.0f, 0.0f), velocity;
+        CHECK_RESULT(system, gust_system_query(system, &outside, 1, &velocity), GUST_OK);
+        CHECK(equal3(velocity, kAmbient));
+
+        CHECK_RESULT(system, gust_system_destroy(system), GUST_OK);
+        host_buffer_destroy(&host, &vertices);
+    }
+    CHECK(counts.allocations == counts.frees);
+    CHECK(atomic_load(&counts.errors) == 0);
+    host_stop(&host);
+    CHECK(atomic_load(&host.validation_messages) == 0);
+}
+
 int main(void) {
     reports_its_version_and_device_requirements();
     fills_the_documented_defaults();
     rejects_bad_creation_without_touching_the_device();
     simulates_a_small_world();
+    runs_on_a_host_device_with_host_commands();
     if (g_failures > 0) {
         fprintf(stderr, "%d check(s) failed\n", g_failures);
         return 1;

@@ -203,19 +203,27 @@ struct WindTexture {
     Mat4 world_to_texture;
     /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step (and after record()).
     VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    std::uint64_t frame = 0; ///< the frame whose wind it holds
+    std::uint64_t frame = 0; ///< steps taken when it was written (0 before the first)
 };
 
 /// What one step did (GPU milliseconds per pass where the device has timestamps).
 struct FrameStats {
-    std::uint64_t frame = 0;
-    std::uint64_t fragments = 0, voxels = 0, nodes = 0, refined = 0, coarsened = 0;
-    std::uint64_t pool_bytes = 0, fragment_bytes = 0, dense_bytes = 0;
-    float divergence_before = 0.0f, divergence_after = 0.0f, residual = 0.0f;
-    std::uint32_t cycles = 0;
-    bool converged = false;
-    std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
-    std::vector<std::pair<std::string, double>> ms;
+    std::uint64_t frame = 0;                        ///< 0 for the first step
+    std::uint64_t fragments = 0;                    ///< voxel fragments of the static and moving surfaces
+    std::uint64_t voxels = 0;                       ///< voxels set in the tree's leaves
+    std::uint64_t nodes = 0;                        ///< tree nodes, root included
+    std::uint64_t refined = 0;                      ///< tree blocks handed out this step
+    std::uint64_t coarsened = 0;                    ///< tree blocks taken back this step
+    std::uint64_t pool_bytes = 0;                   ///< bytes of live tree blocks
+    std::uint64_t fragment_bytes = 0;               ///< bytes of the fragment lists
+    std::uint64_t dense_bytes = 0;                  ///< bytes a dense voxel grid of the same size would take
+    float divergence_before = 0.0f;                 ///< max |divergence| before projection, 1/s
+    float divergence_after = 0.0f;                  ///< the same after, 1/s
+    float residual = 0.0f;                          ///< max |residual| of the pressure solve, 1/s
+    std::uint32_t cycles = 0;                       ///< V-cycles the solve took
+    bool converged = false;                         ///< the solve met its tolerance
+    std::uint32_t rejected_triangles = 0;           ///< non-finite vertices after transform this frame
+    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass
 };
 
 /// Ticket of an asynchronous query (0 is never valid).
@@ -248,6 +256,7 @@ class System {
     Outcome create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id);
     /// Sets an instance's mesh-to-world transform (finite; a static instance's move re-voxelizes the set).
     Outcome set_transform(InstanceId instance, const Mat4& transform);
+    /// Removes an instance; its mesh may then be destroyed.
     Outcome destroy_instance(InstanceId instance);
 
     /// Replaces the emitters (at most 64); rejected whole, keeping the old ones, if any is invalid.
@@ -260,8 +269,8 @@ class System {
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
     /// the wind texture and answer pending queries. Blocks until the GPU is done.
     Outcome step(float dt);
-    /// With Submission::HostCommands: records the wind texture's layout transition for the host's
-    /// command buffer (barriers in docs/api.md); call after step() and before the host's draws.
+    /// With Submission::HostCommands: records into the host's command buffer the memory barrier that makes
+    /// the wind texture's new contents visible to its shaders (docs/api.md); call after step(), before draws.
     Outcome record(VkCommandBuffer commands);
 
     /// Wind velocity at each point (m/s), sampled from the current field; points outside the domain
