@@ -1,6 +1,7 @@
 // Measures the wind solver (DESIGN.md "Wind solver"): GPU time per pass of one step at God of War's
-// 32x16x32 grid and larger ones, multigrid against the Jacobi baseline to the same tolerance, and the
-// bytes each pass moves against the device's copy bandwidth.
+// 32x16x32 grid and larger ones, the three pressure solvers (multigrid-preconditioned conjugate gradients,
+// plain multigrid and the Jacobi baseline) to the same tolerance, and the bytes each pass moves against the
+// device's copy bandwidth.
 #include "bench_common.hpp"
 #include "solver_setup.hpp"
 
@@ -59,11 +60,20 @@ constexpr glm::vec3 kAmbient{4.0f, 0.0f, 0.0f};
 constexpr glm::vec3 kBoxVelocity{0.0f, 0.0f, 3.0f};
 /// Untimed steps before the timed ones of the step-time table.
 constexpr int kWarmupSteps = 2;
-/// Caps of the search step of the multigrid against Jacobi table: far more than the tolerance should
-/// take (five times SolverDesc's 20 V-cycles; 200,000 Jacobi iterations), so the tolerance stops them.
-constexpr std::uint32_t kMultigridCap = 100;
-constexpr std::uint32_t kJacobiCap = 200000;
-/// Tolerances of the multigrid against Jacobi table; 1e-5 is SolverDesc's default.
+/// A solver of the time-to-tolerance table.
+struct Contender {
+    const char* name;
+    gust::PressureSolver pressure;
+    const char* unit; ///< of WindStats::cycles: "V-cycles" (MGPCG: one per iteration) or "iterations"
+    /// Cap of the search step: far more than the tolerance should take, so the tolerance stops it.
+    std::uint32_t cap;
+};
+/// The solvers of the time-to-tolerance table, the default first: the ratios are to it. MGPCG and
+/// multigrid get five times SolverDesc's 20 V-cycles, Jacobi 200,000 iterations.
+constexpr Contender kContenders[] = {{"MGPCG", gust::PressureSolver::MultigridPCG, "V-cycles", 100},
+                                     {"multigrid", gust::PressureSolver::Multigrid, "V-cycles", 100},
+                                     {"Jacobi", gust::PressureSolver::Jacobi, "iterations", 200000}};
+/// Tolerances of the time-to-tolerance table; 1e-5 is SolverDesc's default.
 constexpr float kTolerances[] = {1e-4f, 1e-5f};
 /// Each copy of the bandwidth measurement, bytes (read once and written once).
 constexpr VkDeviceSize kCopyBytes = 256ull << 20;
@@ -73,7 +83,7 @@ struct Options {
     std::vector<std::string> sizes = {"32x16x32", "64", "128"};
     int repeat = 3;
     double budget_s = 30.0;
-    /// Largest grid of the multigrid against Jacobi table: Jacobi's iterations grow with the square of the
+    /// Largest grid of the time-to-tolerance table: Jacobi's iterations grow with the square of the
     /// grid's width and each costs the cells, so a 128^3 solve would take hours on lavapipe.
     std::uint64_t solve_max_cells = 64ull * 64 * 64;
     std::string write;
@@ -111,7 +121,7 @@ std::string size_name(glm::uvec3 cells) {
     return std::to_string(cells.x) + "x" + std::to_string(cells.y) + "x" + std::to_string(cells.z);
 }
 
-/// Cells of a grid, the size the multigrid against Jacobi table is limited by.
+/// Cells of a grid, the size the time-to-tolerance table is limited by.
 std::uint64_t cell_count(glm::uvec3 cells) {
     return std::uint64_t(cells.x) * cells.y * cells.z;
 }
@@ -344,7 +354,7 @@ struct StepRow {
     }
 };
 
-/// Steps the scene and a default multigrid solver from the uniform ambient wind, moving the box every
+/// Steps the scene and a default (MGPCG) solver from the uniform ambient wind, moving the box every
 /// step: kWarmupSteps untimed, then up to `repeat` timed, fewer once the timed ones pass `budget_s`.
 gust::Status bench_steps(Scene& scene, gust::WindSolver& solver, int repeat, double budget_s, StepRow& row) {
     if (gust::Status s = solver.set_velocity(ambient_field(row.cells)); !s) return s;
@@ -374,13 +384,18 @@ struct Solve {
     gust::WindStats stats;
 };
 
-/// One solver's side of the multigrid against Jacobi table.
+/// One solver's row of the time-to-tolerance table.
 struct SolveSide {
-    std::uint32_t cap = 0;    ///< cycles or iterations the search step may run
-    Solve search;             ///< the first step, at the generous cap
+    const Contender* solver = nullptr;
+    Solve search;             ///< the first step, at the solver's cap
     std::vector<Solve> timed; ///< at a cap of what the search needed; none when it did not converge
     std::string error;
     bool converged() const { return error.empty() && search.stats.converged; }
+    /// max |residual| / max |divergence before| at the search step's last check.
+    double residual_ratio() const {
+        const gust::WindStats& s = search.stats;
+        return s.divergence_before > 0.0 ? s.residual / s.divergence_before : 0.0;
+    }
     /// Medians over the timed steps: wall seconds, GPU ms of the pressure pass.
     double wall_s() const {
         return median_of(timed, [](const Solve& s) { return s.wall_s; });
@@ -390,12 +405,11 @@ struct SolveSide {
     }
 };
 
-/// One grid and tolerance of the multigrid against Jacobi table.
+/// One grid and tolerance of the time-to-tolerance table: a side per kContenders entry, in its order.
 struct SolveRow {
     glm::uvec3 cells{0};
     float tolerance = 0.0f;
-    SolveSide multigrid;
-    SolveSide jacobi;
+    std::array<SolveSide, std::size(kContenders)> sides;
 };
 
 /// One step from `start`, timed around step().
@@ -413,65 +427,61 @@ gust::Result<Solve> solve_once(gust::WindSolver& solver, const gust::SolidSource
 
 /// `desc` with its solver's cap (V-cycles or iterations) set to `cap`.
 gust::SolverDesc capped(gust::SolverDesc desc, std::uint32_t cap) {
-    (desc.pressure == gust::PressureSolver::Multigrid ? desc.max_cycles : desc.max_iterations) = cap;
+    (desc.pressure == gust::PressureSolver::Jacobi ? desc.max_iterations : desc.max_cycles) = cap;
     return desc;
 }
 
-/// Multigrid and Jacobi on the scene as it stands (the box no longer moves), from the same start each
-/// time. Each first runs once at a generous cap to find how many cycles or iterations the tolerance
-/// takes; then, side by side in rounds, a solver capped at that count is timed up to `repeat` times,
-/// fewer once its timed steps pass `budget_s`.
+/// The kContenders on the scene as it stands (the box no longer moves), from the same start each time.
+/// Each first runs once at its cap to find how many cycles or iterations the tolerance takes; then, side
+/// by side in rounds, a solver capped at that count is timed up to `repeat` times, fewer once its timed
+/// steps pass `budget_s`.
 SolveRow bench_solve(gust::gpu::Context& ctx, const Scene& scene, glm::uvec3 cells, float tolerance,
                      int repeat, double budget_s) {
     SolveRow row;
     row.cells = cells;
     row.tolerance = tolerance;
-    gust::SolverDesc desc;
-    desc.cells = cells;
-    desc.cell_size = kCellSize;
-    desc.tolerance = tolerance;
-    gust::SolverDesc jacobi_desc = desc;
-    jacobi_desc.pressure = gust::PressureSolver::Jacobi;
-    row.multigrid.cap = kMultigridCap;
-    row.jacobi.cap = kJacobiCap;
     const gust::SolidSource solid = scene.source();
     const std::vector<float> start = ambient_field(cells);
-    struct Contender {
+    // Each side's solver capped at its search step's count (null when it is not timed).
+    std::array<std::unique_ptr<gust::WindSolver>, std::size(kContenders)> timed;
+    for (std::size_t i = 0; i < std::size(kContenders); ++i) {
+        SolveSide& side = row.sides[i];
+        side.solver = &kContenders[i];
         gust::SolverDesc desc;
-        SolveSide* side;
-        std::unique_ptr<gust::WindSolver> timed; ///< capped at the search step's count
-    };
-    Contender contenders[] = {{desc, &row.multigrid, nullptr}, {jacobi_desc, &row.jacobi, nullptr}};
-    for (Contender& c : contenders) {
-        auto search = make_solver(ctx, capped(c.desc, c.side->cap), scene);
+        desc.cells = cells;
+        desc.cell_size = kCellSize;
+        desc.tolerance = tolerance;
+        desc.pressure = side.solver->pressure;
+        auto search = make_solver(ctx, capped(desc, side.solver->cap), scene);
         if (!search) {
-            c.side->error = search.message();
+            side.error = search.message();
             continue;
         }
         auto solve = solve_once(**search, solid, start);
         if (!solve) {
-            c.side->error = solve.message();
+            side.error = solve.message();
             continue;
         }
-        c.side->search = std::move(*solve);
-        if (!c.side->search.stats.converged) continue;
-        auto solver = make_solver(ctx, capped(c.desc, std::max(c.side->search.stats.cycles, 1u)), scene);
+        side.search = std::move(*solve);
+        if (!side.search.stats.converged) continue;
+        auto solver = make_solver(ctx, capped(desc, std::max(side.search.stats.cycles, 1u)), scene);
         if (solver)
-            c.timed = std::move(*solver);
+            timed[i] = std::move(*solver);
         else
-            c.side->error = solver.message();
+            side.error = solver.message();
     }
     for (int round = 0; round < repeat; ++round)
-        for (Contender& c : contenders) {
+        for (std::size_t i = 0; i < std::size(kContenders); ++i) {
+            SolveSide& side = row.sides[i];
             double spent_s = 0.0;
-            for (const Solve& s : c.side->timed)
+            for (const Solve& s : side.timed)
                 spent_s += s.wall_s;
-            if (!c.timed || !c.side->error.empty() || (round > 0 && spent_s > budget_s)) continue;
-            auto solve = solve_once(*c.timed, solid, start);
+            if (!timed[i] || !side.error.empty() || (round > 0 && spent_s > budget_s)) continue;
+            auto solve = solve_once(*timed[i], solid, start);
             if (solve)
-                c.side->timed.push_back(std::move(*solve));
+                side.timed.push_back(std::move(*solve));
             else
-                c.side->error = solve.message();
+                side.error = solve.message();
         }
     return row;
 }
@@ -515,9 +525,9 @@ gust::Result<double> copy_bandwidth(gust::gpu::Context& ctx, int repeat) {
 //   unique:   every array element a dispatch touches, once (a perfect cache: a neighbour read by six
 //             threads counts once); this is what a kernel must move at the least, so unique bytes over
 //             the copy bandwidth is the floor.
-// Uniform parameters (bindings, level table, emitters) and one-thread passes (check, fragment_args) are
-// not counted; the tree's pools count once (pool_bytes) in both; each moving fragment's four atomics
-// count as reads and writes of 4 bytes.
+// Uniform parameters (bindings, level table, emitters) and one-thread or one-workgroup passes (check,
+// fragment_args, cg_scalars) are not counted; the tree's pools count once (pool_bytes) in both; each moving
+// fragment's four atomics count as reads and writes of 4 bytes.
 
 /// Bytes one pass moves, counted both ways.
 struct Traffic {
@@ -612,13 +622,14 @@ void add_residual(Traffic& t, const Workload& w, std::size_t l) {
     t.add(w.cells(l) * (12 * 4 + 4 + 4 + 4), 4 * w.faces(l) + 12 * w.cells(l));
 }
 
-/// The "pressure" pass with multigrid: divergence, then per V-cycle smoothing, residual and restriction
-/// down, the coarsest solve, prolongation and smoothing up, and the residual of the check.
+/// The "pressure" pass with the default MGPCG: divergence, then per iteration one V-cycle (smoothing,
+/// residual and restriction down, the coarsest solve, prolongation and smoothing up) and conjugate
+/// gradients' five level-0 passes (cg.comp), and at the end the copy of x into φ.
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    // divergence: the operator (12 loads), six face fluxes (3 loads each), right-hand side and φ stored.
-    t.add(C * (12 * 4 + 6 * 3 * 4 + 8), 12 * F + 12 * C);
+    // divergence: the operator (12 loads), six face fluxes (3 loads each); r, φ, b, x, p and r_old stored.
+    t.add(C * (12 * 4 + 6 * 3 * 4 + 6 * 4), 12 * F + 28 * C);
     const std::size_t last = w.levels.size() - 1;
     Traffic cycle;
     for (std::size_t l = 0; l < last; ++l) {
@@ -631,9 +642,14 @@ Traffic pressure_traffic(const Workload& w) {
         cycle.add(w.cells(l) * (4 + parents * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1));  // prolong
     }
     add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps, 1);
-    add_residual(cycle, w, 0);
+    cycle.add(C * 3 * 4, 12 * C);                        // z·r and z·r_old
+    cycle.add(C * 3 * 4, 12 * C);                        // p = z + βp
+    cycle.add(C * (4 + 12 * 4 + 4), 4 * F + 4 * C);      // p·Lp
+    cycle.add(C * 6 * 4, 24 * C);                        // x += αp, r_old = r, z = 0
+    cycle.add(C * (4 + 12 * 4 + 4 + 4), 4 * F + 12 * C); // r = b − Lx and its maximum
     t.add(w.cycles * cycle.accessed, w.cycles * cycle.unique,
           std::uint64_t(w.cycles * double(cycle.dispatches) + 0.5));
+    t.add(8 * C, 8 * C); // vkCmdCopyBuffer x -> φ
     return t;
 }
 
@@ -694,10 +710,12 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
         << desc.voxels_per_cell
         << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind ("
         << kAmbient.x << ", " << kAmbient.y << ", " << kAmbient.z
-        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: MacCormack advection, multigrid with "
-        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps, tolerance "
-        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles << " V-cycles, vorticity confinement "
-        << desc.vorticity
+        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: MacCormack advection, the default pressure "
+           "solver MGPCG (`PressureSolver::MultigridPCG`: conjugate gradients preconditioned by one "
+           "multigrid V-cycle per iteration, "
+        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps), tolerance "
+        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles
+        << " iterations (V-cycles), vorticity confinement " << desc.vorticity
         << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; "
         << kWarmupSteps << " untimed steps, then up to " << options.repeat
         << " timed ones, fewer once they pass " << options.budget_s
@@ -736,51 +754,50 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
 }
 
 void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
-                   const std::vector<StepRow>& steps, const Options& options,
+                   const std::vector<StepRow>& steps, const gust::SolverDesc& desc, const Options& options,
                    std::vector<std::string>& notes) {
-    out << "### Multigrid against Jacobi to a tolerance\n\n";
+    const std::string base = kContenders[0].name;
+    out << "### MGPCG, multigrid and Jacobi to a tolerance\n\n";
     out << "The same scene with the moving box stopped where the step-time runs left it, the same settings, "
            "and one step from the uniform ambient wind each time, so the divergence is smooth (the emitter, "
-           "the inflow side and the solids' faces). Both solvers stop when max |residual| <= tolerance x max "
-           "|divergence before projection|. A solver records every cycle or iteration its cap allows and the "
-           "check zeroes the dispatches left once the tolerance is met, so a generous cap costs time after "
-           "convergence too. Each solver therefore first runs once at a generous cap (multigrid "
-        << kMultigridCap << " V-cycles, five times the default; Jacobi, damped with weight "
-        << gust::shaderio::kJacobiWeight << ", " << grouped(kJacobiCap) << " iterations, checked every "
+           "the inflow side and the solids' faces). Every solver stops when max |residual| <= tolerance "
+           "x max |divergence before projection|. A solver records every cycle or iteration its cap allows "
+           "and the check zeroes the dispatches left once the tolerance is met, so a generous cap costs time "
+           "after convergence too. Each solver therefore first runs once at a generous cap (";
+    for (const Contender& c : kContenders)
+        out << (&c == &kContenders[0] ? "" : ", ") << c.name << " " << grouped(c.cap) << " " << c.unit;
+    out << "; Jacobi is damped with weight " << gust::shaderio::kJacobiWeight << " and checked every "
         << gust::detail::kJacobiBlock
-        << "): that step's wall time is the last column, and the cycles or iterations it took are the count. "
-           "Then a solver capped at that count is timed, multigrid and Jacobi side by side in rounds, up to "
-           "the stated runs, fewer once a solver's timed steps pass "
+        << " iterations): that step's wall time is the last column, and the cycles or iterations it took are "
+           "the count; its residual / divergence is max |residual| / max |divergence before| at its last "
+           "check. Then a solver capped at that count is timed, the three side by side in rounds, up to the "
+           "stated runs, fewer once a solver's timed steps pass "
         << options.budget_s
-        << " s; a solver that did not converge at the generous cap is not timed. Wall s is around "
+        << " s; a solver that did not converge at its cap is not timed. Wall s is around "
            "`WindSolver::step()` (the whole step), pressure ms the `pressure` pass's GPU time; medians over "
-           "the timed runs. Grids above "
-        << grouped(options.solve_max_cells)
+           "the timed runs; the ratio columns divide a solver's medians by "
+        << base << "'s at the same grid and tolerance. Grids above " << grouped(options.solve_max_cells)
         << " cells are left out: Jacobi's iterations grow with the square of the grid's width, so at 128^3 "
            "one solve would take about 32 times as long as at 64^3, hours on lavapipe.\n\n";
-    out << "| Grid | Tolerance | Solver | Converged | Cycles / iterations | Residual / divergence | Runs | "
-           "Wall s "
-           "| Pressure GPU ms | Jacobi / multigrid (wall) | Jacobi / multigrid (pressure GPU) | Wall s at "
-           "the "
-           "generous cap |\n";
+    out << "| Grid | Tolerance | Solver | Converged | V-cycles / iterations | Residual / divergence | Runs | "
+           "Wall s | Pressure GPU ms | Wall / "
+        << base << " | Pressure GPU / " << base << " | Wall s at the cap |\n";
     out << "|--:|--:|---|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    const auto measured = [](const SolveSide& r) { return r.converged() && !r.timed.empty(); };
     for (const SolveRow& row : rows) {
         const std::string grid = size_name(row.cells);
         const std::string tol = fmt_sci(row.tolerance);
-        const bool both = row.multigrid.converged() && row.jacobi.converged() &&
-                          !row.multigrid.timed.empty() && !row.jacobi.timed.empty();
-        const auto side = [&](const char* name, const SolveSide& r, bool ratios) {
-            out << "| " << grid << " | " << tol << " | " << name << " | ";
+        const SolveSide& first = row.sides[0];
+        for (const SolveSide& r : row.sides) {
+            out << "| " << grid << " | " << tol << " | " << r.solver->name << " | ";
             if (!r.error.empty()) {
-                out << failed_cell(notes, grid + " " + name + " at " + tol, r.error)
+                out << failed_cell(notes, grid + " " + r.solver->name + " at " + tol, r.error)
                     << " | | | | | | | | |\n";
-                return;
+                continue;
             }
             const gust::WindStats& found = r.search.stats;
-            const double ratio =
-                found.divergence_before > 0.0 ? found.residual / found.divergence_before : 0.0;
-            out << (found.converged ? "yes" : "no (cap " + grouped(r.cap) + ")") << " | "
-                << grouped(found.cycles) << " | " << fmt_sci(ratio) << " | " << r.timed.size();
+            out << (found.converged ? "yes" : "no (cap " + grouped(r.solver->cap) + ")") << " | "
+                << grouped(found.cycles) << " | " << fmt_sci(r.residual_ratio()) << " | " << r.timed.size();
             const auto missed = std::count_if(r.timed.begin(), r.timed.end(),
                                               [](const Solve& t) { return !t.stats.converged; });
             if (missed > 0) out << " (" << missed << " not converged)";
@@ -789,20 +806,39 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
                 out << "- | - | ";
             else
                 out << fmt_s(r.wall_s()) << " | " << fmt_ms(r.pressure_ms()) << " | ";
-            if (ratios && both)
-                out << fmt_ratio(row.jacobi.wall_s() / row.multigrid.wall_s()) << " | "
-                    << fmt_ratio(row.jacobi.pressure_ms() / row.multigrid.pressure_ms()) << " | ";
+            if (&r != &first && measured(r) && measured(first))
+                out << fmt_ratio(r.wall_s() / first.wall_s()) << " | "
+                    << fmt_ratio(r.pressure_ms() / first.pressure_ms()) << " | ";
             else
                 out << "- | - | ";
             out << fmt_s(r.search.wall_s) << " |\n";
-        };
-        side("multigrid", row.multigrid, false);
-        side("Jacobi", row.jacobi, true);
+        }
     }
     for (const StepRow& row : steps)
         if (cell_count(row.cells) > options.solve_max_cells)
-            out << "| " << size_name(row.cells) << " | - | both | skipped (more than "
+            out << "| " << size_name(row.cells) << " | - | all | skipped (more than "
                 << grouped(options.solve_max_cells) << " cells) | | | | | | | | |\n";
+    out << "\n";
+    for (const SolveRow& row : rows) {
+        out << "- At " << size_name(row.cells) << " to " << fmt_sci(row.tolerance) << ": ";
+        for (const SolveSide& r : row.sides) {
+            out << (&r == &row.sides[0] ? "" : &r == &row.sides.back() ? " and " : ", ") << r.solver->name;
+            if (!r.error.empty()) {
+                out << " failed";
+            } else if (r.search.stats.converged) {
+                out << " converged in " << grouped(r.search.stats.cycles) << " " << r.solver->unit;
+                const std::uint32_t cap = r.solver->pressure == gust::PressureSolver::Jacobi
+                                              ? desc.max_iterations
+                                              : desc.max_cycles;
+                if (r.search.stats.cycles > cap)
+                    out << " (more than the default cap of " << grouped(cap) << ")";
+            } else {
+                out << " did not converge (" << fmt_sci(r.residual_ratio()) << " of the divergence after "
+                    << grouped(r.search.stats.cycles) << " " << r.solver->unit << ")";
+            }
+        }
+        out << ".\n";
+    }
     out << "\n";
 }
 
@@ -819,16 +855,23 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "half the cells, each reading six weights, six neighbours and its right-hand side); *unique* "
            "counts every array element a dispatch touches once, as a perfect cache would, and is the least a "
            "pass must move, so floor ms = unique bytes / copy bandwidth. Uniform parameters (bindings, level "
-           "table, emitters) and one-thread passes (the convergence check, the fragment count) are left out; "
-           "the tree's live pools count once; the two `vkCmdCopyBuffer` of a step count as read plus write. "
-           "The pressure pass is counted per V-cycle (at every level but the coarsest: "
+           "table, emitters) and one-thread or one-workgroup passes (the convergence check, the fragment "
+           "count, conjugate gradients' sums for alpha and beta) are left out; the tree's live pools count "
+           "once; the three `vkCmdCopyBuffer` of a step count as read plus write. The pressure pass (MGPCG) "
+           "is counted per iteration (one V-cycle, at every level but the coarsest: "
         << 2 * desc.smoothing << " half-sweeps down and " << 2 * desc.smoothing
         << " up, residual, restriction, prolongation; the coarsest level's "
         << 2 * gust::detail::kCoarseSweeps
-        << " half-sweeps; the level-0 residual of the check) times the median V-cycles of the step-time "
-           "table. Measured ms are that table's pass medians; the step row sums them (the step-time table's "
-           "total is the median of the sums). Accessed at bandwidth ms is what the accessed bytes would take "
-           "at the copy bandwidth, for a kernel whose loads all miss the cache.\n\n";
+        << " half-sweeps; then conjugate gradients' five level-0 passes: the sums of z*r and z*r_old, "
+           "p = z + beta*p, the sum of p*Lp, the update of x, r_old and z, and r = b - Lx with the check's "
+           "maximum) times the median V-cycles of the step-time table, plus the divergence (which also sets "
+           "b and zeroes x, p and r_old) and the copy of x into the pressure. Measured ms are that table's "
+           "pass medians; the step row sums them (the step-time table's total is the median of the sums). A "
+           "step records all "
+        << desc.max_cycles
+        << " iterations and the check zeroes the dispatches of those after convergence, so the measured "
+           "pressure ms also holds their empty dispatches. Accessed at bandwidth ms is what the accessed "
+           "bytes would take at the copy bandwidth, for a kernel whose loads all miss the cache.\n\n";
     out << "| Grid | Pass | Dispatches | Accessed MB | Unique MB | Accessed / unique | Floor ms | Measured "
            "ms | "
            "Measured / floor | Accessed at bandwidth ms |\n";
@@ -865,7 +908,8 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
                    const gust::gpu::DeviceInfo& device, const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
-    out << "## Wind solver: step time, multigrid against Jacobi, bytes against bandwidth\n\n";
+    out << "## Wind solver: step time, MGPCG, multigrid and Jacobi to a tolerance, bytes against "
+           "bandwidth\n\n";
     out << "Command: `" << run.command << "`\n\n";
     out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
         << "); CPU " << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started
@@ -873,7 +917,7 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
         << run.load_start << " at the start and " << load_average()
         << " at the end (a load above the core count means other processes shared the cores).\n\n";
     render_steps(out, steps, desc, options, notes);
-    render_solves(out, solves, steps, options, notes);
+    render_solves(out, solves, steps, desc, options, notes);
     render_bytes(out, steps, desc, bandwidth, options);
     if (!notes.empty()) {
         out << "Notes:\n\n";
@@ -894,7 +938,7 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
 int main(int argc, char** argv) {
     Options options;
     CLI::App app{
-        "Wind solver step time per pass, multigrid against Jacobi to a tolerance, and bytes per step "
+        "Wind solver step time per pass, MGPCG, multigrid and Jacobi to a tolerance, and bytes per step "
         "against the copy bandwidth"};
     app.add_option("--sizes", options.sizes, "wind grids, each N (a cube) or XxYxZ")->expected(1, -1);
     app.add_option("--repeat", options.repeat, "timed steps per measurement (median is reported)")
@@ -903,7 +947,7 @@ int main(int argc, char** argv) {
                    "seconds of timed steps after which a measurement stops short of --repeat (at least one)")
         ->check(CLI::Range(0.0, 1e6));
     app.add_option("--solve-max-cells", options.solve_max_cells,
-                   "largest grid, in cells, of the multigrid against Jacobi table")
+                   "largest grid, in cells, of the time-to-tolerance table")
         ->check(CLI::Range(std::uint64_t(1), std::uint64_t(256) * 256 * 256));
     app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
     app.add_option("--device", options.device, "Vulkan device index or name substring");
@@ -970,16 +1014,15 @@ int main(int argc, char** argv) {
         if (cell_count(cells) > options.solve_max_cells) continue;
         for (float tolerance : kTolerances) {
             SolveRow solve = bench_solve(**ctx, **scene, cells, tolerance, options.repeat, options.budget_s);
-            for (const auto& [name, side] :
-                 {std::pair("multigrid", &solve.multigrid), std::pair("Jacobi", &solve.jacobi)}) {
-                std::cerr << "  " << name << " to " << fmt_sci(tolerance) << ": ";
-                if (!side->error.empty())
-                    std::cerr << "failed: " << side->error << std::endl;
+            for (const SolveSide& side : solve.sides) {
+                std::cerr << "  " << side.solver->name << " to " << fmt_sci(tolerance) << ": ";
+                if (!side.error.empty())
+                    std::cerr << "failed: " << side.error << std::endl;
                 else
-                    std::cerr << grouped(side->search.stats.cycles)
-                              << (side->search.stats.converged ? " (converged), " : " (not converged), ")
-                              << fmt_s(side->search.wall_s) << " s at the generous cap"
-                              << (side->timed.empty() ? "" : ", " + fmt_s(side->wall_s()) + " s capped")
+                    std::cerr << grouped(side.search.stats.cycles)
+                              << (side.search.stats.converged ? " (converged), " : " (not converged), ")
+                              << fmt_s(side.search.wall_s) << " s at the generous cap"
+                              << (side.timed.empty() ? "" : ", " + fmt_s(side.wall_s()) + " s capped")
                               << std::endl;
             }
             solves.push_back(std::move(solve));
@@ -996,7 +1039,7 @@ int main(int argc, char** argv) {
     for (const StepRow& row : steps)
         if (!row.error.empty()) return fail(size_name(row.cells) + ": " + row.error);
     for (const SolveRow& row : solves)
-        for (const SolveSide* r : {&row.multigrid, &row.jacobi})
-            if (!r->error.empty()) return fail(size_name(row.cells) + " solve: " + r->error);
+        for (const SolveSide& r : row.sides)
+            if (!r.error.empty()) return fail(size_name(row.cells) + " " + r.solver->name + ": " + r.error);
     return 0;
 }
