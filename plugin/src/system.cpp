@@ -151,6 +151,25 @@ struct System::Impl {
         return m;
     }
     Outcome refresh_texture();
+
+    /// The mesh `id`, or null with `error` set.
+    Mesh* find_mesh(MeshId id, Outcome& error) {
+        auto it = meshes.find(id);
+        if (it != meshes.end()) return &it->second;
+        error = Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(id));
+        return nullptr;
+    }
+    /// The deforming mesh `id` of `vertex_count` vertices, or null with `error` set.
+    Mesh* find_deforming(MeshId id, std::uint32_t vertex_count, Outcome& error) {
+        Mesh* m = find_mesh(id, error);
+        if (!m) return nullptr;
+        if (!m->deforming)
+            error = invalid("mesh " + std::to_string(id) + " was not created as deforming");
+        else if (vertex_count != m->gpu.vertex_count())
+            error = invalid("got " + std::to_string(vertex_count) + " vertices for a mesh of " +
+                            std::to_string(m->gpu.vertex_count()));
+        return error ? m : nullptr;
+    }
 };
 
 namespace {
@@ -291,6 +310,12 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
             VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
         if (m.ctx->vk().vkCreateSampler(m.ctx->device(), &sampler, nullptr, &m.sampler) != VK_SUCCESS)
             return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
+        m.texture.image = m.image.handle();
+        m.texture.view = m.image.view();
+        m.texture.sampler = m.sampler;
+        m.texture.format = m.image.format();
+        for (int a = 0; a < 3; ++a)
+            m.texture.extent[a] = solver_desc.cells[a];
         if (Outcome o = m.refresh_texture(); !o) return o;
         out = std::move(system);
         return {};
@@ -312,16 +337,8 @@ Outcome System::Impl::refresh_texture() {
         image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     });
     if (!s) return device_failure(s);
-    texture.image = image.handle();
-    texture.view = image.view();
-    texture.sampler = sampler;
-    texture.format = image.format();
-    texture.extent[0] = solver_desc.cells.x;
-    texture.extent[1] = solver_desc.cells.y;
-    texture.extent[2] = solver_desc.cells.z;
     const glm::mat4 w = world_to_texture();
     std::memcpy(texture.world_to_texture.m, glm::value_ptr(w), sizeof(texture.world_to_texture.m));
-    texture.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     texture.frame = frame;
     return {};
 }
@@ -349,26 +366,21 @@ Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
 }
 
 Outcome System::destroy_mesh(MeshId mesh) {
-    auto it = impl_->meshes.find(mesh);
-    if (it == impl_->meshes.end())
-        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
-    if (it->second.instances > 0)
+    Outcome error;
+    const Impl::Mesh* m = impl_->find_mesh(mesh, error);
+    if (!m) return error;
+    if (m->instances > 0)
         return Outcome(ErrorCode::InvalidHandle, "mesh " + std::to_string(mesh) + " is still used by " +
-                                                     std::to_string(it->second.instances) + " instances");
-    impl_->meshes.erase(it);
+                                                     std::to_string(m->instances) + " instances");
+    impl_->meshes.erase(mesh);
     return {};
 }
 
 Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
                              std::uint32_t stride) {
-    auto it = impl_->meshes.find(mesh);
-    if (it == impl_->meshes.end())
-        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
-    Impl::Mesh& m = it->second;
-    if (!m.deforming) return invalid("mesh " + std::to_string(mesh) + " was not created as deforming");
-    if (vertex_count != m.gpu.vertex_count())
-        return invalid("got " + std::to_string(vertex_count) + " vertices for a mesh of " +
-                       std::to_string(m.gpu.vertex_count()));
+    Outcome error;
+    Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
+    if (!m) return error;
     if (vertex_count > 0 && !positions) return invalid("positions is null");
     if (stride < 12) return invalid("stride must be at least 12 bytes, got " + std::to_string(stride));
     return guarded([&]() -> Outcome {
@@ -380,39 +392,34 @@ Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t 
             if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
                 return invalid("vertex " + std::to_string(v) + " is not finite");
         }
-        if (Status s = impl_->world->update_positions(m.gpu, packed); !s) return device_failure(s);
+        if (Status s = impl_->world->update_positions(m->gpu, packed); !s) return device_failure(s);
         return {};
     });
 }
 
 Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count) {
-    auto it = impl_->meshes.find(mesh);
-    if (it == impl_->meshes.end())
-        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
-    Impl::Mesh& m = it->second;
+    Outcome error;
+    Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
+    if (!m) return error;
     if (impl_->ctx->owns_device()) return invalid("vertex buffers need a host device (SystemDesc::host)");
-    if (!m.deforming) return invalid("mesh " + std::to_string(mesh) + " was not created as deforming");
-    if (vertex_count != m.gpu.vertex_count())
-        return invalid("got " + std::to_string(vertex_count) + " vertices for a mesh of " +
-                       std::to_string(m.gpu.vertex_count()));
     if (buffer == VK_NULL_HANDLE) return invalid("buffer is null");
     if (offset % 4 != 0) return invalid("offset must be a multiple of 4");
     return guarded([&]() -> Outcome {
-        if (Status s = impl_->world->copy_positions(m.gpu, buffer, offset); !s) return device_failure(s);
+        if (Status s = impl_->world->copy_positions(m->gpu, buffer, offset); !s) return device_failure(s);
         return {};
     });
 }
 
 Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
     id = 0;
-    auto it = impl_->meshes.find(mesh);
-    if (it == impl_->meshes.end())
-        return Outcome(ErrorCode::InvalidHandle, "no mesh " + std::to_string(mesh));
+    Outcome error;
+    Impl::Mesh* m = impl_->find_mesh(mesh, error);
+    if (!m) return error;
     if (!finite(transform)) return invalid("transform must be finite");
     return guarded([&]() -> Outcome {
         const InstanceId next = impl_->next_id++;
         impl_->instances.emplace(next, Impl::Instance{mesh, to_glm(transform), std::nullopt, moving});
-        ++it->second.instances;
+        ++m->instances;
         id = next;
         return {};
     });
@@ -624,13 +631,13 @@ Outcome System::wind_at(const Vec3& point, WindSample& sample) {
     sample = {};
     if (!finite(point)) return invalid("point is not finite");
     const float h = impl_->solver_desc.cell_size;
-    Vec3 points[7];
-    for (int i = 0; i < 7; ++i)
-        points[i] = point;
-    for (int a = 0; a < 3; ++a) {
-        (&points[1 + 2 * a].x)[a] -= h;
-        (&points[2 + 2 * a].x)[a] += h;
-    }
+    const Vec3 points[7] = {point,
+                            {point.x - h, point.y, point.z},
+                            {point.x + h, point.y, point.z},
+                            {point.x, point.y - h, point.z},
+                            {point.x, point.y + h, point.z},
+                            {point.x, point.y, point.z - h},
+                            {point.x, point.y, point.z + h}};
     Vec3 v[7];
     if (Outcome o = query(points, v); !o) return o;
     glm::vec3 mean(0.0f);
