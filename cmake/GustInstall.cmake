@@ -20,8 +20,9 @@ target_compile_features(gust INTERFACE cxx_std_20)
 
 get_property(gust_shader_targets GLOBAL PROPERTY GUST_SHADER_TARGETS)
 set(gust_internal_targets gust_solver gust_voxelizer gust_gpu ${gust_shader_targets})
-# System::export_vdb links OpenVDB, so the consumer's link needs it: gustConfig.cmake finds it with the
-# same FindOpenVDB module (and its sibling modules) this build used.
+# Built with OpenVDB, System::export_vdb links it, so the consumer's link needs it: gustConfig.cmake finds it
+# with the same FindOpenVDB module (and its sibling modules) this build used. Built without
+# (GUST_WITH_OPENVDB=OFF), there is no gust_vdb and the package asks for no OpenVDB.
 set(GUST_PACKAGE_OPENVDB_MODULE_DIR "")
 if(TARGET gust_vdb)
   list(APPEND gust_internal_targets gust_vdb)

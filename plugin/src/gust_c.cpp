@@ -49,10 +49,15 @@ static_assert(GUST_WIND_EMITTER_VORTEX == static_cast<int>(gust::WindEmitterType
 static_assert(GUST_WIND_EMITTER_CAPSULE_MOTOR == static_cast<int>(gust::WindEmitterType::CapsuleMotor));
 static_assert(GUST_WIND_EMITTER_CONE_MOTOR == static_cast<int>(gust::WindEmitterType::ConeMotor));
 
+static_assert(GUST_TREE_NODE_STALE == static_cast<int>(gust::TreeNodeState::Stale));
+static_assert(GUST_TREE_NODE_REACHED == static_cast<int>(gust::TreeNodeState::Reached));
+static_assert(GUST_TREE_NODE_STATIC == static_cast<int>(gust::TreeNodeState::Static));
+
 // The conversions below copy these arrays element by element.
 static_assert(sizeof(gust_wind_domain::cells) == sizeof(gust::WindDomain::cells));
 static_assert(sizeof(gust_wind_texture::world_to_texture) == sizeof(gust::Mat4::m));
 static_assert(sizeof(gust_wind_texture::extent) == sizeof(gust::WindTexture::extent));
+static_assert(sizeof(gust_voxel_grid_info::resolution) == sizeof(gust::VoxelGridInfo::resolution));
 
 namespace {
 
@@ -771,6 +776,64 @@ gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin) {
 
 gust_result gust_system_export_vdb(gust_system system, const char* path) {
     return on_system(system, "gust_system_export_vdb", [&](gust::System& s) { return s.export_vdb(path); });
+}
+
+gust_result gust_system_debug_voxel_grid(gust_system system, gust_voxel_grid_info* info) {
+    return on_system(system, "gust_system_debug_voxel_grid", [&](gust::System& s) -> gust::Outcome {
+        if (!info) return invalid("info (the output) is NULL");
+        gust::VoxelGridInfo grid;
+        gust::Outcome outcome = s.debug_voxel_grid(grid);
+        if (outcome) {
+            info->origin = to_c(grid.origin);
+            info->voxel_size = grid.voxel_size;
+            std::copy_n(grid.resolution, 3, info->resolution);
+            info->depth = grid.depth;
+            info->branching = grid.branching;
+        }
+        return outcome;
+    });
+}
+
+// The C++ calls write into a list of their own types; converting through one of `capacity` entries keeps the
+// C and C++ structs free to differ, at the cost of a copy (these are debug calls).
+gust_result gust_system_debug_voxels(gust_system system, gust_voxel_coord* voxels, size_t capacity,
+                                     size_t* count) {
+    return on_system(system, "gust_system_debug_voxels", [&](gust::System& s) -> gust::Outcome {
+        if (!count) return invalid("count (the output) is NULL");
+        *count = 0;
+        if (capacity > 0 && !voxels)
+            return invalid("voxels is NULL but capacity is " + std::to_string(capacity));
+        std::vector<gust::VoxelCoord> out(capacity);
+        std::size_t total = 0;
+        gust::Outcome outcome = s.debug_voxels(out, total);
+        if (!outcome) return outcome;
+        for (std::size_t v = 0; v < std::min(capacity, total); ++v)
+            voxels[v] = {out[v].i, out[v].j, out[v].k};
+        *count = total;
+        return {};
+    });
+}
+
+gust_result gust_system_debug_tree_nodes(gust_system system, gust_tree_node* nodes, size_t capacity,
+                                         size_t* count) {
+    return on_system(system, "gust_system_debug_tree_nodes", [&](gust::System& s) -> gust::Outcome {
+        if (!count) return invalid("count (the output) is NULL");
+        *count = 0;
+        if (capacity > 0 && !nodes)
+            return invalid("nodes is NULL but capacity is " + std::to_string(capacity));
+        std::vector<gust::TreeNode> out(capacity);
+        std::size_t total = 0;
+        gust::Outcome outcome = s.debug_tree_nodes(out, total);
+        if (!outcome) return outcome;
+        for (std::size_t n = 0; n < std::min(capacity, total); ++n)
+            nodes[n] = {.min = to_c(out[n].min),
+                        .size = out[n].size,
+                        .level = out[n].level,
+                        .state = static_cast<gust_tree_node_state>(out[n].state),
+                        .refined = out[n].refined};
+        *count = total;
+        return {};
+    });
 }
 
 } // extern "C"

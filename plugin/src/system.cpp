@@ -1,7 +1,12 @@
 // gust::System: one frame of DESIGN.md ("One frame") over the voxel world and the wind solver, behind the
 // engine-facing API of include/gust/gust.hpp.
+#include "tree/tree_io.h"
+#if GUST_WITH_OPENVDB
 #include "vdb_writer.hpp"
+#endif
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -107,7 +112,7 @@ struct System::Impl {
         MeshId mesh = 0;
         glm::mat4 model{1.0f};
         std::optional<glm::mat4> prev;
-        bool moving = false;
+        bool dynamic = false; ///< moving, or of a deforming mesh: voxelized every frame
     };
     struct Pending {
         std::vector<glm::vec3> points;
@@ -119,6 +124,9 @@ struct System::Impl {
     std::pmr::map<QueryId, Pending> queries;
     std::uint64_t next_id = 1;
     glm::vec3 focus{0.0f};
+    /// The static instances changed since step() last handed them to the world; an unchanged static set
+    /// then costs no list and no comparison per frame.
+    bool static_dirty = true;
 
     gpu::Buffer texels;
     gpu::Image image;
@@ -418,8 +426,10 @@ Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving,
     if (!finite(transform)) return invalid("transform must be finite");
     return guarded([&]() -> Outcome {
         const InstanceId next = impl_->next_id++;
-        impl_->instances.emplace(next, Impl::Instance{mesh, to_glm(transform), std::nullopt, moving});
+        const bool dynamic = moving || m->deforming;
+        impl_->instances.emplace(next, Impl::Instance{mesh, to_glm(transform), std::nullopt, dynamic});
         ++m->instances;
+        if (!dynamic) impl_->static_dirty = true;
         id = next;
         return {};
     });
@@ -431,6 +441,7 @@ Outcome System::set_transform(InstanceId instance, const Mat4& transform) {
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
     if (!finite(transform)) return invalid("transform must be finite");
     it->second.model = to_glm(transform);
+    if (!it->second.dynamic) impl_->static_dirty = true;
     return {};
 }
 
@@ -439,6 +450,7 @@ Outcome System::destroy_instance(InstanceId instance) {
     if (it == impl_->instances.end())
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
     --impl_->meshes.at(it->second.mesh).instances;
+    if (!it->second.dynamic) impl_->static_dirty = true;
     impl_->instances.erase(it);
     return {};
 }
@@ -486,15 +498,21 @@ Outcome System::step(float dt) {
             if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
         }
 
-        std::vector<GpuInstance> fixed, dynamic;
-        for (auto& [id, instance] : m.instances) {
-            const Impl::Mesh& mesh = m.meshes.at(instance.mesh);
-            if (instance.moving || mesh.deforming)
-                dynamic.push_back({&mesh.gpu, instance.model, instance.prev});
-            else
-                fixed.push_back({&mesh.gpu, instance.model, std::nullopt});
+        // Meshes in use cannot be destroyed, so the static set only changes through the instance calls that
+        // set static_dirty; VoxelWorld::set_static still compares, so a transform set to its old value
+        // voxelizes nothing.
+        if (m.static_dirty) {
+            std::vector<GpuInstance> fixed;
+            for (const auto& [id, instance] : m.instances)
+                if (!instance.dynamic)
+                    fixed.push_back({&m.meshes.at(instance.mesh).gpu, instance.model, std::nullopt});
+            m.world->set_static(std::move(fixed));
+            m.static_dirty = false;
         }
-        m.world->set_static(std::move(fixed));
+        std::vector<GpuInstance> dynamic;
+        for (const auto& [id, instance] : m.instances)
+            if (instance.dynamic)
+                dynamic.push_back({&m.meshes.at(instance.mesh).gpu, instance.model, instance.prev});
         auto frame = m.world->step(dynamic, dt);
         if (!frame) return device_failure(frame.status());
         for (auto& [id, instance] : m.instances)
@@ -662,6 +680,7 @@ Vec3 System::domain_origin() const {
 
 Outcome System::export_vdb(const char* path) {
     if (!path || !*path) return invalid("path is empty");
+#if GUST_WITH_OPENVDB
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
         auto voxels = m.world->tree().leaf_voxels();
@@ -675,6 +694,96 @@ Outcome System::export_vdb(const char* path) {
             m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, velocity, *pressure};
         if (Status s = vdb::write_frame_vdb(path, *voxels, m.world->grid(), grids); !s)
             return Outcome(ErrorCode::IoError, s.message());
+        return {};
+    });
+#else
+    return Outcome(ErrorCode::Unsupported, std::string("cannot write ") + path +
+                                               ": gust was built without OpenVDB (GUST_WITH_OPENVDB=OFF)");
+#endif
+}
+
+Outcome System::debug_voxel_grid(VoxelGridInfo& info) const {
+    const GridDesc& grid = impl_->world->grid();
+    const SparseTree& tree = impl_->world->tree();
+    info = {};
+    info.origin = to_vec3(grid.origin);
+    info.voxel_size = grid.voxel_size;
+    std::fill(std::begin(info.resolution), std::end(info.resolution), grid.res);
+    info.depth = tree.depth();
+    info.branching = tree.branching();
+    return {};
+}
+
+Outcome System::debug_voxels(std::span<VoxelCoord> out, std::size_t& count) {
+    count = 0;
+    return guarded([&]() -> Outcome {
+        auto keys = impl_->world->tree().leaf_voxels();
+        if (!keys) return device_failure(keys.status());
+        const std::size_t written = std::min(out.size(), keys->size());
+        for (std::size_t v = 0; v < written; ++v) {
+            const glm::uvec3 c = unpack_voxel((*keys)[v]);
+            out[v] = {c.x, c.y, c.z};
+        }
+        count = keys->size();
+        return {};
+    });
+}
+
+Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
+    count = 0;
+    return guarded([&]() -> Outcome {
+        Impl& m = *impl_;
+        const SparseTree& tree = m.world->tree();
+        auto pool = tree.node_pool();
+        if (!pool) return device_failure(pool.status());
+        const std::vector<glm::uvec2>& nodes = *pool;
+        const GridDesc& grid = m.world->grid();
+        const std::uint32_t log2_b = std::uint32_t(std::countr_zero(tree.branching()));
+        const std::uint32_t children = 1u << (3 * log2_b), depth = tree.depth();
+        const std::size_t blocks = nodes.size() / children;
+        if (Outcome o = m.check(blocks > 0, "the node pool holds the root's block", __LINE__); !o) return o;
+
+        // Level by level, so a short `out` still holds the coarse levels whole. A block reached twice (or
+        // the root's block reached as a child) would mean a corrupt pool; refusing it bounds the walk.
+        struct Visit {
+            std::uint32_t node;
+            glm::uvec3 corner; ///< in voxels
+        };
+        std::vector<Visit> level_nodes{{0, glm::uvec3(0)}}, next;
+        std::vector<bool> reached(blocks, false);
+        reached[0] = true;
+        std::size_t total = 0;
+        std::uint32_t extent = grid.res; // voxels across a node of this level
+        for (std::uint32_t level = 0; !level_nodes.empty(); ++level, extent >>= log2_b) {
+            const bool bricks = level + 1 == depth;
+            next.clear();
+            for (const Visit& v : level_nodes) {
+                const glm::uvec2 node = nodes[v.node];
+                if (total < out.size()) {
+                    TreeNode& n = out[total];
+                    n.min = to_vec3(grid.origin + glm::vec3(v.corner) * grid.voxel_size);
+                    n.size = float(extent) * grid.voxel_size;
+                    n.level = level;
+                    n.state = node.y == shaderio::kPinned                   ? TreeNodeState::Static
+                              : tree.frame() != 0 && node.y == tree.frame() ? TreeNodeState::Reached
+                                                                            : TreeNodeState::Stale;
+                    n.refined = node.x != 0;
+                }
+                ++total;
+                if (bricks || node.x == 0) continue;
+                const bool fresh = node.x < blocks && !reached[node.x];
+                if (Outcome o = m.check(fresh, "every child block is in the pool, once", __LINE__); !o)
+                    return o;
+                reached[node.x] = true;
+                const std::uint32_t child_extent = extent >> log2_b, mask = (1u << log2_b) - 1;
+                for (std::uint32_t c = 0; c < children; ++c) {
+                    const glm::uvec3 slot(c & mask, (c >> log2_b) & mask, c >> (2 * log2_b));
+                    next.push_back({node.x * children + c, v.corner + slot * child_extent});
+                }
+            }
+            level_nodes.swap(next);
+        }
+        count = total;
         return {};
     });
 }

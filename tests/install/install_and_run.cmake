@@ -2,8 +2,10 @@
 # EXAMPLES_DIR against that prefix alone, and runs hello_wind. Fails when the install lays out more
 # headers than the two public ones, when the consumer finds gust anywhere but in the prefix, when the
 # example does not build warning-free, when hello_wind fails or prints a validation message, or when its
-# output lacks the wind it must print (a point outside the domain gets exactly the ambient wind).
-foreach(var BUILD_DIR EXAMPLES_DIR WORK_DIR CONFIG GENERATOR CXX_COMPILER)
+# output lacks the wind it must print (a point outside the domain gets exactly the ambient wind). A build
+# without OpenVDB (WITH_OPENVDB off) must install a package that neither ships the OpenVDB writer nor asks
+# for OpenVDB: the consumer is configured with OpenVDB made unfindable.
+foreach(var BUILD_DIR EXAMPLES_DIR WORK_DIR CONFIG GENERATOR CXX_COMPILER WITH_OPENVDB)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "install_and_run.cmake needs -D${var}=...")
   endif()
@@ -35,6 +37,20 @@ set(configure_args -S ${EXAMPLES_DIR} -B ${consumer} -G ${GENERATOR}
   -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF
   -DCMAKE_CXX_COMPILER=${CXX_COMPILER}
   "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}")
+if(NOT WITH_OPENVDB)
+  file(GLOB vdb_archives ${prefix}/lib*/libgust_vdb.a)
+  if(vdb_archives)
+    message(FATAL_ERROR "a build without OpenVDB installed the OpenVDB writer: ${vdb_archives}")
+  endif()
+  file(GLOB_RECURSE target_files ${prefix}/lib*/cmake/gust/gustTargets*.cmake)
+  foreach(target_file IN LISTS target_files)
+    file(STRINGS ${target_file} mentions REGEX "OpenVDB|openvdb|gust_vdb")
+    if(mentions)
+      message(FATAL_ERROR "${target_file} of a build without OpenVDB links OpenVDB: ${mentions}")
+    endif()
+  endforeach()
+  list(APPEND configure_args -DCMAKE_DISABLE_FIND_PACKAGE_OpenVDB=ON)
+endif()
 if(MAKE_PROGRAM)
   list(APPEND configure_args -DCMAKE_MAKE_PROGRAM=${MAKE_PROGRAM})
 endif()

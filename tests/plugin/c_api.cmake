@@ -6,5 +6,7 @@ set_target_properties(gust_c_api_test PROPERTIES C_STANDARD 11 C_STANDARD_REQUIR
 # libdl: the host-device test loads Vulkan itself, as an engine would.
 target_link_libraries(gust_c_api_test PRIVATE gust::gust ${CMAKE_DL_LIBS})
 gust_target_defaults(gust_c_api_test)
+# Which outcome gust_system_export_vdb must have.
+target_compile_definitions(gust_c_api_test PRIVATE GUST_WITH_OPENVDB=$<BOOL:${GUST_WITH_OPENVDB}>)
 add_test(NAME c_api COMMAND gust_c_api_test)
 set_tests_properties(c_api PROPERTIES TIMEOUT 600)

@@ -421,6 +421,16 @@ static void rejects_bad_queries(gust_system system) {
     CHECK_RESULT(system, gust_system_stats_pass_count(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_domain_origin(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_export_vdb(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
+
+    gust_voxel_coord voxels[2];
+    gust_tree_node nodes[2];
+    size_t count = 7;
+    CHECK_RESULT(system, gust_system_debug_voxel_grid(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_debug_voxels(system, voxels, 2, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_debug_voxels(system, NULL, 2, &count), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK(count == 0);
+    CHECK_RESULT(system, gust_system_debug_tree_nodes(system, nodes, 2, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_debug_tree_nodes(system, NULL, 2, &count), GUST_ERROR_INVALID_ARGUMENT);
 }
 
 static int equal3(gust_vec3 a, gust_vec3 b) {
@@ -431,6 +441,76 @@ static int near3(gust_vec3 a, gust_vec3 b, float tolerance) {
 }
 static int finite3(gust_vec3 v) {
     return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
+}
+
+/* The debug views of a world whose static box spans [-1.5, 1.5] x [0.5, 3.5] x [-1.5, 1.5] m and whose moving
+ * box is the 1 m cube around `mover_at`, after a step whose statistics are `stats`. The grid is
+ * small_world_desc's: 64 voxels of 0.25 m (the longest axis needs 16 * 4, a power of the branching 4) from
+ * the domain's corner. */
+static void shows_voxels_and_tree_nodes(gust_system system, const gust_frame_stats* stats,
+                                        gust_vec3 mover_at) {
+    gust_voxel_grid_info grid;
+    CHECK_RESULT(system, gust_system_debug_voxel_grid(system, &grid), GUST_OK);
+    CHECK(equal3(grid.origin, vec3(-8.0f, 0.0f, -8.0f)));
+    CHECK(grid.voxel_size == 0.25f);
+    CHECK(grid.resolution[0] == 64 && grid.resolution[1] == 64 && grid.resolution[2] == 64);
+    CHECK(grid.depth == 3 && grid.branching == 4);
+
+    size_t count = 0;
+    CHECK_RESULT(system, gust_system_debug_voxels(system, NULL, 0, &count), GUST_OK);
+    CHECK(count == stats->voxels);
+    gust_voxel_coord* voxels = (gust_voxel_coord*)malloc((count + 1) * sizeof *voxels);
+    CHECK(voxels != NULL);
+    if (!voxels) return;
+    size_t again = 0;
+    CHECK_RESULT(system, gust_system_debug_voxels(system, voxels, count + 1, &again), GUST_OK);
+    CHECK(again == count);
+    /* Every voxel meets one of the boxes: it lies within a box grown by one voxel. */
+    const float lo[2][3] = {{-1.5f, 0.5f, -1.5f}, {mover_at.x - 0.5f, mover_at.y - 0.5f, mover_at.z - 0.5f}};
+    const float hi[2][3] = {{1.5f, 3.5f, 1.5f}, {mover_at.x + 0.5f, mover_at.y + 0.5f, mover_at.z + 0.5f}};
+    size_t off_boxes = 0;
+    for (size_t v = 0; v < count; ++v) {
+        const uint32_t c[3] = {voxels[v].i, voxels[v].j, voxels[v].k};
+        const float origin[3] = {grid.origin.x, grid.origin.y, grid.origin.z};
+        int on_a_box = 0;
+        for (int b = 0; b < 2; ++b) {
+            int within = 1;
+            for (int a = 0; a < 3; ++a) {
+                const float min = origin[a] + (float)c[a] * grid.voxel_size;
+                within = within && min >= lo[b][a] - grid.voxel_size - 1e-4f &&
+                         min + grid.voxel_size <= hi[b][a] + grid.voxel_size + 1e-4f;
+            }
+            on_a_box = on_a_box || within;
+        }
+        off_boxes += !on_a_box;
+    }
+    CHECK(off_boxes == 0);
+    /* A short array gets the first voxels and the total. */
+    gust_voxel_coord first[3];
+    CHECK_RESULT(system, gust_system_debug_voxels(system, first, 3, &again), GUST_OK);
+    CHECK(again == count);
+    CHECK(count >= 3 && memcmp(first, voxels, sizeof first) == 0);
+    free(voxels);
+
+    CHECK_RESULT(system, gust_system_debug_tree_nodes(system, NULL, 0, &count), GUST_OK);
+    CHECK(count == stats->nodes);
+    gust_tree_node* nodes = (gust_tree_node*)malloc(count * sizeof *nodes);
+    CHECK(nodes != NULL);
+    if (!nodes) return;
+    CHECK_RESULT(system, gust_system_debug_tree_nodes(system, nodes, count, &again), GUST_OK);
+    CHECK(again == count);
+    CHECK(count > 1 && nodes[0].level == 0 && nodes[0].refined);
+    CHECK(equal3(nodes[0].min, grid.origin) && nodes[0].size == 16.0f);
+    CHECK(nodes[0].state == GUST_TREE_NODE_STATIC);
+    int reached = 0, levels_in_order = 1;
+    for (size_t n = 1; n < count; ++n) {
+        levels_in_order =
+            levels_in_order && nodes[n].level >= nodes[n - 1].level && nodes[n].level < grid.depth;
+        reached = reached || nodes[n].state == GUST_TREE_NODE_REACHED;
+    }
+    CHECK(levels_in_order);
+    CHECK(reached); /* the moving box */
+    free(nodes);
 }
 
 /* Points inside and outside the 16x8x16 m domain around kFocus; those outside get the ambient wind exactly.
@@ -575,21 +655,28 @@ static void simulates_a_small_world(void) {
     }
     CHECK_RESULT(system, gust_system_stats_pass(system, passes, NULL, NULL), GUST_ERROR_INVALID_ARGUMENT);
 
-    /* OpenVDB export: a file when built with OpenVDB; a missing directory is an I/O error. */
+    shows_voxels_and_tree_nodes(system, &stats, mover_at);
+
+    /* OpenVDB export: a file when built with OpenVDB (a missing directory is an I/O error); without it, a
+     * clear refusal. */
     const char* vdb_path = "gust_c_api_test.vdb";
-    const gust_result exported = gust_system_export_vdb(system, vdb_path);
-    CHECK(exported == GUST_OK || exported == GUST_ERROR_UNSUPPORTED);
-    if (exported == GUST_OK) {
-        FILE* file = fopen(vdb_path, "rb");
-        CHECK(file != NULL);
-        if (file) {
-            CHECK(fseek(file, 0, SEEK_END) == 0 && ftell(file) > 0);
-            fclose(file);
-        }
-        remove(vdb_path);
-        CHECK_RESULT(system, gust_system_export_vdb(system, "/nonexistent-gust-dir/frame.vdb"),
-                     GUST_ERROR_IO);
+#if GUST_WITH_OPENVDB
+    CHECK_RESULT(system, gust_system_export_vdb(system, vdb_path), GUST_OK);
+    FILE* file = fopen(vdb_path, "rb");
+    CHECK(file != NULL);
+    if (file) {
+        CHECK(fseek(file, 0, SEEK_END) == 0 && ftell(file) > 0);
+        fclose(file);
     }
+    remove(vdb_path);
+    CHECK_RESULT(system, gust_system_export_vdb(system, "/nonexistent-gust-dir/frame.vdb"), GUST_ERROR_IO);
+#else
+    CHECK_RESULT(system, gust_system_export_vdb(system, vdb_path), GUST_ERROR_UNSUPPORTED);
+    CHECK(strstr(gust_system_last_error(system), "built without OpenVDB") != NULL);
+    FILE* file = fopen(vdb_path, "rb");
+    CHECK(file == NULL);
+    if (file) fclose(file);
+#endif
 
     rejects_bad_meshes_and_instances(system, box, wall);
     rejects_bad_frame_inputs(system);
@@ -613,6 +700,11 @@ static void simulates_a_small_world(void) {
     CHECK(other != NULL && other != system);
     CHECK_RESULT(system, gust_system_set_ambient(system, kAmbient), GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(system, gust_system_query(system, kProbes, kPoints, velocities), GUST_ERROR_INVALID_HANDLE);
+    size_t count = 0;
+    gust_voxel_grid_info grid;
+    CHECK_RESULT(system, gust_system_debug_voxel_grid(system, &grid), GUST_ERROR_INVALID_HANDLE);
+    CHECK_RESULT(system, gust_system_debug_voxels(system, NULL, 0, &count), GUST_ERROR_INVALID_HANDLE);
+    CHECK_RESULT(NULL, gust_system_debug_tree_nodes(NULL, NULL, 0, &count), GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(other, gust_system_step(other, 0.05f), GUST_OK);
     CHECK_RESULT(other, gust_system_destroy(other), GUST_OK);
     gust_system made_up = (gust_system)(uintptr_t)0x5eed;

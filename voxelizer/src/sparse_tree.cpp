@@ -298,6 +298,14 @@ Result<TreeStats> SparseTree::read_stats() const {
     return out;
 }
 
+Result<std::vector<glm::uvec2>> SparseTree::node_pool() const {
+    TreeState st{};
+    std::memcpy(&st, state_.mapped(), sizeof(st));
+    std::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) << (3 * log2_b_));
+    if (Status s = gpu::download(ctx_, nodes_, nodes.data(), nodes.size() * sizeof(glm::uvec2)); !s) return s;
+    return nodes;
+}
+
 Result<std::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
     TreeState st{};
     std::memcpy(&st, state_.mapped(), sizeof(st));

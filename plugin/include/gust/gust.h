@@ -230,6 +230,37 @@ typedef struct gust_frame_stats {
     bool converged;              ///< the pressure solve reached the tolerance
 } gust_frame_stats;
 
+/// The voxel grid of the solid boundary (gust_system_debug_voxel_grid). Voxel (i, j, k) is the world-space
+/// box origin + [(i, j, k), (i + 1, j + 1, k + 1)] * voxel_size.
+typedef struct gust_voxel_grid_info {
+    gust_vec3 origin;       ///< world-space min corner of voxel (0, 0, 0), m; follows the focus
+    float voxel_size;       ///< edge of one voxel, m (cell_size / voxels_per_cell)
+    uint32_t resolution[3]; ///< voxels per axis, branching^depth (may reach past the wind domain)
+    uint32_t depth;         ///< tree levels below the root
+    uint32_t branching;     ///< children per node per axis: 2, 4 or 8
+} gust_voxel_grid_info;
+
+/// An occupied voxel, indexed in the grid of gust_system_debug_voxel_grid.
+typedef struct gust_voxel_coord {
+    uint32_t i, j, k; ///< voxel indices along x, y and z
+} gust_voxel_coord;
+
+/// What reached a tree node in the last step (gust::TreeNodeState).
+typedef enum gust_tree_node_state {
+    GUST_TREE_NODE_STALE = 0, ///< no fragment reached it in the last step (coarsened after a few such steps)
+    GUST_TREE_NODE_REACHED = 1, ///< a moving or deforming surface reached it in the last step
+    GUST_TREE_NODE_STATIC = 2,  ///< static geometry reached it: kept until the static set changes
+} gust_tree_node_state;
+
+/// One allocated node of the voxel tree as a world-space cube (gust_system_debug_tree_nodes).
+typedef struct gust_tree_node {
+    gust_vec3 min;              ///< world-space min corner, m
+    float size;                 ///< edge length, m (branching^(depth - level) voxels)
+    uint32_t level;             ///< 0: the root; depth - 1: leaf bricks of branching^3 voxels
+    gust_tree_node_state state; ///< what reached it in the last step
+    bool refined;               ///< has a child block (a leaf brick: an occupancy mask)
+} gust_tree_node;
+
 /// The version the library was built as (compare with GUST_HEADER_VERSION). Any thread.
 uint32_t gust_library_version(void);
 
@@ -350,8 +381,26 @@ gust_result gust_system_stats_pass(gust_system system, uint32_t index, const cha
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
 
 /// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; DESIGN.md layout);
-/// GUST_ERROR_UNSUPPORTED when built without OpenVDB.
+/// GUST_ERROR_UNSUPPORTED when built without OpenVDB (GUST_WITH_OPENVDB=OFF).
 gust_result gust_system_export_vdb(gust_system system, const char* path);
+
+/* Debug views of the solid boundary as of the last step, for tools and samples that draw it. The lists
+ * download the tree and walk it on the CPU, blocking for a GPU round trip: not for every frame. */
+
+/// Fills `info` with the voxel grid the tree indexes (world space, m). No GPU work.
+gust_result gust_system_debug_voxel_grid(gust_system system, gust_voxel_grid_info* info);
+
+/// Occupied leaf voxels (static or moving), ordered by k, then j, then i: `*count` receives how many there
+/// are and the first min(capacity, *count) go into the caller's `voxels` (NULL when capacity is 0, to ask for
+/// the count). Debug only: downloads the tree and blocks.
+gust_result gust_system_debug_voxels(gust_system system, gust_voxel_coord* voxels, size_t capacity,
+                                     size_t* count);
+
+/// Every allocated tree node, level by level from the root: `*count` receives how many there are and the
+/// first min(capacity, *count) go into the caller's `nodes` (NULL when capacity is 0). Debug only: downloads
+/// the node pool and blocks.
+gust_result gust_system_debug_tree_nodes(gust_system system, gust_tree_node* nodes, size_t capacity,
+                                         size_t* count);
 
 #ifdef __cplusplus
 } // extern "C"

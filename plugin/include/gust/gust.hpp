@@ -229,6 +229,37 @@ struct FrameStats {
 /// Ticket of an asynchronous query (0 is never valid).
 using QueryId = std::uint64_t;
 
+/// The voxel grid of the solid boundary (System::debug_voxel_grid). Voxel (i, j, k) is the world-space box
+/// origin + [(i, j, k), (i + 1, j + 1, k + 1)] · voxel_size.
+struct VoxelGridInfo {
+    Vec3 origin{};                    ///< world-space min corner of voxel (0, 0, 0), m; follows the focus
+    float voxel_size = 0.0f;          ///< edge of one voxel, m (cell_size / voxels_per_cell)
+    std::uint32_t resolution[3] = {}; ///< voxels per axis, branching^depth (may reach past the wind domain)
+    std::uint32_t depth = 0;          ///< tree levels below the root
+    std::uint32_t branching = 0;      ///< children per node per axis: 2, 4 or 8
+};
+
+/// An occupied voxel, indexed in the grid of System::debug_voxel_grid.
+struct VoxelCoord {
+    std::uint32_t i = 0, j = 0, k = 0;
+};
+
+/// What reached a tree node in the last step (System::debug_tree_nodes).
+enum class TreeNodeState : std::int32_t {
+    Stale = 0,   ///< no fragment reached it in the last step (coarsened after a few such steps)
+    Reached = 1, ///< a moving or deforming surface reached it in the last step
+    Static = 2,  ///< static geometry reached it: kept until the static set changes
+};
+
+/// One allocated node of the voxel tree as a world-space cube (System::debug_tree_nodes).
+struct TreeNode {
+    Vec3 min{};              ///< world-space min corner, m
+    float size = 0.0f;       ///< edge length, m (branching^(depth − level) voxels)
+    std::uint32_t level = 0; ///< 0: the root; depth − 1: leaf bricks of branching^3 voxels
+    TreeNodeState state = TreeNodeState::Stale; ///< what reached it in the last step
+    bool refined = false;                       ///< has a child block (a leaf brick: an occupancy mask)
+};
+
 /// The wind subsystem. Create one per world.
 class System {
   public:
@@ -290,8 +321,23 @@ class System {
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
-    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; DESIGN.md layout).
+    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; DESIGN.md layout);
+    /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).
     Outcome export_vdb(const char* path);
+
+    // Debug views of the solid boundary as of the last step, for tools and samples that draw it. The lists
+    // download the tree and walk it on the CPU, blocking for a GPU round trip: not for every frame.
+
+    /// The voxel grid the tree indexes (world space, m). No GPU work.
+    Outcome debug_voxel_grid(VoxelGridInfo& info) const;
+    /// Occupied leaf voxels (static or moving), ordered by k, then j, then i. `count` receives how many
+    /// there are (FrameStats::voxels); the first min(out.size(), count) go into the caller's `out`, so an
+    /// empty span asks for the count. Debug only: downloads the tree and blocks.
+    Outcome debug_voxels(std::span<VoxelCoord> out, std::size_t& count);
+    /// Every allocated tree node (root, internal nodes, leaf bricks), level by level from the root. `count`
+    /// receives how many there are (FrameStats::nodes); the first min(out.size(), count) go into the
+    /// caller's `out`. Debug only: downloads the node pool and blocks.
+    Outcome debug_tree_nodes(std::span<TreeNode> out, std::size_t& count);
 
     struct Impl;
 

@@ -70,6 +70,12 @@ class SparseTree {
     /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree).
     Result<std::vector<std::uint32_t>> leaf_voxels() const;
 
+    /// The node pool's blocks in use (uvec2 per node: child block, touched; layout in
+    /// shaders/tree/tree_io.h), downloaded for debug views and tests. Blocks until the GPU is done.
+    Result<std::vector<glm::uvec2>> node_pool() const;
+    /// The frame number the last update stamped on the nodes it reached (`touched`); 0 before the first.
+    std::uint32_t frame() const { return frame_; }
+
     /// Device address of the node pool (uvec2 per node, layout in shaders/tree/tree_io.h).
     VkDeviceAddress node_address() const { return nodes_.address(); }
     /// Device address of the leaf mask pool.
