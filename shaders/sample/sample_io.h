@@ -1,0 +1,53 @@
+// Layouts shared by the sample game's shaders and sample_game/renderer.cpp.
+#ifndef GUST_SAMPLE_IO_H
+#define GUST_SAMPLE_IO_H
+
+#include "../common.h"
+
+GUST_NAMESPACE_BEGIN
+
+GUST_CONST uint kFoliageGroupSize = 64;
+/// Vertices of one grass blade: one triangle, root to tip.
+GUST_CONST uint kBladeVertices = 3;
+
+/// Per-frame values every pass reads (uniform buffer, binding 0; only vec4 and mat4 for std140).
+struct FrameUniforms {
+    mat4 view_proj;
+    mat4 inverse_view_proj;
+    mat4 wind_world_to_texture; ///< gust's WindTexture::world_to_texture
+    vec4 camera;                ///< xyz: eye (world, m); w: time (s)
+    vec4 light;                 ///< xyz: unit vector towards the sun; w: grass count
+    vec4 voxel_origin;          ///< xyz: min corner of the voxel grid (world, m); w: voxel size (m)
+    vec4 voxel_dims;            ///< xyz: voxels per axis; w: 1 when the occupancy volume is valid
+    vec4 wind_min;              ///< xyz: min corner of the wind domain (world, m); w: cell size (m)
+    vec4 wind_cells;            ///< xyz: wind cells per axis; w: speed drawn as the top colour (m/s)
+    vec4 slice;                 ///< x: slice height (world y, m); y: arrow length per m/s (m); z, w: 0
+};
+
+/// Push constants of mesh draws.
+struct DrawPush {
+    mat4 model;
+    vec4 color; ///< rgb: linear albedo; a: 1
+    vec4 sway;  ///< x: foliage slot (< 0: rigid); y: model height where bending starts; z: height of full bend
+};
+
+/// Push constants of the foliage update.
+struct FoliagePush {
+    float dt;    ///< s
+    uint count;  ///< blades and crowns
+    float drag;  ///< bend per (m/s)^2 of wind, before the spring
+    float pad;
+};
+
+/// One blade or crown: what it is (seed, read-only) and how it moves (state, read-write).
+struct FoliageSeed {
+    vec4 root_height; ///< xyz: root (world, m); w: height (m)
+    vec4 yaw_width;   ///< x: yaw (rad); y: width (m); z: stiffness (1/s^2); w: colour variation
+};
+struct FoliageState {
+    vec4 bend; ///< xy: tip displacement over height along world x and z; zw: its rate (1/s)
+};
+
+GUST_NAMESPACE_END
+
+#endif
