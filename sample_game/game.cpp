@@ -409,6 +409,7 @@ int Game::run() {
     make_wind();
     views_ = options_.views;
     camera_.follow = options_.follow;
+    show_hud_ = options_.hud;
 
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = vk_->command_pool();

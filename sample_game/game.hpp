@@ -26,6 +26,7 @@ struct GameOptions {
     float dt = 1.0f / 30.0f;      ///< headless: fixed time step (s); windowed runs use the clock
     Views views;
     bool follow = false; ///< start with the camera following the fox
+    bool hud = true;     ///< start with the HUD shown (H toggles it)
     WorldSettings world;
 };
 

@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(-360.0f, 360.0f));
     app.add_option("--gustiness", options.world.gustiness, "relative size of the gusts")
         ->check(CLI::Range(0.0f, 1.0f));
-    bool no_fan = false, no_motor = false;
+    bool no_fan = false, no_motor = false, no_hud = false;
+    app.add_flag("--no-hud", no_hud, "start with the HUD hidden");
     app.add_flag("--no-fan", no_fan, "switch the fan off");
     app.add_flag("--no-motor", no_motor, "switch the flyer's motor off");
     app.add_option("--cells", cells, "wind cells X,Y,Z, each 8..256 (default 16,8,16)");
@@ -91,6 +92,7 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
+    options.hud = !no_hud;
     options.world.fan_on = !no_fan;
     options.world.flyer_motor_on = !no_motor;
     options.assets = assets;
