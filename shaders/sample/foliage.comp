@@ -11,9 +11,12 @@ void main() {
     if (i >= push.count) return;
     FoliageSeed seed = seeds[i];
     vec4 s = states[i].bend;
-    // Blades (width > 0) feel the wind at 60% of their height; crowns (width 0) at their seed, the top.
+    // Blades (width > 0) feel the wind at 60% of their height, but no lower than one wind cell above
+    // their root: a coarse grid's lowest cell centre may lie inside the ground, and the texture would
+    // blend that still air into the grass. Crowns (width 0) feel it at their seed, the top.
     bool blade = seed.yaw_width.y > 0.0;
-    vec3 probe = seed.root_height.xyz + vec3(0.0, blade ? 0.6 * seed.root_height.w : 0.0, 0.0);
+    float lift = blade ? max(0.6 * seed.root_height.w, frame.wind_min.w) : 0.0;
+    vec3 probe = seed.root_height.xyz + vec3(0.0, lift, 0.0);
     vec2 w = wind_at(probe).xz;
     // Drag grows with the square of the wind speed (a bluff body); scaled by k, the steady bend is
     // drag * |w|^2 whatever the stiffness, which sets only how fast it sways. A crown bends a third as far.

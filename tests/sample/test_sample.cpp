@@ -111,14 +111,15 @@ TEST(SampleGame, grassBendsWithTheWindAndStandsInCalm) {
 }
 
 TEST(SampleGame, gustsMakeTheGrassSway) {
-    // With gusts on, the ambient speed changes over seconds and the mean bend must follow it.
+    // With gusts on, the ambient speed swings between about 1 and 6 m/s over eight seconds (World::ambient)
+    // and the mean bend must follow it; 3 m/s keeps the blades below their 1.2 cap.
     const fs::path dir = fresh_dir("gusts");
     const Outcome r = run(
-        "--headless --frames 60 --dt 0.1 --png-every 1000 --wind 5 --gustiness 1 --no-fan --no-motor --out " +
+        "--headless --frames 80 --dt 0.1 --png-every 1000 --wind 3 --gustiness 1 --no-fan --no-motor --out " +
         dir.string() + kSmall);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::vector<nlohmann::json> stats = read_stats(dir / "stats.jsonl");
-    ASSERT_EQ(stats.size(), 60u);
+    ASSERT_EQ(stats.size(), 80u);
     double lowest = 1e9, highest = 0.0;
     for (std::size_t i = 20; i < stats.size(); ++i) {
         lowest = std::min(lowest, stats[i]["grass_bend_mean"].get<double>());
