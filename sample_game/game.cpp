@@ -47,6 +47,12 @@ struct Camera {
     }
 };
 
+/// Where gust's domain is centred for a focus on the ground at `focus`: the domain's floor sits 1 m under
+/// the ground so that the ground is a solid inside it.
+gust::Vec3 domain_centre(glm::vec3 focus, float cell_size, std::uint32_t cells_y) {
+    return {focus.x, 0.5f * cell_size * static_cast<float>(cells_y) - 1.0f, focus.z};
+}
+
 /// Key of a tree node for telling this frame's nodes from last frame's.
 using NodeKey = std::tuple<std::uint32_t, std::int64_t, std::int64_t, std::int64_t>;
 
@@ -219,8 +225,7 @@ void Game::make_wind() {
     // An octree, as in the seed, so that E (one more level) doubles the resolution.
     desc.domain.branching = 2;
     // The domain's floor sits just under the ground so the grass roots are inside it.
-    desc.domain.focus = {0.0f, 0.5f * options_.cell_size * static_cast<float>(options_.wind_cells[1]) - 1.0f,
-                         0.0f};
+    desc.domain.focus = domain_centre(glm::vec3(0.0f), options_.cell_size, options_.wind_cells[1]);
     desc.wind.max_cycles = options_.max_cycles;
     desc.wind.tolerance = 1e-3f;
     if (gust::Outcome made = gust::System::create(desc, wind_); !made)
@@ -453,8 +458,7 @@ int Game::run() {
         const Clock::time_point wind_start = Clock::now();
         if (dt > 0.0f) {
             const glm::vec3 focus = camera_.follow ? fox : glm::vec3(0.0f);
-            wind_->set_focus(
-                {focus.x, 0.5f * domain_.cell_size * static_cast<float>(domain_.cells[1]) - 1.0f, focus.z});
+            wind_->set_focus(domain_centre(focus, domain_.cell_size, domain_.cells[1]));
             if (gust::Outcome stepped = world_->step_wind(*wind_, dt, t); !stepped)
                 throw std::runtime_error("gust step: " + stepped.message());
         }

@@ -2,33 +2,16 @@
 #include "game.hpp"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
-#include <sstream>
-
-namespace {
-
-/// Parses "X,Y,Z" into three unsigned integers.
-bool parse_cells(const std::string& text, std::uint32_t (&cells)[3]) {
-    std::istringstream in(text);
-    char comma = 0;
-    long long x = 0, y = 0, z = 0;
-    if (!(in >> x >> comma) || comma != ',' || !(in >> y >> comma) || comma != ',' || !(in >> z) || !in.eof())
-        return false;
-    for (long long v : {x, y, z})
-        if (v < 8 || v > 256) return false;
-    cells[0] = static_cast<std::uint32_t>(x);
-    cells[1] = static_cast<std::uint32_t>(y);
-    cells[2] = static_cast<std::uint32_t>(z);
-    return true;
-}
-
-} // namespace
+#include <vector>
 
 int main(int argc, char** argv) {
     sample::GameOptions options;
     options.assets = GUST_SAMPLE_ASSETS;
     CLI::App app{"gust sample game: wind through grass, trees and walking characters"};
-    std::string out, assets = options.assets.string(), cells, views;
+    std::string out, assets = options.assets.string(), views;
+    std::vector<std::uint32_t> cells;
     app.add_flag("--headless", options.headless,
                  "render offscreen and write PNG frames (also without a display)");
     app.add_option("--frames", options.frames, "stop after N frames (headless default 300)");
@@ -49,7 +32,10 @@ int main(int argc, char** argv) {
     app.add_flag("--no-hud", no_hud, "start with the HUD hidden");
     app.add_flag("--no-fan", no_fan, "switch the fan off");
     app.add_flag("--no-motor", no_motor, "switch the flyer's motor off");
-    app.add_option("--cells", cells, "wind cells X,Y,Z, each 8..256 (default 16,8,16)");
+    app.add_option("--cells", cells, "wind cells X,Y,Z, each 8..256 (default 16,8,16)")
+        ->delimiter(',')
+        ->expected(3)
+        ->check(CLI::Range(8u, 256u));
     app.add_option("--cell-size", options.cell_size, "wind cell edge, m")->check(CLI::Range(0.05f, 20.0f));
     app.add_option("--voxels-per-cell", options.voxels_per_cell,
                    "voxels per wind cell per axis: 1, 2, 4 or 8")
@@ -63,11 +49,7 @@ int main(int argc, char** argv) {
     app.add_option("--assets", assets, "the repository's assets/ folder");
     CLI11_PARSE(app, argc, argv);
 
-    if (!cells.empty() && !parse_cells(cells, options.wind_cells)) {
-        std::fprintf(stderr, "gust_sample: error: --cells wants X,Y,Z with each in 8..256, got '%s'\n",
-                     cells.c_str());
-        return 2;
-    }
+    std::copy(cells.begin(), cells.end(), options.wind_cells);
     for (char v : views) {
         switch (v) {
         case 'q':

@@ -178,14 +178,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     }
 
     // Until the first voxel upload the volume is one empty voxel, so the set is always complete.
-    occupancy_ = vk_.create_image(VK_FORMAT_R8_UNORM, {1, 1, 1},
-                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                  VK_IMAGE_ASPECT_COLOR_BIT);
-    vk_.submit_now([&](VkCommandBuffer cmd) {
-        transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                   VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    });
+    make_occupancy({1, 1, 1});
     update_world(world);
 }
 
@@ -317,19 +310,23 @@ void Renderer::set_wind(const gust::WindTexture& texture, const gust::WindDomain
     write_descriptors();
 }
 
+void Renderer::make_occupancy(VkExtent3D extent) {
+    occupancy_ = vk_.create_image(VK_FORMAT_R8_UNORM, extent,
+                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                  VK_IMAGE_ASPECT_COLOR_BIT);
+    vk_.submit_now([&](VkCommandBuffer cmd) {
+        transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                   VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    });
+}
+
 void Renderer::set_voxels(const gust::VoxelGridInfo& grid, std::span<const gust::VoxelCoord> voxels) {
     const VkExtent3D extent{grid.resolution[0], grid.resolution[1], grid.resolution[2]};
     if (occupancy_.extent.width != extent.width || occupancy_.extent.height != extent.height ||
         occupancy_.extent.depth != extent.depth) {
         vk_.destroy(occupancy_);
-        occupancy_ = vk_.create_image(VK_FORMAT_R8_UNORM, extent,
-                                      VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                      VK_IMAGE_ASPECT_COLOR_BIT);
-        vk_.submit_now([&](VkCommandBuffer cmd) {
-            transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                       VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                       VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-        });
+        make_occupancy(extent);
         write_descriptors();
     }
     const std::size_t bytes = std::size_t(extent.width) * extent.height * extent.depth;

@@ -77,6 +77,8 @@ class Renderer {
     VkPipeline graphics(VkShaderModule vert, VkShaderModule frag, VkPrimitiveTopology topology,
                         bool mesh_input, bool line_input, bool depth_write, bool blend);
     void write_descriptors();
+    /// A cleared occupancy volume of `extent`, ready to be sampled.
+    void make_occupancy(VkExtent3D extent);
 
     VulkanHost& vk_;
     VkRenderPass pass_ = VK_NULL_HANDLE;
