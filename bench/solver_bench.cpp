@@ -69,7 +69,7 @@ struct Contender {
     std::uint32_t cap;
 };
 /// The solvers of the time-to-tolerance table, the default first: the ratios are to it. MGPCG and
-/// multigrid get five times SolverDesc's 20 V-cycles, Jacobi 200,000 iterations.
+/// multigrid get 100 V-cycles (SolverDesc's default is 32), Jacobi 200,000 iterations.
 constexpr Contender kContenders[] = {{"MGPCG", gust::PressureSolver::MultigridPCG, "V-cycles", 100},
                                      {"multigrid", gust::PressureSolver::Multigrid, "V-cycles", 100},
                                      {"Jacobi", gust::PressureSolver::Jacobi, "iterations", 200000}};
@@ -86,6 +86,10 @@ struct Options {
     /// Largest grid of the time-to-tolerance table: Jacobi's iterations grow with the square of the
     /// grid's width and each costs the cells, so a 128^3 solve would take hours on lavapipe.
     std::uint64_t solve_max_cells = 64ull * 64 * 64;
+    /// Step-time table: every pressure solve from zero (SolverDesc::warm_start off), to compare.
+    bool cold_start = false;
+    /// Step-time table: V-cycles per step at most (SolverDesc::max_cycles).
+    std::uint32_t max_cycles = gust::SolverDesc{}.max_cycles;
     std::string write;
     std::string device;
 };
@@ -370,6 +374,9 @@ gust::Status bench_steps(Scene& scene, gust::WindSolver& solver, int repeat, dou
         sample.wall_ms = ms_since(start);
         if (!stats) return stats.status();
         sample.stats = std::move(*stats);
+        std::cerr << "  step " << i << (i < kWarmupSteps ? " (untimed)" : "") << ": " << sample.stats.cycles
+                  << " V-cycles" << (sample.stats.converged ? "" : " (not converged)") << ", "
+                  << fmt_ms(sample.wall_ms) << " ms wall" << std::endl;
         if (i < kWarmupSteps) continue;
         spent_ms += sample.wall_ms;
         row.steps.push_back(std::move(sample));
@@ -548,6 +555,7 @@ struct Workload {
     std::uint32_t smoothing = 0;  ///< SolverDesc::smoothing
     std::uint32_t cell_words = 0; ///< words of a cell's voxel set
     double cycles = 0.0;          ///< V-cycles per step (median)
+    bool warm_start = false;      ///< the solve starts from the last step's pressure
     double cut_cells = 0.0;       ///< cells holding solid voxels
     double fragments = 0.0;       ///< moving fragments
     double tree_bytes = 0.0;      ///< live bytes of the tree's pools
@@ -628,8 +636,13 @@ void add_residual(Traffic& t, const Workload& w, std::size_t l) {
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    // divergence: the operator (12 loads), six face fluxes (3 loads each); r, φ, b, x, p and r_old stored.
-    t.add(C * (12 * 4 + 6 * 3 * 4 + 6 * 4), 12 * F + 28 * C);
+    // divergence: the operator (12 loads), six face fluxes (3 loads each); r, b, x, p and r_old stored.
+    t.add(C * (12 * 4 + 6 * 3 * 4 + 5 * 4), 12 * F + 24 * C);
+    // warm start: q = Lφ (the operator, φ) with the sums b·q and q·q, q stored.
+    if (w.warm_start) t.add(C * (12 * 4 + 4 + 4 + 4), 4 * F + 12 * C);
+    // start: b (and, warm, φ and q) read; x0, r0 and φ = 0 stored.
+    const double start_loads = w.warm_start ? 3 : 1;
+    t.add(C * (start_loads + 3) * 4, (start_loads + 3) * 4 * C);
     const std::size_t last = w.levels.size() - 1;
     Traffic cycle;
     for (std::size_t l = 0; l < last; ++l) {
@@ -678,6 +691,7 @@ Workload workload_of(const StepRow& row, const gust::SolverDesc& desc) {
     w.smoothing = desc.smoothing;
     w.cell_words = gust::detail::cell_words(desc.voxels_per_cell);
     w.cycles = row.cycles();
+    w.warm_start = desc.warm_start;
     w.cut_cells = median_of(row.steps, [](const StepSample& s) { return s.stats.cut_cells; });
     w.fragments = median_of(row.steps, [](const StepSample& s) { return s.stats.moving_fragments; });
     w.tree_bytes = double(row.world.tree.pool_bytes);
@@ -714,8 +728,11 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "solver MGPCG (`PressureSolver::MultigridPCG`: conjugate gradients preconditioned by one "
            "multigrid V-cycle per iteration, "
         << desc.smoothing << " + " << desc.smoothing << " red-black sweeps), tolerance "
-        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles
-        << " iterations (V-cycles), vorticity confinement " << desc.vorticity
+        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles << " iterations (V-cycles), "
+        << (desc.warm_start
+                ? "each solve starting from the last step's pressure scaled to fit (the warm start)"
+                : "each solve starting from zero (`--cold-start`)")
+        << ", vorticity confinement " << desc.vorticity
         << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; "
         << kWarmupSteps << " untimed steps, then up to " << options.repeat
         << " timed ones, fewer once they pass " << options.budget_s
@@ -754,7 +771,7 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
 }
 
 void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
-                   const std::vector<StepRow>& steps, const gust::SolverDesc& desc, const Options& options,
+                   const std::vector<StepRow>& steps, const Options& options,
                    std::vector<std::string>& notes) {
     const std::string base = kContenders[0].name;
     out << "### MGPCG, multigrid and Jacobi to a tolerance\n\n";
@@ -827,9 +844,10 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
                 out << " failed";
             } else if (r.search.stats.converged) {
                 out << " converged in " << grouped(r.search.stats.cycles) << " " << r.solver->unit;
+                const gust::SolverDesc defaults;
                 const std::uint32_t cap = r.solver->pressure == gust::PressureSolver::Jacobi
-                                              ? desc.max_iterations
-                                              : desc.max_cycles;
+                                              ? defaults.max_iterations
+                                              : defaults.max_cycles;
                 if (r.search.stats.cycles > cap)
                     out << " (more than the default cap of " << grouped(cap) << ")";
             } else {
@@ -865,9 +883,10 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
         << " half-sweeps; then conjugate gradients' five level-0 passes: the sums of z*r and z*r_old, "
            "p = z + beta*p, the sum of p*Lp, the update of x, r_old and z, and r = b - Lx with the check's "
            "maximum) times the median V-cycles of the step-time table, plus the divergence (which also sets "
-           "b and zeroes x, p and r_old) and the copy of x into the pressure. Measured ms are that table's "
-           "pass medians; the step row sums them (the step-time table's total is the median of the sums). A "
-           "step records all "
+           "b and zeroes x, p and r_old), the warm start (q = L phi with the sums b*q and q*q; left out with "
+           "`--cold-start`), the start (x0 = s*phi and r0 = b - s*q) and the copy of x into the pressure. "
+           "Measured ms are that table's pass medians; the step row sums them (the step-time table's total "
+           "is the median of the sums). A step records all "
         << desc.max_cycles
         << " iterations and the check zeroes the dispatches of those after convergence, so the measured "
            "pressure ms also holds their empty dispatches. Accessed at bandwidth ms is what the accessed "
@@ -917,7 +936,7 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
         << run.load_start << " at the start and " << load_average()
         << " at the end (a load above the core count means other processes shared the cores).\n\n";
     render_steps(out, steps, desc, options, notes);
-    render_solves(out, solves, steps, desc, options, notes);
+    render_solves(out, solves, steps, options, notes);
     render_bytes(out, steps, desc, bandwidth, options);
     if (!notes.empty()) {
         out << "Notes:\n\n";
@@ -949,6 +968,10 @@ int main(int argc, char** argv) {
     app.add_option("--solve-max-cells", options.solve_max_cells,
                    "largest grid, in cells, of the time-to-tolerance table")
         ->check(CLI::Range(std::uint64_t(1), std::uint64_t(256) * 256 * 256));
+    app.add_flag("--cold-start", options.cold_start,
+                 "step-time table: start every pressure solve from zero (SolverDesc::warm_start = false)");
+    app.add_option("--max-cycles", options.max_cycles, "step-time table: V-cycles per step at most")
+        ->check(CLI::Range(1, 1000));
     app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
     app.add_option("--device", options.device, "Vulkan device index or name substring");
     CLI11_PARSE(app, argc, argv);
@@ -981,6 +1004,8 @@ int main(int argc, char** argv) {
 
     gust::SolverDesc defaults;
     defaults.cell_size = kCellSize;
+    defaults.warm_start = !options.cold_start;
+    defaults.max_cycles = options.max_cycles;
     std::vector<StepRow> steps;
     std::vector<SolveRow> solves;
     for (glm::uvec3 cells : sizes) {

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// One workgroup: sums the per-group partials of cg.comp in a fixed order, then pc.parity 0 sets β (and
-// keeps r·z for the next iteration), 1 sets α.
+// One workgroup: sums the per-group partials of cg.comp (or divergence.comp's warm start) in a fixed
+// order, then pc.parity 0 sets β (and keeps r·z for the next iteration), 1 sets α, 2 the warm start's
+// scale.
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -23,7 +24,9 @@ void main() {
     if (pc.parity == 0u) {
         st.s.cg_beta = cg_beta(total.x, total.y, st.s.cg_rz);
         st.s.cg_rz = total.x;
-    } else {
+    } else if (pc.parity == 1u) {
         st.s.cg_alpha = cg_alpha(st.s.cg_rz, total.x);
+    } else {
+        st.s.warm_scale = warm_scale(total.x, total.y);
     }
 }

@@ -1,8 +1,9 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// One thread after each V-cycle (or block of Jacobi iterations): records the residual and, once it is
-// within tolerance of the divergence before projection, zeroes the live dispatches so the remaining
-// recorded work does nothing.
+// One thread after the solve's start and after each V-cycle (or block of Jacobi iterations): records the
+// residual and, once it is within tolerance of the divergence before projection, zeroes the live
+// dispatches so the remaining recorded work does nothing. The reference is max |b|, not the first
+// residual: a warm start begins with a small residual, and measuring against it would stop short.
 #include "solver_common.glsl"
 
 layout(local_size_x = 1) in;

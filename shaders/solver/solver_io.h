@@ -73,7 +73,7 @@ struct SolverState {
     float cg_rz;                      ///< conjugate gradients: r·z of the last iteration
     float cg_alpha;                   ///< step length along the search direction
     float cg_beta;                    ///< weight of the previous search direction
-    uint pad;
+    float warm_scale;                 ///< s of the warm start x0 = s·φ of the last step (0: from zero)
 };
 
 /// Slots of the dispatch buffer: one per multigrid level, the coarsest solve, then a full copy that
@@ -450,6 +450,16 @@ GUST_INLINE float cg_beta(float rz, float z_dot_old_r, float old_rz) {
 GUST_INLINE float cg_alpha(float rz, float p_dot_lp) {
     float alpha = p_dot_lp != 0.0f ? rz / p_dot_lp : 0.0f;
     return abs(alpha) < 1e30f ? alpha : 0.0f;
+}
+
+/// Scale s of the warm start x0 = s·φ_prev, from b·q and q·q with q = Lφ_prev: the s that minimises
+/// |b − s·q|², so the first residual is never larger (2-norm) than a start from zero gives. It follows a
+/// change of dt (φ = p·dt/ρ) and falls to about 0 when φ_prev belongs to another problem (the first
+/// step from still or uniform air, whose φ sets the flow moving, is then a poor start for the next).
+/// 0 when q vanishes or the quotient is not finite.
+GUST_INLINE float warm_scale(float b_dot_q, float q_dot_q) {
+    float s = q_dot_q > 0.0f ? b_dot_q / q_dot_q : 0.0f;
+    return abs(s) < 1e30f ? s : 0.0f;
 }
 
 GUST_NAMESPACE_END

@@ -51,6 +51,7 @@ struct CpuWind::Impl {
     std::vector<CellBits> fluid;
     std::uint32_t face_mask[6 * kCellWords];
     float last_dt = 0.0f;
+    bool has_guess = false; ///< as WindSolver's: φ may start the next solve
 
     std::size_t faces() const { return std::size_t(shaderio::faces_total(k.dims)); }
     std::size_t cells() const { return std::size_t(k.dims.x) * k.dims.y * k.dims.z; }
@@ -73,6 +74,7 @@ struct CpuWind::Impl {
     void smooth(std::uint32_t l);
     void v_cycle();
     float max_residual();
+    float start_solve(bool warm);
     float conjugate_gradients(float goal, float residual, std::uint32_t& checks);
 };
 
@@ -123,6 +125,7 @@ Status CpuWind::set_emitters(std::span<const Emitter> emitters) {
 Status CpuWind::set_velocity(std::span<const float> faces) {
     if (faces.size() != impl_->faces()) return Status::failure("wrong number of face velocities");
     impl_->k.face[shaderio::kFieldVelocity].assign(faces.begin(), faces.end());
+    impl_->has_guess = false;
     return Status{};
 }
 
@@ -138,6 +141,15 @@ Status CpuWind::scroll(glm::ivec3 cells) {
             inside ? m.k.face[0][std::size_t(shaderio::face_index(m.k.dims, axis, src))] : m.k.ambient[axis];
     });
     m.k.face[0] = std::move(moved);
+    std::vector<float>& phi = m.k.cell[shaderio::kCellPressure];
+    std::vector<float> shifted(m.cells());
+    m.each_cell(m.k.levels[0], [&](int i, glm::ivec3 c) {
+        const glm::ivec3 src = c + cells;
+        shifted[std::size_t(i)] = shaderio::inside_cells(m.k.dims, src)
+                                      ? phi[std::size_t(shaderio::cell_index(m.k.dims, src))]
+                                      : 0.0f;
+    });
+    std::copy(shifted.begin(), shifted.end(), phi.begin());
     m.k.origin += glm::vec3(cells) * m.desc.cell_size;
     return Status{};
 }
@@ -282,9 +294,45 @@ void CpuWind::Impl::v_cycle() {
     }
 }
 
-// The GPU's passes in the GPU's order (wind_solver.cpp), with the dot products summed in double. The
-// residual is recomputed from x each iteration rather than updated: the update drifts from b − Lx in
-// float by more than the tolerance.
+// divergence.comp's passes 2 and 3 over b in kCellTarget and φ: the warm start x0 = s·φ (s fitted by
+// warm_scale, 0 when not warm) and its residual r0 = b − s·Lφ, placed as the solver takes them
+// (conjugate gradients: x0 in x, r0 in rhs, φ = 0; otherwise x0 in φ). Returns max |r0|.
+float CpuWind::Impl::start_solve(bool warm) {
+    using namespace shaderio;
+    std::vector<float>& phi = k.cell[kCellPressure];
+    std::vector<float>& q = k.cell[kCellResidual];
+    const std::vector<float>& b = k.cell[kCellTarget];
+    float s = 0.0f;
+    if (warm) {
+        double bq = 0.0, qq = 0.0;
+        each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+            const float lap = k.laplacian_cell(0, c, kCellPressure);
+            q[std::size_t(i)] = lap;
+            bq += double(b[std::size_t(i)]) * lap;
+            qq += double(lap) * lap;
+        });
+        s = warm_scale(float(bq), float(qq));
+    }
+    const bool pcg = desc.pressure == PressureSolver::MultigridPCG;
+    float worst = 0.0f;
+    for (std::size_t i = 0; i < cells(); ++i) {
+        const float x0 = s != 0.0f ? s * phi[i] : 0.0f;
+        const float r0 = s != 0.0f ? b[i] - s * q[i] : b[i];
+        if (pcg) {
+            k.cell[kCellSolution][i] = x0;
+            k.cell[kCellRhs][i] = r0;
+            phi[i] = 0.0f;
+        } else {
+            phi[i] = x0;
+        }
+        worst = std::max(worst, std::abs(r0));
+    }
+    return worst;
+}
+
+// The GPU's passes in the GPU's order (wind_solver.cpp), with the dot products summed in double, from
+// x, r, b as start_solve left them. The residual is recomputed from x each iteration rather than updated:
+// the update drifts from b − Lx in float by more than the tolerance.
 float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32_t& checks) {
     using namespace shaderio;
     std::vector<float>& z = k.cell[kCellPressure];
@@ -294,10 +342,8 @@ float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32
     std::vector<float>& b = k.cell[kCellTarget];
     std::vector<float>& old_r = k.cell[kCellOldResidual];
     const std::size_t n = cells();
-    std::fill_n(x.begin(), n, 0.0f);
     std::fill_n(p.begin(), n, 0.0f);
     std::fill_n(old_r.begin(), n, 0.0f);
-    std::copy_n(r.begin(), n, b.begin());
     float old_rz = 0.0f;
     for (std::uint32_t it = 0; it < desc.max_cycles && residual > goal; ++it) {
         v_cycle();
@@ -399,7 +445,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         u = k.face[from];
     }
 
-    // Projection, in the GPU's order of passes and checks.
+    // Projection, in the GPU's order of passes and checks. φ still holds the last step's solution.
     std::vector<float>& phi = k.cell[shaderio::kCellPressure];
     std::vector<float>& rhs = k.cell[shaderio::kCellRhs];
     float before = 0.0f;
@@ -408,12 +454,14 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         k.cell_operator(0, c, shaderio::kCellPressure, 0.0f, diag, off);
         const float d = diag > 0.0f ? k.cell_divergence(c) : 0.0f;
         rhs[std::size_t(i)] = d;
-        phi[std::size_t(i)] = 0.0f;
+        k.cell[shaderio::kCellTarget][std::size_t(i)] = d;
         before = std::max(before, std::abs(d));
         if (diag > 0.0f) ++stats.fluid_cells;
     });
+    // The goal is relative to b, not to the first residual: a warm start that begins near the solution
+    // must still reach tolerance · max |b|.
     const float goal = desc.tolerance * before;
-    float residual = before;
+    float residual = m.start_solve(desc.warm_start && m.has_guess);
     std::uint32_t checks = 0;
     bool done = residual <= goal;
     if (!done) ++checks;
@@ -462,6 +510,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     });
     stats.divergence_after = after;
     m.last_dt = dt;
+    m.has_guess = true;
     return stats;
 }
 

@@ -66,6 +66,9 @@ struct WindSolver::Impl {
     gpu::Profiler profiler;
     std::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
+    /// φ holds the last solve of this field's history, so the next solve may start from it (the warm
+    /// start); false before the first step and after set_velocity replaced the field.
+    bool has_guess = false;
     SolverBindings b{};
 };
 
@@ -236,7 +239,9 @@ Status WindSolver::set_velocity(std::span<const float> faces) {
                                std::to_string(faces.size()));
     for (float v : faces)
         if (!std::isfinite(v)) return Status::failure("face velocities must be finite");
-    return upload(ctx_, impl_->velocity, faces.data(), faces.size_bytes());
+    if (Status s = upload(ctx_, impl_->velocity, faces.data(), faces.size_bytes()); !s) return s;
+    impl_->has_guess = false;
+    return Status{};
 }
 
 namespace {
@@ -339,8 +344,10 @@ Status WindSolver::scroll(glm::ivec3 cells) {
         m.scroll.bind(cmd, &push, sizeof(push));
         ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
-        const VkBufferCopy copy{0, 0, face_count() * sizeof(float)};
-        ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &copy);
+        const VkBufferCopy face_bytes{0, 0, face_count() * sizeof(float)};
+        ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &face_bytes);
+        const VkBufferCopy cell_bytes{0, 0, cell_count() * sizeof(float)};
+        ctx_.vk().vkCmdCopyBuffer(cmd, m.pressure_tmp.handle(), m.pressure.handle(), 1, &cell_bytes);
     });
     if (!s) return s;
     origin_ += glm::vec3(cells) * desc_.cell_size;
@@ -378,6 +385,7 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     std::memcpy(m.bindings.mapped(), &b, sizeof(b));
 
     const std::uint32_t levels = levels_;
+    const bool warm = desc_.warm_start && m.has_guess;
     const LevelDispatch face_groups = groups_for(face_count());
     const LevelDispatch cell_groups = groups_for(cell_count());
     SolverPush push{};
@@ -493,6 +501,16 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
         push.level = 0;
         push.parity = 0;
         run(cmd, m.divergence, cell_groups);
+        // The warm start (docs/solver.md): the last step's φ, scaled to fit this step's b, starts the
+        // solve; without it the scale stays 0 (the state was cleared) and the start pass begins from zero.
+        if (warm) {
+            push.parity = 2;
+            run(cmd, m.divergence, cell_groups);
+            run(cmd, m.cg_scalars, {1, 1, 1});
+        }
+        push.parity = 3;
+        push.iterations = desc_.pressure == PressureSolver::MultigridPCG ? 1 : 0;
+        run(cmd, m.divergence, cell_groups);
         run(cmd, m.check, {1, 1, 1});
         if (desc_.pressure == PressureSolver::Multigrid) {
             for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
@@ -543,6 +561,7 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     });
     if (!recorded) return recorded;
     last_dt_ = dt;
+    m.has_guess = true;
 
     SolverState st;
     std::memcpy(&st, m.state.mapped(), sizeof(st));

@@ -227,7 +227,7 @@ static void fills_the_documented_defaults(void) {
     CHECK(desc.domain.cells[0] == 32 && desc.domain.cells[1] == 16 && desc.domain.cells[2] == 32);
     CHECK(desc.domain.cell_size == 1.0f && desc.domain.voxels_per_cell == 4 && desc.domain.branching == 4);
     CHECK(desc.domain.focus.x == 0.0f && desc.domain.focus.y == 0.0f && desc.domain.focus.z == 0.0f);
-    CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 20);
+    CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 32);
     CHECK(desc.wind.vorticity == 0.2f && desc.wind.viscosity == 0.0f);
     CHECK(desc.hooks.user == NULL && desc.hooks.allocate == NULL && desc.hooks.free == NULL &&
           desc.hooks.log == NULL && desc.hooks.assert_failed == NULL);

@@ -119,7 +119,7 @@ struct WindDomain {
 /// Numerics of the wind (defaults suit game wind; docs/solver.md explains each).
 struct WindSettings {
     float tolerance = 1e-5f;       ///< relative residual the pressure solve stops at
-    std::uint32_t max_cycles = 20; ///< V-cycles per step at most
+    std::uint32_t max_cycles = 32; ///< V-cycles per step at most (docs/solver.md: about 48 for 128^3)
     float vorticity = 0.2f;        ///< vorticity confinement ε (0: off)
     float viscosity = 0.0f;        ///< m^2/s (0: off)
 };

@@ -57,12 +57,16 @@ struct SolverDesc {
     PressureSolver pressure = PressureSolver::MultigridPCG;
     /// The solve stops when max |residual| <= tolerance · max |divergence before projection|.
     float tolerance = 1e-5f;
-    std::uint32_t max_cycles = 20;       ///< V-cycles (conjugate-gradient iterations) per step at most
+    /// V-cycles (conjugate-gradient iterations) per step at most; docs/solver.md says why 32.
+    std::uint32_t max_cycles = 32;
     std::uint32_t max_iterations = 4000; ///< Jacobi iterations per step at most
     std::uint32_t smoothing = 2;         ///< Gauss–Seidel sweeps before and after each coarse correction
     float vorticity = 0.2f;              ///< confinement strength ε (0: off)
     float viscosity = 0.0f;              ///< kinematic viscosity, m^2/s (0: off)
     float emitter_response = 0.1f;       ///< seconds for an emitter to close 63% of the gap, > 0
+    /// Start each pressure solve from the last step's pressure, scaled to fit (docs/solver.md); false:
+    /// from zero every step.
+    bool warm_start = true;
 };
 
 /// Where the solid boundary comes from: a tree over a voxel grid of cell_size / voxels_per_cell
@@ -116,13 +120,14 @@ class WindSolver {
     /// Replaces the emitters (at most 64). Rejected whole when any is invalid.
     Status set_emitters(std::span<const Emitter> emitters);
     /// Moves the grid by whole cells (origin += cells · cell_size): overlapping faces keep their
-    /// values, the others take the ambient wind. Blocks.
+    /// values, the others take the ambient wind; the pressure moves alike (new cells 0). Blocks.
     Status scroll(glm::ivec3 cells);
     /// One step of dt seconds (finite, in (0, 10]): solid boundary, advection, emitters, vorticity
     /// confinement, viscosity, projection. Blocks until the GPU is done.
     Result<WindStats> step(float dt, const SolidSource* solid = nullptr);
 
     /// Face velocities (m/s) in the layout of shaders/solver/solver_io.h: x faces, then y, then z.
+    /// The field is replaced, so the next pressure solve starts from zero rather than warm.
     Status set_velocity(std::span<const float> faces);
     Result<std::vector<float>> read_velocity() const;
     /// Open fraction per face (1 open, 0 closed), as of the last step.
