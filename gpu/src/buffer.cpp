@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstring>
 #include <gust/gpu/buffer.hpp>
 #include <utility>
@@ -68,8 +69,12 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
 void Buffer::release() {
     if (!ctx_) return;
     const auto& vk = ctx_->vk();
-    if (buffer_) vk.vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
-    if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, nullptr);
+    if (ctx_->deferred() && buffer_) {
+        ctx_->release_later(buffer_, memory_);
+    } else {
+        if (buffer_) vk.vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
+        if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, nullptr);
+    }
     buffer_ = VK_NULL_HANDLE;
     memory_ = VK_NULL_HANDLE;
     mapped_ = nullptr;
@@ -128,6 +133,15 @@ Status download(Context& ctx, const Buffer& src, void* data, std::size_t bytes, 
     if (!s) return s;
     std::memcpy(data, staging->mapped(), bytes);
     return {};
+}
+
+void update(const Context& ctx, VkCommandBuffer cmd, const Buffer& dst, const void* data, std::size_t bytes,
+            std::size_t offset) {
+    const auto* from = static_cast<const unsigned char*>(data);
+    for (std::size_t done = 0; done < bytes; done += kMaxUpdateBytes) {
+        const std::size_t size = std::min(kMaxUpdateBytes, bytes - done);
+        ctx.vk().vkCmdUpdateBuffer(cmd, dst.handle(), offset + done, size, from + done);
+    }
 }
 
 void barrier(const Context& ctx, VkCommandBuffer cmd) {

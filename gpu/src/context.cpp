@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
+#include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
 
 namespace gust::gpu {
@@ -554,6 +555,7 @@ Context::~Context() {
         // An adopted device is never waited on: that would touch the host's queues, which the host
         // synchronizes, and every gust submission has completed when submit_and_wait returns.
         if (owns_device_) vk_.vkDeviceWaitIdle(device_);
+        retire(UINT64_MAX);
         if (fence_) vk_.vkDestroyFence(device_, fence_, nullptr);
         if (pool_) vk_.vkDestroyCommandPool(device_, pool_, nullptr);
         if (owns_device_) vk_.vkDestroyDevice(device_, nullptr);
@@ -574,6 +576,7 @@ Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& reco
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     vk_.vkBeginCommandBuffer(cmd, &begin);
+    if (!owns_device_) barrier(*this, cmd);
     record(cmd);
     vk_.vkEndCommandBuffer(cmd);
 
@@ -596,6 +599,28 @@ Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& reco
         status = Status::failure(std::string("waiting for the GPU failed: ") + to_string(w));
     vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
     return status;
+}
+
+void Context::begin_frame(std::uint64_t frame) {
+    deferred_ = true;
+    recording_frame_ = frame;
+}
+
+void Context::retire(std::uint64_t completed) {
+    std::size_t kept = 0;
+    for (const Released& r : released_) {
+        if (r.frame > completed) {
+            released_[kept++] = r;
+            continue;
+        }
+        vk_.vkDestroyBuffer(device_, r.buffer, nullptr);
+        vk_.vkFreeMemory(device_, r.memory, nullptr);
+    }
+    released_.resize(kept);
+}
+
+void Context::release_later(VkBuffer buffer, VkDeviceMemory memory) {
+    released_.push_back({recording_frame_, buffer, memory});
 }
 
 std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags required,

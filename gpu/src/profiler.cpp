@@ -18,11 +18,11 @@ Result<Profiler> Profiler::create(Context& ctx, std::uint32_t max_passes) {
 
 void Profiler::reset(VkCommandBuffer cmd) {
     names_.clear();
-    if (pool_) ctx_->vk().vkCmdResetQueryPool(cmd, pool_, 0, 2 * capacity_);
+    if (pool_ && !ctx_->deferred()) ctx_->vk().vkCmdResetQueryPool(cmd, pool_, 0, 2 * capacity_);
 }
 
 void Profiler::begin(VkCommandBuffer cmd, std::string name) {
-    if (!pool_ || names_.size() >= capacity_) return;
+    if (!pool_ || ctx_->deferred() || names_.size() >= capacity_) return;
     ctx_->vk().vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_,
                                     std::uint32_t(2 * names_.size()));
     names_.push_back(std::move(name));

@@ -2,6 +2,7 @@
 #include "tree/tree_io.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 #include <gust/solver/wind_solver.hpp>
@@ -66,6 +67,14 @@ struct WindSolver::Impl {
     gpu::Profiler profiler;
     std::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
+    std::array<shaderio::GpuEmitter, shaderio::kMaxEmitters> emitter_data{}; ///< written by each step
+    /// Records the bindings `b` into their buffer, between barriers (passes earlier in the command buffer
+    /// may still read the old ones).
+    void put_bindings(const gpu::Context& ctx, VkCommandBuffer cmd) const {
+        gpu::barrier(ctx, cmd);
+        gpu::update(ctx, cmd, bindings, &b, sizeof(b));
+        gpu::barrier(ctx, cmd);
+    }
     /// φ holds the last solve of this field's history, so the next solve may start from it (the warm
     /// start); false before the first step and after set_velocity replaced the field.
     bool has_guess = false;
@@ -153,11 +162,11 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_motion, cells * 16, gpu::MemoryUse::Device, 0},
         {&m.vorticity_buf, cells * 16, gpu::MemoryUse::Device, 0},
-        {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), gpu::MemoryUse::Upload, 0},
+        {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), gpu::MemoryUse::Device, 0},
         {&m.state, sizeof(SolverState), gpu::MemoryUse::Readback, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
         {&m.dispatch, 2 * kDispatchSlots * sizeof(LevelDispatch), gpu::MemoryUse::Upload,
          VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
-        {&m.bindings, sizeof(SolverBindings), gpu::MemoryUse::Upload, 0}};
+        {&m.bindings, sizeof(SolverBindings), gpu::MemoryUse::Device, 0}};
     for (const Want& want : wants) {
         auto buffer = gpu::Buffer::create(ctx, want.bytes, want.use, want.usage);
         if (!buffer) return buffer.status();
@@ -226,9 +235,8 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
 
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
-    auto* out = static_cast<shaderio::GpuEmitter*>(impl_->emitters.mapped());
     for (std::size_t i = 0; i < emitters.size(); ++i)
-        out[i] = detail::to_gpu(emitters[i]);
+        impl_->emitter_data[i] = detail::to_gpu(emitters[i]);
     impl_->emitter_count = std::uint32_t(emitters.size());
     return Status{};
 }
@@ -292,70 +300,111 @@ Result<std::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> poi
         }
     }
     std::memcpy(m.points.mapped(), points.data(), bytes);
-    m.b.origin = origin_;
-    m.b.ambient = ambient_;
-    m.b.points = m.points.address();
-    m.b.samples = m.samples.address();
-    m.b.point_count = std::uint32_t(points.size());
-    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
-    SolverPush push{};
-    push.bindings = m.bindings.address();
-    push.parity = 0;
-    const LevelDispatch g = groups_for(points.size());
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        m.sample.bind(cmd, &push, sizeof(push));
-        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+        record_sample(cmd, m.points.address(), m.samples.address(), std::uint32_t(points.size()));
     });
     if (!s) return s;
     std::memcpy(out.data(), m.samples.mapped(), bytes);
     return out;
 }
 
-Status WindSolver::write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then) {
-    if (texels.size() < cell_count() * 8)
-        return Status::failure("texel buffer holds " + std::to_string(texels.size()) + " bytes, needs " +
-                               std::to_string(cell_count() * 8));
+void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDeviceAddress samples,
+                               std::uint32_t count) {
     Impl& m = *impl_;
     m.b.origin = origin_;
-    m.b.texels = texels.address();
-    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
+    m.b.ambient = ambient_;
+    m.b.points = points;
+    m.b.samples = samples;
+    m.b.point_count = count;
+    m.put_bindings(ctx_, cmd);
     SolverPush push{};
     push.bindings = m.bindings.address();
-    push.parity = 1;
-    const LevelDispatch g = groups_for(cell_count());
+    push.parity = 0;
+    const LevelDispatch g = groups_for(count);
+    m.sample.bind(cmd, &push, sizeof(push));
+    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    gpu::barrier(ctx_, cmd);
+}
+
+Status WindSolver::write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then) {
+    if (Status s = check_texels(texels); !s) return s;
     return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        m.sample.bind(cmd, &push, sizeof(push));
-        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx_, cmd);
+        record_texels(cmd, texels);
         if (then) then(cmd);
     });
 }
 
+Status WindSolver::check_texels(const gpu::Buffer& texels) const {
+    if (texels.size() < cell_count() * 8)
+        return Status::failure("texel buffer holds " + std::to_string(texels.size()) + " bytes, needs " +
+                               std::to_string(cell_count() * 8));
+    return Status{};
+}
+
+void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
+    Impl& m = *impl_;
+    m.b.origin = origin_;
+    m.b.texels = texels.address();
+    m.put_bindings(ctx_, cmd);
+    SolverPush push{};
+    push.bindings = m.bindings.address();
+    push.parity = 1;
+    const LevelDispatch g = groups_for(cell_count());
+    m.sample.bind(cmd, &push, sizeof(push));
+    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    gpu::barrier(ctx_, cmd);
+}
+
 Status WindSolver::scroll(glm::ivec3 cells) {
     if (cells == glm::ivec3(0)) return Status{};
+    return ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_scroll(cmd, cells); });
+}
+
+void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
+    if (cells == glm::ivec3(0)) return;
     Impl& m = *impl_;
     m.b.ambient = ambient_;
-    std::memcpy(m.bindings.mapped(), &m.b, sizeof(m.b));
+    m.put_bindings(ctx_, cmd);
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.shift = cells;
     const LevelDispatch g = groups_for(face_count());
-    Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        m.scroll.bind(cmd, &push, sizeof(push));
-        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx_, cmd);
-        const VkBufferCopy face_bytes{0, 0, face_count() * sizeof(float)};
-        ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &face_bytes);
-        const VkBufferCopy cell_bytes{0, 0, cell_count() * sizeof(float)};
-        ctx_.vk().vkCmdCopyBuffer(cmd, m.pressure_tmp.handle(), m.pressure.handle(), 1, &cell_bytes);
-    });
-    if (!s) return s;
+    m.scroll.bind(cmd, &push, sizeof(push));
+    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    gpu::barrier(ctx_, cmd);
+    const VkBufferCopy face_bytes{0, 0, face_count() * sizeof(float)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &face_bytes);
+    const VkBufferCopy cell_bytes{0, 0, cell_count() * sizeof(float)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, m.pressure_tmp.handle(), m.pressure.handle(), 1, &cell_bytes);
+    gpu::barrier(ctx_, cmd);
     origin_ += glm::vec3(cells) * desc_.cell_size;
-    return Status{};
 }
 
 Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     if (Status s = detail::validate_dt(dt); !s) return s;
+    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_passes(cmd, dt, solid); });
+    if (!recorded) return recorded;
+    WindStats stats = stats_from(impl_->state.mapped());
+    stats.ms = impl_->profiler.read();
+    return stats;
+}
+
+Status WindSolver::record_step(VkCommandBuffer cmd, float dt, const SolidSource* solid) {
+    if (Status s = detail::validate_dt(dt); !s) return s;
+    record_passes(cmd, dt, solid);
+    return Status{};
+}
+
+std::size_t WindSolver::readback_bytes() {
+    return sizeof(SolverState);
+}
+
+void WindSolver::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
+    const VkBufferCopy region{0, offset, sizeof(SolverState)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, impl_->state.handle(), dst, 1, &region);
+}
+
+void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource* solid) {
     Impl& m = *impl_;
     const gpu::Dispatch& vk = ctx_.vk();
     SolverBindings& b = m.b;
@@ -382,7 +431,6 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
         b.fragment_motion = solid->fragment_velocities;
         b.fragment_capacity = std::uint32_t(std::min<std::uint64_t>(solid->fragment_capacity, 0xffffffffu));
     }
-    std::memcpy(m.bindings.mapped(), &b, sizeof(b));
 
     const std::uint32_t levels = levels_;
     const bool warm = desc_.warm_start && m.has_guess;
@@ -391,180 +439,182 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.dt = dt;
-    auto run = [&](VkCommandBuffer cmd, const gpu::Pipeline& p, LevelDispatch g) {
+    auto run = [&](const gpu::Pipeline& p, LevelDispatch g) {
         p.bind(cmd, &push, sizeof(push));
         vk.vkCmdDispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     };
-    auto run_slot = [&](VkCommandBuffer cmd, const gpu::Pipeline& p, std::uint32_t slot) {
+    auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
         p.bind(cmd, &push, sizeof(push));
         vk.vkCmdDispatchIndirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
         gpu::barrier(ctx_, cmd);
     };
-    auto copy = [&](VkCommandBuffer cmd, const gpu::Buffer& from, const gpu::Buffer& to) {
+    auto copy = [&](const gpu::Buffer& from, const gpu::Buffer& to) {
         const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
         vk.vkCmdCopyBuffer(cmd, from.handle(), to.handle(), 1, &region);
         gpu::barrier(ctx_, cmd);
     };
-    auto smooth = [&](VkCommandBuffer cmd, std::uint32_t l) {
+    auto smooth = [&](std::uint32_t l) {
         push.level = l;
         for (std::uint32_t s = 0; s < desc_.smoothing; ++s)
             for (std::uint32_t colour = 0; colour < 2; ++colour) {
                 push.parity = colour;
-                run_slot(cmd, m.relax, l);
+                run_slot(m.relax, l);
             }
     };
     // One V-cycle on rhs at level 0, improving φ there (levels below start from 0).
-    auto v_cycle = [&](VkCommandBuffer cmd) {
+    auto v_cycle = [&]() {
         for (std::uint32_t l = 0; l + 1 < levels; ++l) {
-            smooth(cmd, l);
+            smooth(l);
             push.level = l;
             push.parity = 0;
-            run_slot(cmd, m.residual, l);
+            run_slot(m.residual, l);
             push.level = l + 1;
-            run_slot(cmd, m.restrict_, l + 1);
+            run_slot(m.restrict_, l + 1);
         }
         push.level = levels - 1;
         push.iterations = detail::kCoarseSweeps;
-        run_slot(cmd, m.coarse_solve, shaderio::kCoarseSlot);
+        run_slot(m.coarse_solve, shaderio::kCoarseSlot);
         for (std::uint32_t l = levels - 1; l-- > 0;) {
             push.level = l;
-            run_slot(cmd, m.prolong, l);
-            smooth(cmd, l);
+            run_slot(m.prolong, l);
+            smooth(l);
         }
     };
 
-    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        m.profiler.reset(cmd);
-        vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
-        vk.vkCmdFillBuffer(cmd, m.cell_motion.handle(), 0, VK_WHOLE_SIZE, 0);
-        const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0,
-                                 kDispatchSlots * sizeof(LevelDispatch)};
-        vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
-        gpu::barrier(ctx_, cmd);
+    m.profiler.reset(cmd);
+    m.put_bindings(ctx_, cmd);
+    if (m.emitter_count > 0)
+        gpu::update(ctx_, cmd, m.emitters, m.emitter_data.data(),
+                    m.emitter_count * sizeof(shaderio::GpuEmitter));
+    vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
+    vk.vkCmdFillBuffer(cmd, m.cell_motion.handle(), 0, VK_WHOLE_SIZE, 0);
+    const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0,
+                             kDispatchSlots * sizeof(LevelDispatch)};
+    vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
+    gpu::barrier(ctx_, cmd);
 
-        m.profiler.begin(cmd, "solid");
-        run(cmd, m.solid_cells, cell_groups);
-        run(cmd, m.fragment_args, {1, 1, 1});
-        m.solid_motion.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
-        gpu::barrier(ctx_, cmd);
-        run(cmd, m.solid_faces, face_groups);
-        for (std::uint32_t l = 1; l < levels; ++l) {
-            push.level = l;
-            const glm::ivec3 d = m.levels[l].dims;
-            run(cmd, m.coarse_weights, groups_for(std::uint64_t(shaderio::faces_total(d))));
-        }
-        m.profiler.end(cmd);
+    m.profiler.begin(cmd, "solid");
+    run(m.solid_cells, cell_groups);
+    run(m.fragment_args, {1, 1, 1});
+    m.solid_motion.bind(cmd, &push, sizeof(push));
+    vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
+    gpu::barrier(ctx_, cmd);
+    run(m.solid_faces, face_groups);
+    for (std::uint32_t l = 1; l < levels; ++l) {
+        push.level = l;
+        const glm::ivec3 d = m.levels[l].dims;
+        run(m.coarse_weights, groups_for(std::uint64_t(shaderio::faces_total(d))));
+    }
+    m.profiler.end(cmd);
 
-        if (desc_.advection != Advection::None) {
-            m.profiler.begin(cmd, "advect");
-            push.parity = 0;
-            run(cmd, m.advect, face_groups);
-            if (desc_.advection == Advection::MacCormack) {
-                push.parity = 1;
-                run(cmd, m.advect, face_groups);
-                push.parity = 2;
-                run(cmd, m.advect, face_groups);
-            }
-            copy(cmd, m.velocity_tmp, m.velocity);
-            m.profiler.end(cmd);
-        }
-
-        m.profiler.begin(cmd, "forces");
-        push.param = detail::emitter_rate(dt, desc_.emitter_response);
-        run(cmd, m.forces, face_groups);
-        if (desc_.vorticity > 0.0f) {
-            run(cmd, m.vorticity, cell_groups);
-            push.param = desc_.vorticity;
-            run(cmd, m.confine, face_groups);
-            copy(cmd, m.velocity_tmp, m.velocity);
-        }
-        m.profiler.end(cmd);
-
-        if (desc_.viscosity > 0.0f) {
-            m.profiler.begin(cmd, "viscosity");
-            push.param = desc_.viscosity * dt / (desc_.cell_size * desc_.cell_size);
-            std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
-            for (std::uint32_t i = 0; i < detail::kViscosityIterations; ++i) {
-                push.parity = from;
-                push.iterations = to;
-                run(cmd, m.diffuse, face_groups);
-                from = to;
-                to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
-            }
-            copy(cmd, from == shaderio::kFieldTmp ? m.velocity_tmp : m.velocity_back, m.velocity);
-            m.profiler.end(cmd);
-        }
-
-        m.profiler.begin(cmd, "pressure");
-        push.level = 0;
+    if (desc_.advection != Advection::None) {
+        m.profiler.begin(cmd, "advect");
         push.parity = 0;
-        run(cmd, m.divergence, cell_groups);
-        // The warm start (docs/solver.md): the last step's φ, scaled to fit this step's b, starts the
-        // solve; without it the scale stays 0 (the state was cleared) and the start pass begins from zero.
-        if (warm) {
+        run(m.advect, face_groups);
+        if (desc_.advection == Advection::MacCormack) {
+            push.parity = 1;
+            run(m.advect, face_groups);
             push.parity = 2;
-            run(cmd, m.divergence, cell_groups);
-            run(cmd, m.cg_scalars, {1, 1, 1});
+            run(m.advect, face_groups);
         }
-        push.parity = 3;
-        push.iterations = desc_.pressure == PressureSolver::MultigridPCG ? 1 : 0;
-        run(cmd, m.divergence, cell_groups);
-        run(cmd, m.check, {1, 1, 1});
-        if (desc_.pressure == PressureSolver::Multigrid) {
-            for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
-                v_cycle(cmd);
-                push.level = 0;
-                push.parity = 1;
-                run_slot(cmd, m.residual, 0);
-                run(cmd, m.check, {1, 1, 1});
-            }
-        } else if (desc_.pressure == PressureSolver::MultigridPCG) {
-            for (std::uint32_t iteration = 0; iteration < desc_.max_cycles; ++iteration) {
-                v_cycle(cmd);
-                push.level = 0;
-                for (std::uint32_t stage = 0; stage < 5; ++stage) {
-                    push.parity = stage;
-                    run_slot(cmd, m.cg, 0);
-                    if (stage == 0 || stage == 2) {
-                        push.parity = stage / 2;
-                        run_slot(cmd, m.cg_scalars, shaderio::kCoarseSlot);
-                    }
-                }
-                run(cmd, m.check, {1, 1, 1});
-            }
-            const VkBufferCopy solution{0, 0, cell_count() * sizeof(float)};
-            vk.vkCmdCopyBuffer(cmd, m.cg_cells.handle(), m.pressure.handle(), 1, &solution);
-            gpu::barrier(ctx_, cmd);
-        } else {
-            push.level = 0;
-            const std::uint32_t blocks =
-                (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
-            for (std::uint32_t block = 0; block < blocks; ++block) {
-                for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
-                    push.parity = 2 + (i & 1);
-                    run_slot(cmd, m.relax, 0);
-                }
-                push.parity = 1;
-                run_slot(cmd, m.residual, 0);
-                run(cmd, m.check, {1, 1, 1});
-            }
-        }
+        copy(m.velocity_tmp, m.velocity);
         m.profiler.end(cmd);
+    }
 
-        m.profiler.begin(cmd, "project");
-        run(cmd, m.project, face_groups);
-        push.parity = 1;
-        run(cmd, m.divergence, cell_groups);
+    m.profiler.begin(cmd, "forces");
+    push.param = detail::emitter_rate(dt, desc_.emitter_response);
+    run(m.forces, face_groups);
+    if (desc_.vorticity > 0.0f) {
+        run(m.vorticity, cell_groups);
+        push.param = desc_.vorticity;
+        run(m.confine, face_groups);
+        copy(m.velocity_tmp, m.velocity);
+    }
+    m.profiler.end(cmd);
+
+    if (desc_.viscosity > 0.0f) {
+        m.profiler.begin(cmd, "viscosity");
+        push.param = desc_.viscosity * dt / (desc_.cell_size * desc_.cell_size);
+        std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
+        for (std::uint32_t i = 0; i < detail::kViscosityIterations; ++i) {
+            push.parity = from;
+            push.iterations = to;
+            run(m.diffuse, face_groups);
+            from = to;
+            to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
+        }
+        copy(from == shaderio::kFieldTmp ? m.velocity_tmp : m.velocity_back, m.velocity);
         m.profiler.end(cmd);
-    });
-    if (!recorded) return recorded;
+    }
+
+    m.profiler.begin(cmd, "pressure");
+    push.level = 0;
+    push.parity = 0;
+    run(m.divergence, cell_groups);
+    // The warm start (docs/solver.md): the last step's φ, scaled to fit this step's b, starts the
+    // solve; without it the scale stays 0 (the state was cleared) and the start pass begins from zero.
+    if (warm) {
+        push.parity = 2;
+        run(m.divergence, cell_groups);
+        run(m.cg_scalars, {1, 1, 1});
+    }
+    push.parity = 3;
+    push.iterations = desc_.pressure == PressureSolver::MultigridPCG ? 1 : 0;
+    run(m.divergence, cell_groups);
+    run(m.check, {1, 1, 1});
+    if (desc_.pressure == PressureSolver::Multigrid) {
+        for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
+            v_cycle();
+            push.level = 0;
+            push.parity = 1;
+            run_slot(m.residual, 0);
+            run(m.check, {1, 1, 1});
+        }
+    } else if (desc_.pressure == PressureSolver::MultigridPCG) {
+        for (std::uint32_t iteration = 0; iteration < desc_.max_cycles; ++iteration) {
+            v_cycle();
+            push.level = 0;
+            for (std::uint32_t stage = 0; stage < 5; ++stage) {
+                push.parity = stage;
+                run_slot(m.cg, 0);
+                if (stage == 0 || stage == 2) {
+                    push.parity = stage / 2;
+                    run_slot(m.cg_scalars, shaderio::kCoarseSlot);
+                }
+            }
+            run(m.check, {1, 1, 1});
+        }
+        const VkBufferCopy solution{0, 0, cell_count() * sizeof(float)};
+        vk.vkCmdCopyBuffer(cmd, m.cg_cells.handle(), m.pressure.handle(), 1, &solution);
+        gpu::barrier(ctx_, cmd);
+    } else {
+        push.level = 0;
+        const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+        for (std::uint32_t block = 0; block < blocks; ++block) {
+            for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
+                push.parity = 2 + (i & 1);
+                run_slot(m.relax, 0);
+            }
+            push.parity = 1;
+            run_slot(m.residual, 0);
+            run(m.check, {1, 1, 1});
+        }
+    }
+    m.profiler.end(cmd);
+
+    m.profiler.begin(cmd, "project");
+    run(m.project, face_groups);
+    push.parity = 1;
+    run(m.divergence, cell_groups);
+    m.profiler.end(cmd);
     last_dt_ = dt;
     m.has_guess = true;
+}
 
+WindStats WindSolver::stats_from(const void* readback) const {
     SolverState st;
-    std::memcpy(&st, m.state.mapped(), sizeof(st));
+    std::memcpy(&st, readback, sizeof(st));
     WindStats stats;
     stats.divergence_before = from_bits(st.divergence_before);
     stats.divergence_after = from_bits(st.divergence_after);
@@ -578,7 +628,6 @@ Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     stats.cut_cells = st.cut_cells;
     stats.fluid_cells = st.fluid_cells;
     stats.moving_fragments = st.fragments;
-    stats.ms = m.profiler.read();
     return stats;
 }
 

@@ -129,5 +129,105 @@ TEST_F(WorldTest, staticSetIsVoxelizedAgainOnlyWhenItChanges) {
     EXPECT_FALSE((*world)->step({}, 0.0f));
 }
 
+/// Frames in flight: recorded frames are read back `kFrames` frames later. The pools start too small, so
+/// the first frames run out; collect() reports them as truncated and grows the pools, and every frame
+/// recorded after the last truncated one was collected equals a from-scratch voxelization. The context
+/// is the test's own, since begin_frame() switches a context to deferred releases for good.
+TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
+    constexpr std::uint64_t kFrames = 2;
+    gpu::ContextDesc context_desc;
+    context_desc.validation = true;
+    auto context = gpu::Context::create(context_desc);
+    ASSERT_TRUE(context) << context.message();
+    gpu::Context& ctx = **context;
+    auto scene = load_scene(std::string(GUST_ASSETS_DIR) + "/scenes/fox_bunnies.json");
+    ASSERT_TRUE(scene) << scene.message();
+    auto runtime = SceneRuntime::load(*scene);
+    ASSERT_TRUE(runtime) << runtime.message();
+    auto grid = domain_grid(scene->domain);
+    ASSERT_TRUE(grid) << grid.message();
+    WorldDesc desc;
+    desc.grid = *grid;
+    desc.method = VoxelizeMethod::Compute;
+    desc.tree.branching = scene->domain.branching;
+    desc.tree.node_blocks = 8;
+    desc.tree.mask_blocks = 64;
+    auto world = VoxelWorld::create(ctx, desc);
+    ASSERT_TRUE(world) << world.message();
+    auto scratch = Voxelizer::create(ctx);
+    ASSERT_TRUE(scratch);
+    std::vector<GpuMesh> meshes;
+    for (std::size_t i = 0; i < runtime->object_count(); ++i) {
+        auto mesh = (*world)->upload(view_of(runtime->mesh(i)));
+        ASSERT_TRUE(mesh) << mesh.message();
+        meshes.push_back(std::move(*mesh));
+    }
+    std::vector<GpuInstance> statics;
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+        if (scene->objects[i].is_static) statics.push_back({&meshes[i], runtime->model(i, 0.0)});
+    (*world)->set_static(statics);
+
+    std::vector<gpu::Buffer> readbacks;
+    for (std::uint64_t i = 0; i < kFrames; ++i) {
+        auto buffer = gpu::Buffer::create(ctx, VoxelWorld::readback_bytes(), gpu::MemoryUse::Readback);
+        ASSERT_TRUE(buffer);
+        readbacks.push_back(std::move(*buffer));
+    }
+    const std::uint64_t frames = 12;
+    const double stride = 0.25;
+    std::uint64_t whole_from = 0; // frames recorded from here on had every growth
+    std::uint32_t truncated = 0;
+    std::vector<bool> matches;
+    const auto collect = [&](std::uint64_t n) {
+        auto done = (*world)->collect(readbacks[n % kFrames].mapped());
+        ASSERT_TRUE(done) << done.message();
+        EXPECT_EQ(done->frame, n - kFrames);
+        if (done->truncated) {
+            ++truncated;
+            whole_from = n;
+        }
+        ctx.retire(n - kFrames);
+    };
+    for (std::uint64_t n = 0; n < frames; ++n) {
+        if (n >= kFrames) collect(n);
+        ctx.begin_frame(n);
+        const double t = double(n) * stride;
+        std::vector<GpuInstance> dynamic;
+        for (std::size_t i = 0; i < meshes.size(); ++i) {
+            if (scene->objects[i].is_static) continue;
+            if (runtime->deforms(i)) {
+                ASSERT_TRUE((*world)->update_positions(meshes[i], runtime->positions(i, t)));
+            }
+            GpuInstance inst{&meshes[i], runtime->model(i, t)};
+            inst.prev_model = runtime->model(i, t - stride);
+            dynamic.push_back(inst);
+        }
+        Status recorded;
+        ASSERT_TRUE(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+            recorded = (*world)->record(cmd, dynamic, float(stride));
+            gpu::barrier(ctx, cmd);
+            (*world)->record_readback(cmd, readbacks[n % kFrames].handle(), 0);
+        }));
+        ASSERT_TRUE(recorded) << recorded.message();
+        std::vector<GpuInstance> everything = statics;
+        everything.insert(everything.end(), dynamic.begin(), dynamic.end());
+        ASSERT_TRUE((*scratch)->voxelize(everything, *grid, VoxelizeMethod::Compute));
+        std::vector<std::uint32_t> expected = *(*scratch)->read_fragments();
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        const auto leaves = (*world)->tree().leaf_voxels();
+        ASSERT_TRUE(leaves);
+        matches.push_back(*leaves == expected);
+    }
+    for (std::uint64_t n = frames; n < frames + kFrames; ++n)
+        collect(n);
+    EXPECT_GT(truncated, 0u) << "the small pools ran out";
+    EXPECT_FALSE(matches.front()) << "the first frame ran out, so its tree is partial";
+    ASSERT_LE(whole_from + 3, frames) << "at least three frames recorded after the last growth";
+    for (std::uint64_t n = whole_from; n < frames; ++n)
+        EXPECT_TRUE(matches[n]) << "frame " << n << " was recorded after the pools grew";
+    EXPECT_EQ(ctx.validation_messages(), 0u) << ctx.last_validation_message();
+}
+
 } // namespace
 } // namespace gust::test

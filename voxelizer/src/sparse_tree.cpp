@@ -62,9 +62,9 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
             std::to_string(desc.branching) + " in [" + std::to_string(desc.branching) + ", " +
             std::to_string(kMaxRes) + "]");
     if (desc.fragment_shift > 10 || (std::uint64_t(desc.res) << desc.fragment_shift) > kMaxRes)
-        return Result<std::unique_ptr<SparseTree>>::failure("fragment_shift " + std::to_string(desc.fragment_shift) +
-                                                            " puts the fragment grid beyond " +
-                                                            std::to_string(kMaxRes) + " voxels per axis");
+        return Result<std::unique_ptr<SparseTree>>::failure(
+            "fragment_shift " + std::to_string(desc.fragment_shift) + " puts the fragment grid beyond " +
+            std::to_string(kMaxRes) + " voxels per axis");
     if (desc.node_blocks < 1 || desc.mask_blocks < 1)
         return Result<std::unique_ptr<SparseTree>>::failure("pool capacities must be at least one block");
 
@@ -93,7 +93,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     if (!state) return state.status();
     tree->state_ = std::move(*state);
     for (gpu::Buffer* bindings : {&tree->static_bindings_, &tree->dynamic_bindings_}) {
-        auto b = gpu::Buffer::create(ctx, sizeof(TreeBindings), gpu::MemoryUse::Upload);
+        auto b = gpu::Buffer::create(ctx, sizeof(TreeBindings), gpu::MemoryUse::Device);
         if (!b) return b.status();
         *bindings = std::move(*b);
     }
@@ -167,7 +167,8 @@ Status SparseTree::ensure_scratch(std::uint64_t fragments) {
     return {};
 }
 
-Status SparseTree::write_bindings(gpu::Buffer& bindings, const FragmentSource& source) {
+void SparseTree::write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings,
+                                const FragmentSource& source) {
     TreeBindings b{};
     b.state = state_.address();
     b.nodes = nodes_.address();
@@ -190,7 +191,7 @@ Status SparseTree::write_bindings(gpu::Buffer& bindings, const FragmentSource& s
     b.levels = levels_;
     b.hysteresis = hysteresis_;
     b.key_shift = fragment_shift_;
-    return gpu::upload(ctx_, bindings, &b, sizeof(b));
+    gpu::update(ctx_, cmd, bindings, &b, sizeof(b));
 }
 
 void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned) {
@@ -217,60 +218,84 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
     indirect(leaf_, offsetof(TreeState, fragments_dispatch));
 }
 
-Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
+Status SparseTree::prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
     std::uint64_t needed = 0;
     for (const FragmentSource* s : {rebuild_static, dynamic})
         if (s) needed = std::max(needed, s->capacity);
-    if (Status s = ensure_scratch(needed); !s) return s;
-    if (rebuild_static)
-        if (Status s = write_bindings(static_bindings_, *rebuild_static); !s) return s;
-    const FragmentSource none{};
-    if (Status s = write_bindings(dynamic_bindings_, dynamic ? *dynamic : none); !s) return s;
-    ++frame_;
-
-    const auto& vk = ctx_.vk();
-    Status done = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        profiler_.reset(cmd);
-        profiler_.begin(cmd, "tree_begin");
-        if (rebuild_static) {
-            TreeState empty{};
-            empty.node_blocks_used = 1;
-            empty.mask_blocks_used = 1;
-            vk.vkCmdUpdateBuffer(cmd, state_.handle(), 0, sizeof(empty), &empty);
-            vk.vkCmdFillBuffer(cmd, nodes_.handle(), 0, (1ull << (3 * log2_b_)) * sizeof(glm::uvec2), 0);
-            gpu::barrier(ctx_, cmd);
-        }
-        TreePush push{dynamic_bindings_.address(), frame_, 0, 0, 0};
-        begin_.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatch(cmd, 1, 1, 1);
-        gpu::barrier(ctx_, cmd);
-        clear_.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
-        gpu::barrier(ctx_, cmd);
-        profiler_.end(cmd);
-        if (rebuild_static) {
-            profiler_.begin(cmd, "tree_static");
-            record_insert(cmd, static_bindings_, true);
-            profiler_.end(cmd);
-        }
-        if (dynamic) {
-            profiler_.begin(cmd, "tree_dynamic");
-            record_insert(cmd, dynamic_bindings_, false);
-            profiler_.end(cmd);
-        }
-        profiler_.begin(cmd, "tree_coarsen");
-        coarsen_.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
-        gpu::barrier(ctx_, cmd);
-        profiler_.end(cmd);
-    });
-    if (!done) return done;
-    return read_stats();
+    return ensure_scratch(needed);
 }
 
-Result<TreeStats> SparseTree::read_stats() const {
+Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
+    if (Status s = prepare(rebuild_static, dynamic); !s) return s;
+    Status done =
+        ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_passes(cmd, rebuild_static, dynamic); });
+    if (!done) return done;
+    TreeStats stats = stats_from(state_.mapped());
+    stats.ms = profiler_.read();
+    return stats;
+}
+
+Status SparseTree::record_update(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
+                                 const FragmentSource* dynamic) {
+    if (Status s = prepare(rebuild_static, dynamic); !s) return s;
+    record_passes(cmd, rebuild_static, dynamic);
+    return {};
+}
+
+std::size_t SparseTree::readback_bytes() {
+    return sizeof(TreeState);
+}
+
+void SparseTree::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
+    const VkBufferCopy region{0, offset, sizeof(TreeState)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, state_.handle(), dst, 1, &region);
+}
+
+void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
+                               const FragmentSource* dynamic) {
+    const FragmentSource none{};
+    if (rebuild_static) write_bindings(cmd, static_bindings_, *rebuild_static);
+    write_bindings(cmd, dynamic_bindings_, dynamic ? *dynamic : none);
+    ++frame_;
+    const auto& vk = ctx_.vk();
+    profiler_.reset(cmd);
+    profiler_.begin(cmd, "tree_begin");
+    if (rebuild_static) {
+        TreeState empty{};
+        empty.node_blocks_used = 1;
+        empty.mask_blocks_used = 1;
+        vk.vkCmdUpdateBuffer(cmd, state_.handle(), 0, sizeof(empty), &empty);
+        vk.vkCmdFillBuffer(cmd, nodes_.handle(), 0, (1ull << (3 * log2_b_)) * sizeof(glm::uvec2), 0);
+    }
+    gpu::barrier(ctx_, cmd);
+    TreePush push{dynamic_bindings_.address(), frame_, 0, 0, 0};
+    begin_.bind(cmd, &push, sizeof(push));
+    vk.vkCmdDispatch(cmd, 1, 1, 1);
+    gpu::barrier(ctx_, cmd);
+    clear_.bind(cmd, &push, sizeof(push));
+    vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
+    gpu::barrier(ctx_, cmd);
+    profiler_.end(cmd);
+    if (rebuild_static) {
+        profiler_.begin(cmd, "tree_static");
+        record_insert(cmd, static_bindings_, true);
+        profiler_.end(cmd);
+    }
+    if (dynamic) {
+        profiler_.begin(cmd, "tree_dynamic");
+        record_insert(cmd, dynamic_bindings_, false);
+        profiler_.end(cmd);
+    }
+    profiler_.begin(cmd, "tree_coarsen");
+    coarsen_.bind(cmd, &push, sizeof(push));
+    vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
+    gpu::barrier(ctx_, cmd);
+    profiler_.end(cmd);
+}
+
+TreeStats SparseTree::stats_from(const void* readback) const {
     TreeState st{};
-    std::memcpy(&st, state_.mapped(), sizeof(st));
+    std::memcpy(&st, readback, sizeof(st));
     TreeStats out;
     out.frame = frame_;
     const std::uint64_t children = 1ull << (3 * log2_b_);
@@ -294,7 +319,6 @@ Result<TreeStats> SparseTree::read_stats() const {
     out.pool_bytes = live_nodes * children * sizeof(glm::uvec2) + live_masks * stride * sizeof(std::uint32_t);
     out.capacity_bytes = nodes_.size() + masks_.size();
     out.voxels = std::uint64_t(st.static_voxels) + st.dynamic_voxels;
-    out.ms = profiler_.read();
     return out;
 }
 

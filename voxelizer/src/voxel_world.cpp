@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <gust/voxelizer/voxel_world.hpp>
 
 namespace gust {
@@ -21,6 +22,7 @@ void append_ms(std::vector<std::pair<std::string, double>>& out, const std::stri
 Result<std::unique_ptr<VoxelWorld>> VoxelWorld::create(gpu::Context& ctx, const WorldDesc& desc) {
     if (Status s = validate_grid(desc.grid); !s) return s;
     std::unique_ptr<VoxelWorld> world(new VoxelWorld(desc));
+    world->ctx_ = &ctx;
     world->desc_.tree.res = desc.grid.res;
     auto static_voxelizer = Voxelizer::create(ctx);
     if (!static_voxelizer) return static_voxelizer.status();
@@ -88,6 +90,75 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
     out.dynamic_voxelize = *dyn;
     out.tree = *tree;
     ++frame_;
+    return out;
+}
+
+namespace {
+/// Written by record_readback() ahead of the voxelizers' and the tree's counters.
+struct ReadbackHeader {
+    std::uint64_t frame;
+    std::uint32_t static_rebuilt;
+    std::uint32_t unused;
+};
+} // namespace
+
+Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dynamic, float dt) {
+    if (!(dt > 0.0f)) return Status::failure("frame time must be > 0 s, got " + std::to_string(dt));
+    const bool rebuild = static_dirty_;
+    if (rebuild)
+        if (Status s = static_->record(cmd, static_set_, desc_.grid, desc_.method, 0.0f); !s) return s;
+    if (Status s = dynamic_->record(cmd, dynamic, desc_.grid, desc_.method, dt); !s) return s;
+    const FragmentSource static_source{static_->fragment_buffer().address(),
+                                       static_->fragment_count_address(), static_->fragment_capacity()};
+    const FragmentSource dynamic_source{dynamic_->fragment_buffer().address(),
+                                        dynamic_->fragment_count_address(), dynamic_->fragment_capacity()};
+    if (Status s = tree_->record_update(cmd, rebuild ? &static_source : nullptr, &dynamic_source); !s)
+        return s;
+    static_dirty_ = false;
+    recorded_rebuild_ = rebuild;
+    recorded_frame_ = frame_++;
+    return {};
+}
+
+std::size_t VoxelWorld::readback_bytes() {
+    return sizeof(ReadbackHeader) + 2 * Voxelizer::readback_bytes() + SparseTree::readback_bytes();
+}
+
+void VoxelWorld::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
+    const ReadbackHeader header{recorded_frame_, recorded_rebuild_ ? 1u : 0u, 0};
+    ctx_->vk().vkCmdUpdateBuffer(cmd, dst, offset, sizeof(header), &header);
+    offset += sizeof(header);
+    static_->record_readback(cmd, dst, offset);
+    dynamic_->record_readback(cmd, dst, offset + Voxelizer::readback_bytes());
+    tree_->record_readback(cmd, dst, offset + 2 * Voxelizer::readback_bytes());
+}
+
+Result<WorldFrame> VoxelWorld::collect(const void* readback) {
+    const auto* bytes = static_cast<const unsigned char*>(readback);
+    ReadbackHeader header;
+    std::memcpy(&header, bytes, sizeof(header));
+    bytes += sizeof(header);
+    WorldFrame out;
+    out.frame = header.frame;
+    out.static_rebuilt = header.static_rebuilt != 0;
+    // The static counters stay as the last rebuild left them, so they are read every frame.
+    auto fixed = static_->collect(bytes);
+    if (!fixed) return fixed.status();
+    auto moving = dynamic_->collect(bytes + Voxelizer::readback_bytes());
+    if (!moving) return moving.status();
+    out.tree = tree_->stats_from(bytes + 2 * Voxelizer::readback_bytes());
+    out.static_voxelize = *fixed;
+    out.dynamic_voxelize = *moving;
+    // The static counters are new only in a frame that voxelized the static set.
+    if (fixed->truncated && out.static_rebuilt) static_dirty_ = true;
+    // Frames recorded before the pools grew ran out too: they do not grow them again.
+    if (out.tree.exhausted > 0 && out.frame >= pools_grown_for_) {
+        pools_grown_for_ = frame_;
+        if (Status s = tree_->reserve(tree_->node_capacity() * 2, tree_->mask_capacity() * 2); !s) return s;
+        ++out.pool_growths;
+        static_dirty_ = true;
+    }
+    out.truncated = fixed->truncated || moving->truncated || out.tree.exhausted > 0;
     return out;
 }
 

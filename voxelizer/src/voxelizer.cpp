@@ -164,7 +164,7 @@ Status Voxelizer::ensure_velocity_capacity() {
 Status Voxelizer::ensure_instances(std::size_t count) {
     const VkDeviceSize bytes = std::max<std::size_t>(count, 1) * sizeof(VoxelizeInstance);
     if (instances_ && instances_.size() >= bytes) return {};
-    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Upload);
+    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Device);
     if (!buffer) return buffer.status();
     instances_ = std::move(*buffer);
     return {};
@@ -186,18 +186,34 @@ Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> pos
         return Status::failure("got " + std::to_string(positions.size()) + " positions for a mesh of " +
                                std::to_string(mesh.vertices_) + " vertices");
     if (mesh.triangles_ == 0) return {};
-    if (Status s = rotate_positions(mesh); !s) return s;
-    return gpu::upload(ctx_, mesh.positions_, positions.data(), positions.size_bytes());
+    if (!ctx_.deferred()) {
+        if (Status s = rotate_positions(mesh); !s) return s;
+        return gpu::upload(ctx_, mesh.positions_, positions.data(), positions.size_bytes());
+    }
+    // A second pose before the next frame replaces the first: last frame's stay the previous ones.
+    if (!mesh.staged())
+        if (Status s = rotate_positions(mesh); !s) return s;
+    mesh.staged_.assign(positions.begin(), positions.end());
+    mesh.staged_source_ = VK_NULL_HANDLE;
+    return {};
 }
 
 Status Voxelizer::copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset) {
     if (source == VK_NULL_HANDLE) return Status::failure("the source buffer is null");
     if (mesh.triangles_ == 0) return {};
-    if (Status s = rotate_positions(mesh); !s) return s;
-    return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        const VkBufferCopy region{offset, 0, mesh.positions_.size()};
-        ctx_.vk().vkCmdCopyBuffer(cmd, source, mesh.positions_.handle(), 1, &region);
-    });
+    if (!ctx_.deferred()) {
+        if (Status s = rotate_positions(mesh); !s) return s;
+        return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+            const VkBufferCopy region{offset, 0, mesh.positions_.size()};
+            ctx_.vk().vkCmdCopyBuffer(cmd, source, mesh.positions_.handle(), 1, &region);
+        });
+    }
+    if (!mesh.staged())
+        if (Status s = rotate_positions(mesh); !s) return s;
+    mesh.staged_.clear();
+    mesh.staged_source_ = source;
+    mesh.staged_offset_ = offset;
+    return {};
 }
 
 Status Voxelizer::ensure_large_list(std::uint64_t items) {
@@ -251,24 +267,97 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
     return out;
 }
 
-Result<VoxelizeStats> Voxelizer::voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
-                                          VoxelizeMethod method, float dt) {
+Result<std::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuInstance> instances,
+                                                       const GridDesc& grid, VoxelizeMethod method,
+                                                       float dt) {
     if (Status s = validate_grid(grid); !s) return s;
     if (!std::isfinite(dt) || dt < 0.0f)
-        return Result<VoxelizeStats>::failure("frame time must be finite and >= 0, got " +
-                                              std::to_string(dt));
+        return Result<std::vector<VoxelizeMethod>>::failure("frame time must be finite and >= 0, got " +
+                                                            std::to_string(dt));
     inv_dt_ = dt > 0.0f ? 1.0f / dt : 0.0f;
-    if (dt > 0.0f)
-        if (Status s = ensure_velocity_capacity(); !s) return s;
     for (const GpuInstance& inst : instances)
-        if (!inst.mesh) return Result<VoxelizeStats>::failure("an instance has no mesh");
+        if (!inst.mesh) return Result<std::vector<VoxelizeMethod>>::failure("an instance has no mesh");
     if (method == VoxelizeMethod::Auto)
         if (Status s = choose_methods(instances, grid); !s) return s;
     std::vector<VoxelizeMethod> methods;
     for (const GpuInstance& inst : instances)
         methods.push_back(method == VoxelizeMethod::Auto ? inst.mesh->measured_.at(grid.res) : method);
-    auto stats = run(instances, methods, grid);
-    if (stats && !methods.empty()) stats->method = methods.back();
+    return methods;
+}
+
+Result<VoxelizeStats> Voxelizer::voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                          VoxelizeMethod method, float dt) {
+    auto methods = prepare(instances, grid, method, dt);
+    if (!methods) return methods.status();
+    auto stats = run(instances, *methods, grid);
+    if (stats && !methods->empty()) stats->method = methods->back();
+    return stats;
+}
+
+Status Voxelizer::record(VkCommandBuffer cmd, std::span<const GpuInstance> instances, const GridDesc& grid,
+                         VoxelizeMethod method, float dt) {
+    auto methods = prepare(instances, grid, method, dt);
+    if (!methods) return methods.status();
+    std::uint64_t triangles = 0;
+    for (const GpuInstance& inst : instances)
+        triangles += inst.mesh->triangles_;
+    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
+    if (Status s = ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * triangles));
+        !s)
+        return s;
+    if (Status s = ensure_pass(instances.size()); !s) return s;
+    record_pass(cmd, instances, *methods, grid);
+    method_ = methods->empty() ? method_ : methods->back();
+    return {};
+}
+
+namespace {
+/// What record_readback() writes: the counters, then the capacities the pass ran with.
+struct Readback {
+    VoxelizeCounters counters;
+    std::uint32_t capacity;
+    std::uint32_t large_capacity;
+};
+} // namespace
+
+std::size_t Voxelizer::readback_bytes() {
+    return sizeof(Readback);
+}
+
+void Voxelizer::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
+    const VkBufferCopy region{0, offset, sizeof(VoxelizeCounters)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, counters_.handle(), dst, 1, &region);
+    const std::uint32_t capacities[2] = {std::uint32_t(capacity_), std::uint32_t(large_capacity_)};
+    ctx_.vk().vkCmdUpdateBuffer(cmd, dst, offset + offsetof(Readback, capacity), sizeof(capacities),
+                                capacities);
+}
+
+Result<VoxelizeStats> Voxelizer::collect(const void* readback) {
+    Readback r;
+    std::memcpy(&r, readback, sizeof(r));
+    VoxelizeStats stats;
+    stats.method = method_;
+    return take_counters(r.counters, r.capacity, r.large_capacity, stats);
+}
+
+Result<VoxelizeStats> Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t capacity,
+                                               std::uint64_t large_capacity, VoxelizeStats stats) {
+    stats.rejected = counters.rejected;
+    stats.fragments = counters.fragments;
+    if (counters.wrapped)
+        return Result<VoxelizeStats>::failure("the fragment list would pass 2^32 entries (too many "
+                                              "voxels per triangle at this resolution); "
+                                              "lower the resolution or split the scene");
+    stats.truncated = counters.fragments > capacity || counters.large_peak > large_capacity;
+    // Grow with headroom so that a scene growing slowly does not redo every frame.
+    if (counters.fragments > capacity_)
+        if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s)
+            return s;
+    if (counters.large_peak > large_capacity_)
+        if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4); !s)
+            return s;
+    fragment_count_ = std::min<std::uint64_t>(counters.fragments, capacity);
+    stats.capacity = capacity_;
     return stats;
 }
 
@@ -299,6 +388,12 @@ Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const G
     return {};
 }
 
+Status Voxelizer::ensure_pass(std::size_t instances) {
+    if (inv_dt_ > 0.0f)
+        if (Status s = ensure_velocity_capacity(); !s) return s;
+    return ensure_instances(instances);
+}
+
 Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                                      std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
     VoxelizeStats stats;
@@ -311,120 +406,119 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
             ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * stats.triangles));
         !s)
         return s;
-    const glm::mat4 to_grid = world_to_grid(grid);
-    const auto& vk = ctx_.vk();
-
     for (;;) {
-        if (inv_dt_ > 0.0f)
-            if (Status s = ensure_velocity_capacity(); !s) return s;
-        if (Status s = ensure_instances(instances.size()); !s) return s;
-        std::vector<VoxelizeInstance> records(instances.size());
-        for (std::size_t i = 0; i < instances.size(); ++i) {
-            const GpuInstance& inst = instances[i];
-            const GpuMesh& mesh = *inst.mesh;
-            VoxelizeInstance& r = records[i];
-            r.to_grid = to_grid * inst.model;
-            r.model = inst.model;
-            r.prev_model = inst.prev_model.value_or(inst.model);
-            r.positions = mesh.positions_ ? mesh.positions_.address() : 0;
-            r.prev_positions = mesh.prev_positions_ ? mesh.prev_positions_.address() : r.positions;
-            r.indices = mesh.indices_ ? mesh.indices_.address() : 0;
-            r.triangle_count = mesh.triangles_;
-            r.inv_dt = inv_dt_;
-        }
-        if (Status s =
-                gpu::upload(ctx_, instances_, records.data(), records.size() * sizeof(VoxelizeInstance));
-            !s)
-            return s;
-        const std::size_t with_velocity = inv_dt_ > 0.0f ? 1 : 0;
-        VoxelizePush push{};
-        push.velocities = with_velocity ? velocities_.address() : 0;
-        push.fragments = fragments_.address();
-        push.counters = counters_.address();
-        push.large_list = large_list_.address();
-        push.large_capacity = std::uint32_t(large_capacity_);
-        push.res = grid.res;
-        push.capacity = std::uint32_t(capacity_);
-        Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-            profiler_.reset(cmd);
-            vk.vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
-            gpu::barrier(ctx_, cmd);
-            const bool any_raster =
-                std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
-            if (any_raster) {
-                profiler_.begin(cmd, "raster");
-                VkRenderingInfo rendering{VK_STRUCTURE_TYPE_RENDERING_INFO};
-                rendering.renderArea = {{0, 0}, {grid.res, grid.res}};
-                rendering.layerCount = 1;
-                vk.vkCmdBeginRendering(cmd, &rendering);
-                const VkViewport viewport{0.0f, 0.0f, float(grid.res), float(grid.res), 0.0f, 1.0f};
-                const VkRect2D scissor{{0, 0}, {grid.res, grid.res}};
-                vk.vkCmdSetViewport(cmd, 0, 1, &viewport);
-                vk.vkCmdSetScissor(cmd, 0, 1, &scissor);
-                for (std::size_t i = 0; i < instances.size(); ++i) {
-                    const GpuMesh& mesh = *instances[i].mesh;
-                    if (methods[i] != VoxelizeMethod::Raster || mesh.triangles_ == 0) continue;
-                    push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
-                    push.triangle_count = mesh.triangles_;
-                    raster_[with_velocity].bind(cmd, &push, sizeof(push));
-                    vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
-                }
-                vk.vkCmdEndRendering(cmd);
-                profiler_.end(cmd);
-            }
-            bool first_compute = true;
-            for (std::size_t i = 0; i < instances.size(); ++i) {
-                const GpuMesh& mesh = *instances[i].mesh;
-                if (methods[i] != VoxelizeMethod::Compute || mesh.triangles_ == 0) continue;
-                if (first_compute) profiler_.begin(cmd, "compute");
-                first_compute = false;
-                push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
-                // The large-triangle queue is per instance: empty it before each one.
-                vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_items), 4, 0);
-                gpu::barrier(ctx_, cmd);
-                const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
-                for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
-                    push.first_triangle = first;
-                    push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
-                    compute_small_[with_velocity].bind(cmd, &push, sizeof(push));
-                    vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize,
-                                     1, 1);
-                }
-                gpu::barrier(ctx_, cmd);
-                compute_args_.bind(cmd, &push, sizeof(push));
-                vk.vkCmdDispatch(cmd, 1, 1, 1);
-                gpu::barrier(ctx_, cmd);
-                compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
-                vk.vkCmdDispatchIndirect(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_dispatch));
-                gpu::barrier(ctx_, cmd);
-            }
-            if (!first_compute) profiler_.end(cmd);
-        });
+        if (Status s = ensure_pass(instances.size()); !s) return s;
+        const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
+        Status recorded =
+            ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_pass(cmd, instances, methods, grid); });
         if (!recorded) return recorded;
         VoxelizeCounters counters{};
         if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
-        stats.rejected = counters.rejected;
-        stats.fragments = counters.fragments;
         stats.ms = profiler_.read();
-        if (counters.wrapped)
-            return Result<VoxelizeStats>::failure("the fragment list would pass 2^32 entries (too many "
-                                                  "voxels per triangle at this resolution); "
-                                                  "lower the resolution or split the scene");
-        const bool large_overflow = counters.large_peak > large_capacity_;
-        if (counters.fragments <= capacity_ && !large_overflow) break;
-        // Grow with headroom so that a scene growing slowly does not redo every frame.
-        if (counters.fragments > capacity_)
-            if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s)
-                return s;
-        if (large_overflow)
-            if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4);
-                !s)
-                return s;
+        auto taken = take_counters(counters, capacity, large_capacity, stats);
+        if (!taken) return taken.status();
+        stats = *taken;
+        if (!stats.truncated) break;
+        stats.truncated = false;
         ++stats.retries;
     }
-    stats.capacity = capacity_;
-    fragment_count_ = stats.fragments;
     return stats;
+}
+
+void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
+                            std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
+    const glm::mat4 to_grid = world_to_grid(grid);
+    const auto& vk = ctx_.vk();
+    std::vector<VoxelizeInstance> records(instances.size());
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        const GpuInstance& inst = instances[i];
+        const GpuMesh& mesh = *inst.mesh;
+        VoxelizeInstance& r = records[i];
+        r.to_grid = to_grid * inst.model;
+        r.model = inst.model;
+        r.prev_model = inst.prev_model.value_or(inst.model);
+        r.positions = mesh.positions_ ? mesh.positions_.address() : 0;
+        r.prev_positions = mesh.prev_positions_ ? mesh.prev_positions_.address() : r.positions;
+        r.indices = mesh.indices_ ? mesh.indices_.address() : 0;
+        r.triangle_count = mesh.triangles_;
+        r.inv_dt = inv_dt_;
+    }
+    const std::size_t with_velocity = inv_dt_ > 0.0f ? 1 : 0;
+    VoxelizePush push{};
+    push.velocities = with_velocity ? velocities_.address() : 0;
+    push.fragments = fragments_.address();
+    push.counters = counters_.address();
+    push.large_list = large_list_.address();
+    push.large_capacity = std::uint32_t(large_capacity_);
+    push.res = grid.res;
+    push.capacity = std::uint32_t(capacity_);
+
+    profiler_.reset(cmd);
+    for (const GpuInstance& inst : instances) {
+        const GpuMesh& mesh = *inst.mesh;
+        if (!mesh.staged_.empty()) {
+            gpu::update(ctx_, cmd, mesh.positions_, mesh.staged_.data(),
+                        mesh.staged_.size() * sizeof(glm::vec3));
+        } else if (mesh.staged_source_) {
+            const VkBufferCopy region{mesh.staged_offset_, 0, mesh.positions_.size()};
+            vk.vkCmdCopyBuffer(cmd, mesh.staged_source_, mesh.positions_.handle(), 1, &region);
+        }
+        mesh.staged_.clear();
+        mesh.staged_source_ = VK_NULL_HANDLE;
+    }
+    if (!records.empty())
+        gpu::update(ctx_, cmd, instances_, records.data(), records.size() * sizeof(VoxelizeInstance));
+    vk.vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
+    gpu::barrier(ctx_, cmd);
+    const bool any_raster =
+        std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
+    if (any_raster) {
+        profiler_.begin(cmd, "raster");
+        VkRenderingInfo rendering{VK_STRUCTURE_TYPE_RENDERING_INFO};
+        rendering.renderArea = {{0, 0}, {grid.res, grid.res}};
+        rendering.layerCount = 1;
+        vk.vkCmdBeginRendering(cmd, &rendering);
+        const VkViewport viewport{0.0f, 0.0f, float(grid.res), float(grid.res), 0.0f, 1.0f};
+        const VkRect2D scissor{{0, 0}, {grid.res, grid.res}};
+        vk.vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vk.vkCmdSetScissor(cmd, 0, 1, &scissor);
+        for (std::size_t i = 0; i < instances.size(); ++i) {
+            const GpuMesh& mesh = *instances[i].mesh;
+            if (methods[i] != VoxelizeMethod::Raster || mesh.triangles_ == 0) continue;
+            push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
+            push.triangle_count = mesh.triangles_;
+            raster_[with_velocity].bind(cmd, &push, sizeof(push));
+            vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
+        }
+        vk.vkCmdEndRendering(cmd);
+        profiler_.end(cmd);
+    }
+    bool first_compute = true;
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        const GpuMesh& mesh = *instances[i].mesh;
+        if (methods[i] != VoxelizeMethod::Compute || mesh.triangles_ == 0) continue;
+        if (first_compute) profiler_.begin(cmd, "compute");
+        first_compute = false;
+        push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
+        // The large-triangle queue is per instance: empty it before each one.
+        vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_items), 4, 0);
+        gpu::barrier(ctx_, cmd);
+        const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
+        for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
+            push.first_triangle = first;
+            push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
+            compute_small_[with_velocity].bind(cmd, &push, sizeof(push));
+            vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
+        }
+        gpu::barrier(ctx_, cmd);
+        compute_args_.bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatch(cmd, 1, 1, 1);
+        gpu::barrier(ctx_, cmd);
+        compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
+        vk.vkCmdDispatchIndirect(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_dispatch));
+        gpu::barrier(ctx_, cmd);
+    }
+    if (!first_compute) profiler_.end(cmd);
 }
 
 Result<std::vector<std::uint32_t>> Voxelizer::read_fragments() const {

@@ -53,6 +53,14 @@ Status upload(Context& ctx, Buffer& dst, const void* data, std::size_t bytes, st
 /// Copies `bytes` from `src` at `offset` into host memory (blocks).
 Status download(Context& ctx, const Buffer& src, void* data, std::size_t bytes, std::size_t offset = 0);
 
+/// Most bytes one vkCmdUpdateBuffer takes.
+constexpr std::size_t kMaxUpdateBytes = 65536;
+/// Records `bytes` (a multiple of 4) of host data into `dst` at `offset` (a multiple of 4): the data is
+/// copied into the command buffer now, so `data` may change once the call returns. Needs a barrier before
+/// passes read `dst`.
+void update(const Context& ctx, VkCommandBuffer cmd, const Buffer& dst, const void* data, std::size_t bytes,
+            std::size_t offset = 0);
+
 /// Full memory barrier between two recorded passes (compute/graphics/transfer/indirect).
 void barrier(const Context& ctx, VkCommandBuffer cmd);
 

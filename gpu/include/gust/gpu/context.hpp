@@ -142,8 +142,21 @@ class Context {
     std::string last_validation_message() const;
 
     /// Records commands with `record` into a one-time command buffer, submits and waits (holding
-    /// HostDevice::queue_mutex, if given, while submitting).
+    /// HostDevice::queue_mutex, if given, while submitting). On an adopted device the commands start with
+    /// a full barrier, so they run after whatever the host submitted to the queue before.
     Status submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
+
+    /// Frames in flight (work recorded into the host's command buffers, which run later): from the first
+    /// call on, buffers released are kept until retire() says the frames that may use them completed,
+    /// and timestamps are off (a query pool would be reused before it is read). `frame` numbers the frame
+    /// being recorded; buffers released from now on are tagged with it.
+    void begin_frame(std::uint64_t frame);
+    /// Destroys the buffers released while recording frames up to `completed` (which have completed).
+    void retire(std::uint64_t completed);
+    /// True once begin_frame() was called: recorded work may still be pending when a call returns.
+    bool deferred() const { return deferred_; }
+    /// Internal: called by Buffer when it is released while deferred().
+    void release_later(VkBuffer buffer, VkDeviceMemory memory);
 
     /// Index of a memory type allowed by `type_bits` having all of `required` (and as many of
     /// `preferred` as possible); UINT32_MAX if none.
@@ -179,6 +192,14 @@ class Context {
     DeviceInfo info_;
     std::vector<std::string> device_names_;
     MessageCallback on_message_;
+    struct Released {
+        std::uint64_t frame;
+        VkBuffer buffer;
+        VkDeviceMemory memory;
+    };
+    bool deferred_ = false;
+    std::uint64_t recording_frame_ = 0;
+    std::vector<Released> released_;
     std::atomic<std::uint32_t> validation_messages_{0};
     mutable std::mutex message_mutex_;
     std::string last_message_;

@@ -12,7 +12,8 @@ namespace gust::gpu {
 /// Records begin/end timestamps per named pass. One recording at a time; reuse with reset().
 class Profiler {
   public:
-    /// Up to `max_passes` passes per recording. A device without timestamps yields empty results.
+    /// Up to `max_passes` passes per recording. A device without timestamps, or a Context with frames in
+    /// flight (Context::deferred), yields empty results.
     static Result<Profiler> create(Context& ctx, std::uint32_t max_passes = 32);
     Profiler() = default;
     ~Profiler();

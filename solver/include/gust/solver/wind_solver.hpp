@@ -147,6 +147,26 @@ class WindSolver {
     /// (may be empty) into the same submission, after a barrier. Blocks.
     Status write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then);
 
+    // Frames in flight (gpu::Context::begin_frame): the same work recorded into the caller's command
+    // buffer, which runs later. Each starts and ends with a barrier of its own.
+    /// step() recorded; its stats come from record_readback() and stats_from() once the frame completed.
+    Status record_step(VkCommandBuffer cmd, float dt, const SolidSource* solid = nullptr);
+    /// Bytes record_readback() writes.
+    static std::size_t readback_bytes();
+    /// Records a copy of the recorded step's counters into `dst` at `offset`.
+    void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
+    /// The stats of a recorded step from its readback (no pass timings).
+    WindStats stats_from(const void* readback) const;
+    /// scroll() recorded (the origin moves now).
+    void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
+    /// Fails when `texels` is too small for write_texels() or record_texels().
+    Status check_texels(const gpu::Buffer& texels) const;
+    /// write_texels() recorded, without `then` (`texels` checked by check_texels).
+    void record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels);
+    /// sample() recorded: `count` vec3 points at device address `points` (finite), velocities to `samples`.
+    void record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDeviceAddress samples,
+                       std::uint32_t count);
+
     const SolverDesc& desc() const { return desc_; }
     glm::vec3 origin() const { return origin_; }
     glm::vec3 ambient() const { return ambient_; }
@@ -158,6 +178,7 @@ class WindSolver {
 
   private:
     explicit WindSolver(gpu::Context& ctx);
+    void record_passes(VkCommandBuffer cmd, float dt, const SolidSource* solid);
     struct Impl;
     gpu::Context& ctx_;
     SolverDesc desc_;

@@ -63,6 +63,16 @@ class SparseTree {
     /// as static (never coarsened); then `dynamic` fragments (may be null) are inserted, last frame's
     /// dynamic occupancy is replaced, and stale blocks are coarsened. Blocks until the GPU is done.
     Result<TreeStats> update(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
+    /// Frames in flight: records update() into `cmd` without waiting; its stats come from
+    /// record_readback() and stats_from() once the frame completed.
+    Status record_update(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
+                         const FragmentSource* dynamic);
+    /// Bytes record_readback() writes.
+    static std::size_t readback_bytes();
+    /// Records a copy of the tree's counters (after the recorded update) into `dst` at `offset`.
+    void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
+    /// The stats of a recorded update from its readback.
+    TreeStats stats_from(const void* readback) const;
 
     /// Grows the pools (never shrinks); contents are kept. Takes effect from the next update.
     Status reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks);
@@ -89,9 +99,11 @@ class SparseTree {
     explicit SparseTree(gpu::Context& ctx) : ctx_(ctx) {}
     Status allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep);
     Status ensure_scratch(std::uint64_t fragments);
-    Status write_bindings(gpu::Buffer& bindings, const FragmentSource& source);
+    void write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings, const FragmentSource& source);
     void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned);
-    Result<TreeStats> read_stats() const;
+    Status prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
+    void record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
+                       const FragmentSource* dynamic);
 
     gpu::Context& ctx_;
     std::uint32_t log2_b_ = 2;

@@ -27,6 +27,7 @@ struct WorldFrame {
     VoxelizeStats dynamic_voxelize; ///< of this frame's dynamic instances
     TreeStats tree;                 ///< after the update
     std::uint32_t pool_growths = 0; ///< times the pools were grown (and the update redone) this step
+    bool truncated = false;         ///< recorded frame: a list or pool ran out, so its solids are partial
     std::vector<std::pair<std::string, double>> ms; ///< milliseconds per pass (GPU where timed)
 };
 
@@ -58,6 +59,18 @@ class VoxelWorld {
     /// grows its pools and redoes the update when they ran out. Blocks until the GPU is done.
     Result<WorldFrame> step(std::span<const GpuInstance> dynamic, float dt);
 
+    /// Frames in flight (gpu::Context::begin_frame): records step()'s work into `cmd` without waiting.
+    /// Nothing is grown within the frame; collect() does that for later frames.
+    Status record(VkCommandBuffer cmd, std::span<const GpuInstance> dynamic, float dt);
+    /// Bytes record_readback() writes.
+    static std::size_t readback_bytes();
+    /// Records a copy of the recorded frame's counters into `dst` at `offset` (after record()).
+    void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
+    /// What a recorded frame did, from its readback once the frame completed. When a list or pool ran out
+    /// that frame's solids were cut short (`WorldFrame::truncated`); collect() grows it and has the next
+    /// recorded frame voxelize the static set again and rebuild the tree, so later frames are whole.
+    Result<WorldFrame> collect(const void* readback);
+
     const SparseTree& tree() const { return *tree_; }
     /// The dynamic fragment list and its velocities, for the solver.
     const Voxelizer& dynamic_voxelizer() const { return *dynamic_; }
@@ -67,6 +80,7 @@ class VoxelWorld {
   private:
     explicit VoxelWorld(const WorldDesc& desc) : desc_(desc) {}
 
+    gpu::Context* ctx_ = nullptr;
     WorldDesc desc_;
     std::unique_ptr<Voxelizer> static_, dynamic_;
     std::unique_ptr<SparseTree> tree_;
@@ -74,6 +88,9 @@ class VoxelWorld {
     bool static_dirty_ = true;
     VoxelizeStats last_static_;
     std::uint64_t frame_ = 0;
+    std::uint64_t recorded_frame_ = 0;  ///< record(): the frame recorded last
+    bool recorded_rebuild_ = false;     ///< record(): whether it voxelized the static set
+    std::uint64_t pools_grown_for_ = 0; ///< collect(): frames from this one on were recorded with grown pools
 };
 
 } // namespace gust

@@ -16,6 +16,10 @@
 
 namespace gust {
 
+namespace shaderio {
+struct VoxelizeCounters;
+}
+
 /// Which path turns triangles into voxels.
 enum class VoxelizeMethod {
     Raster,  ///< hardware rasterizer: dominant-axis projection, dilation, exact per-voxel test
@@ -42,6 +46,13 @@ class GpuMesh {
     std::uint32_t triangles_ = 0;
     std::uint32_t vertices_ = 0;
     std::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
+    // Frames in flight: positions set since the last recorded frame, written into positions_ by the next
+    // frame's commands (a write now could race the frames still running). Mutable: the positions are
+    // already set; the staging only says when they reach the GPU.
+    mutable std::vector<glm::vec3> staged_;
+    mutable VkBuffer staged_source_ = VK_NULL_HANDLE; ///< or copied from this buffer at staged_offset_
+    mutable VkDeviceSize staged_offset_ = 0;
+    bool staged() const { return !staged_.empty() || staged_source_ != VK_NULL_HANDLE; }
 };
 
 /// One placement of an uploaded mesh.
@@ -67,6 +78,7 @@ struct VoxelizeStats {
     std::uint64_t capacity = 0;                     ///< fragment slots after the call
     VoxelizeMethod method = VoxelizeMethod::Raster; ///< path used (Auto reports the last mesh's choice)
     std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
+    bool truncated = false; ///< recorded pass (frames in flight) overflowed: fragments were cut, list grown
 };
 
 /// Owns the pipelines and the fragment list. One call at a time (thread-compatible).
@@ -87,11 +99,25 @@ class Voxelizer {
                                    VoxelizeMethod method, float dt = 0.0f);
 
     /// Replaces a mesh's vertex positions (a skinned pose) with `positions` (mesh space, one per vertex);
-    /// the previous ones are kept for velocities. Blocks until uploaded.
+    /// the previous ones are kept for velocities. Blocks until uploaded; with frames in flight
+    /// (gpu::Context::deferred) the positions are kept and written by the next recorded pass instead.
     Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions);
     /// The same from a device buffer of the same Context's device holding vertex_count() float3 at
-    /// `offset` (the caller checked its size). Blocks until copied.
+    /// `offset` (the caller checked its size). Blocks until copied; with frames in flight the copy is
+    /// recorded by the next pass, and the buffer must hold the positions when that pass runs.
     Status copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset);
+
+    /// Frames in flight: records one pass of voxelize() into `cmd` without waiting or growing the list
+    /// within the frame. record_readback() copies the pass's counters out; collect() reads them once the
+    /// frame completed and grows the list for later frames if this one overflowed (`truncated`).
+    Status record(VkCommandBuffer cmd, std::span<const GpuInstance> instances, const GridDesc& grid,
+                  VoxelizeMethod method, float dt);
+    /// Bytes record_readback() writes.
+    static std::size_t readback_bytes();
+    /// Records a copy of the last recorded pass's counters and capacities into `dst` at `offset`.
+    void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
+    /// The stats of a recorded pass from its readback; grows the lists it overflowed.
+    Result<VoxelizeStats> collect(const void* readback);
 
     /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
     Result<std::vector<std::uint32_t>> read_fragments() const;
@@ -120,6 +146,17 @@ class Voxelizer {
     Result<VoxelizeStats> run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
                               const GridDesc& grid);
     Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
+    /// Validates a call and picks each instance's path.
+    Result<std::vector<VoxelizeMethod>> prepare(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                                VoxelizeMethod method, float dt);
+    /// Sizes the instance and velocity buffers for a pass over `instances`.
+    Status ensure_pass(std::size_t instances);
+    /// Records one pass (instance records, staged positions, the passes) into `cmd`.
+    void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
+                     std::span<const VoxelizeMethod> methods, const GridDesc& grid);
+    /// Counters into stats; grows what overflowed. `capacity` and `large_capacity` are the pass's.
+    Result<VoxelizeStats> take_counters(const shaderio::VoxelizeCounters& counters, std::uint64_t capacity,
+                                        std::uint64_t large_capacity, VoxelizeStats stats);
 
     gpu::Context& ctx_;
     gpu::Pipeline raster_[2]; ///< [0]: without velocities, [1]: with
@@ -133,6 +170,7 @@ class Voxelizer {
     gpu::Buffer velocities_;
     gpu::Buffer instances_;
     float inv_dt_ = 0.0f;
+    VoxelizeMethod method_ = VoxelizeMethod::Raster; ///< the last recorded pass's (record())
     std::uint64_t large_capacity_ = 0;
     std::uint64_t capacity_ = 0;
     std::uint64_t fragment_count_ = 0;
