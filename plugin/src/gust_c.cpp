@@ -344,12 +344,14 @@ gust_wind_settings to_c(const gust::WindSettings& w) {
 gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice* host_device,
                         gust_hooks& hooks_in_handle) {
     gust::SystemDesc out;
-    auto& [header_version, host, validation, device, submission, voxelize, domain, wind, hooks] = out;
+    auto& [header_version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
+           hooks] = out;
     header_version = c.header_version;
     host = host_device;
     validation = c.validation;
     device = c.device;
     submission = to_cpp_enum<gust::Submission>(c.submission);
+    frames_in_flight = c.frames_in_flight;
     voxelize = to_cpp_enum<gust::VoxelizePath>(c.voxelize);
     domain = to_cpp(c.domain);
     wind = to_cpp(c.wind);
@@ -358,12 +360,14 @@ gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice* host_
 }
 // The defaults: no host device and no hooks, whatever the C++ ones hold.
 gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_version) {
-    const auto& [version, host, validation, device, submission, voxelize, domain, wind, hooks] = d;
+    const auto& [version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
+                 hooks] = d;
     return {.header_version = header_version,
             .host = nullptr,
             .validation = validation,
             .device = device,
             .submission = static_cast<gust_submission>(static_cast<std::int32_t>(submission)),
+            .frames_in_flight = frames_in_flight,
             .voxelize = static_cast<gust_voxelize_path>(static_cast<std::int32_t>(voxelize)),
             .domain = to_c(domain),
             .wind = to_c(wind),
@@ -676,8 +680,9 @@ gust_result gust_system_step(gust_system system, float dt) {
     return on_system(system, "gust_system_step", [&](gust::System& s) { return s.step(dt); });
 }
 
-gust_result gust_system_record(gust_system system, VkCommandBuffer commands) {
-    return on_system(system, "gust_system_record", [&](gust::System& s) { return s.record(commands); });
+gust_result gust_system_step_commands(gust_system system, float dt, VkCommandBuffer commands) {
+    return on_system(system, "gust_system_step_commands",
+                     [&](gust::System& s) { return s.step(dt, commands); });
 }
 
 gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,

@@ -118,6 +118,7 @@ struct System::Impl {
         std::vector<glm::vec3> points;
         std::vector<glm::vec3> answer;
         bool ready = false;
+        bool asked = false; ///< HostCommands: recorded into a frame, answered when it completes
     };
     std::pmr::map<MeshId, Mesh> meshes;
     std::pmr::map<InstanceId, Instance> instances;
@@ -158,7 +159,34 @@ struct System::Impl {
         }
         return m;
     }
+    /// Writes the wind texture from the field (blocking) and publishes its transform.
     Outcome refresh_texture();
+    /// Records the copy of the texels into the texture, leaving it readable by shaders.
+    void record_texture_copy(VkCommandBuffer cmd);
+    /// The texture's transform and frame as of the last step.
+    void publish_texture();
+
+    /// scroll_cells() when the focus moved too far to follow.
+    static constexpr int kTooFar = 1 << 30;
+    /// Whole cells the domain moves this step to follow the focus.
+    glm::ivec3 scroll_cells() const;
+    /// This step's dynamic instances (their last transforms become the previous ones); hands a changed
+    /// static set to the world.
+    std::vector<GpuInstance> frame_instances();
+    /// Stats from a finished frame.
+    void take_stats(const WorldFrame& frame, const WindStats& wind);
+
+    /// HostCommands: per frame in flight, where its counters and async answers come back.
+    struct Slot {
+        gpu::Buffer readback; ///< world counters, solver counters, then answers at answers_offset()
+        gpu::Buffer points;   ///< async query points asked in the frame
+        std::vector<QueryId> asked;
+        bool used = false; ///< a recorded frame's results wait here
+    };
+    std::vector<Slot> slots;
+    static std::size_t answers_offset();
+    /// Reads a completed frame's slot: stats, async answers, growth for later frames.
+    Outcome collect(Slot& slot);
 
     /// The mesh `id`, or null with `error` set.
     Mesh* find_mesh(MeshId id, Outcome& error) {
@@ -267,6 +295,9 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         return invalid("voxelize must be Auto, Raster or Compute");
     if (desc.submission == Submission::HostCommands && !desc.host)
         return invalid("submission HostCommands needs a host device");
+    if (desc.submission == Submission::HostCommands &&
+        (desc.frames_in_flight < 1 || desc.frames_in_flight > 8))
+        return invalid("frames_in_flight must be 1..8, got " + std::to_string(desc.frames_in_flight));
     SolverDesc solver_desc;
     if (Outcome o = solver_desc_from(desc, solver_desc); !o) return o;
     const std::uint32_t b = desc.domain.branching;
@@ -325,6 +356,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         for (int a = 0; a < 3; ++a)
             m.texture.extent[a] = solver_desc.cells[a];
         if (Outcome o = m.refresh_texture(); !o) return o;
+        if (desc.submission == Submission::HostCommands) m.slots.resize(desc.frames_in_flight);
         out = std::move(system);
         return {};
     });
@@ -339,16 +371,22 @@ System::~System() {
 }
 
 Outcome System::Impl::refresh_texture() {
-    Status s = solver->write_texels(texels, [&](VkCommandBuffer cmd) {
-        image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-        image.copy_from(cmd, texels);
-        image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    });
+    Status s = solver->write_texels(texels, [&](VkCommandBuffer cmd) { record_texture_copy(cmd); });
     if (!s) return device_failure(s);
+    publish_texture();
+    return {};
+}
+
+void System::Impl::record_texture_copy(VkCommandBuffer cmd) {
+    image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    image.copy_from(cmd, texels);
+    image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+}
+
+void System::Impl::publish_texture() {
     const glm::mat4 w = world_to_texture();
     std::memcpy(texture.world_to_texture.m, glm::value_ptr(w), sizeof(texture.world_to_texture.m));
     texture.frame = frame;
-    return {};
 }
 
 Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
@@ -482,42 +520,94 @@ Outcome System::set_focus(const Vec3& position) {
     return {};
 }
 
-Outcome System::step(float dt) {
+namespace {
+Outcome check_dt(float dt) {
     if (!std::isfinite(dt) || !(dt > 0.0f) || dt > 10.0f)
         return invalid("dt must be a finite number of seconds in (0, 10], got " + std::to_string(dt));
+    return {};
+}
+} // namespace
+
+glm::ivec3 System::Impl::scroll_cells() const {
+    // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
+    const float h = solver_desc.cell_size;
+    const glm::vec3 wanted = focus - 0.5f * glm::vec3(solver_desc.cells) * h;
+    const glm::vec3 shift = glm::round((wanted - solver->origin()) / h);
+    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f)))) return glm::ivec3(kTooFar);
+    return glm::ivec3(shift);
+}
+
+std::vector<GpuInstance> System::Impl::frame_instances() {
+    // Meshes in use cannot be destroyed, so the static set only changes through the instance calls that
+    // set static_dirty; VoxelWorld::set_static still compares, so a transform set to its old value
+    // voxelizes nothing.
+    if (static_dirty) {
+        std::vector<GpuInstance> fixed;
+        for (const auto& [id, instance] : instances)
+            if (!instance.dynamic)
+                fixed.push_back({&meshes.at(instance.mesh).gpu, instance.model, std::nullopt});
+        world->set_static(std::move(fixed));
+        static_dirty = false;
+    }
+    std::vector<GpuInstance> dynamic;
+    for (auto& [id, instance] : instances)
+        if (instance.dynamic) {
+            dynamic.push_back({&meshes.at(instance.mesh).gpu, instance.model, instance.prev});
+            instance.prev = instance.model;
+        }
+    return dynamic;
+}
+
+void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wind) {
+    FrameStats& st = stats;
+    const TreeStats& tree = world_frame.tree;
+    st.frame = world_frame.frame;
+    st.fragments = world_frame.static_voxelize.fragments + world_frame.dynamic_voxelize.fragments;
+    st.voxels = tree.voxels;
+    st.nodes = tree.nodes;
+    st.refined = tree.refined;
+    st.coarsened = tree.coarsened;
+    st.pool_bytes = tree.pool_bytes;
+    st.fragment_bytes = st.fragments * 4 + world_frame.dynamic_voxelize.fragments * 8;
+    const std::uint64_t res = world->grid().res;
+    st.dense_bytes = res * res * res * 4;
+    st.divergence_before = float(wind.divergence_before);
+    st.divergence_after = float(wind.divergence_after);
+    st.residual = float(wind.residual);
+    st.cycles = wind.cycles;
+    st.converged = wind.converged;
+    st.rejected_triangles =
+        std::uint32_t(world_frame.dynamic_voxelize.rejected +
+                      (world_frame.static_rebuilt ? world_frame.static_voxelize.rejected : 0));
+    st.ms = world_frame.ms;
+    for (const auto& [pass, ms] : wind.ms)
+        st.ms.emplace_back("wind_" + pass, ms);
+    if (world_frame.pool_growths > 0)
+        log(LogLevel::Info,
+            "the voxel tree's pools grew " + std::to_string(world_frame.pool_growths) + " times");
+    if (world_frame.truncated)
+        log(LogLevel::Warning,
+            "frame " + std::to_string(world_frame.frame) +
+                ": a fragment list or tree pool ran out, so its solids were partial; grown "
+                "for the frames recorded from now on");
+}
+
+Outcome System::step(float dt) {
+    if (impl_->submission == Submission::HostCommands)
+        return invalid("with Submission::HostCommands, call step(dt, commands)");
+    if (Outcome o = check_dt(dt); !o) return o;
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
-        // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
-        const float h = m.solver_desc.cell_size;
-        const glm::vec3 wanted = m.focus - 0.5f * glm::vec3(m.solver_desc.cells) * h;
-        const glm::vec3 shift = glm::round((wanted - m.solver->origin()) / h);
-        if (shift != glm::vec3(0.0f)) {
-            if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f))))
-                return invalid("the focus moved more than a million cells in one step");
-            if (Status s = m.solver->scroll(glm::ivec3(shift)); !s) return device_failure(s);
+        const glm::ivec3 shift = m.scroll_cells();
+        if (shift == glm::ivec3(Impl::kTooFar))
+            return invalid("the focus moved more than a million cells in one step");
+        if (shift != glm::ivec3(0)) {
+            if (Status s = m.solver->scroll(shift); !s) return device_failure(s);
             if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
         }
-
-        // Meshes in use cannot be destroyed, so the static set only changes through the instance calls that
-        // set static_dirty; VoxelWorld::set_static still compares, so a transform set to its old value
-        // voxelizes nothing.
-        if (m.static_dirty) {
-            std::vector<GpuInstance> fixed;
-            for (const auto& [id, instance] : m.instances)
-                if (!instance.dynamic)
-                    fixed.push_back({&m.meshes.at(instance.mesh).gpu, instance.model, std::nullopt});
-            m.world->set_static(std::move(fixed));
-            m.static_dirty = false;
-        }
-        std::vector<GpuInstance> dynamic;
-        for (const auto& [id, instance] : m.instances)
-            if (instance.dynamic)
-                dynamic.push_back({&m.meshes.at(instance.mesh).gpu, instance.model, instance.prev});
+        const std::vector<GpuInstance> dynamic = m.frame_instances();
         auto frame = m.world->step(dynamic, dt);
         if (!frame) return device_failure(frame.status());
-        for (auto& [id, instance] : m.instances)
-            instance.prev = instance.model;
-
         const SolidSource solid = solid_source(*m.world);
         auto wind = m.solver->step(dt, &solid);
         if (!wind) return device_failure(wind.status());
@@ -541,53 +631,111 @@ Outcome System::step(float dt) {
             if (Outcome o = m.check(at == answers->size(), "every queued point answered", __LINE__); !o)
                 return o;
         }
-
-        FrameStats& st = m.stats;
-        const TreeStats& tree = frame->tree;
-        st.frame = frame->frame;
-        st.fragments = frame->static_voxelize.fragments + frame->dynamic_voxelize.fragments;
-        st.voxels = tree.voxels;
-        st.nodes = tree.nodes;
-        st.refined = tree.refined;
-        st.coarsened = tree.coarsened;
-        st.pool_bytes = tree.pool_bytes;
-        st.fragment_bytes = st.fragments * 4 + frame->dynamic_voxelize.fragments * 8;
-        const std::uint64_t res = m.world->grid().res;
-        st.dense_bytes = res * res * res * 4;
-        st.divergence_before = float(wind->divergence_before);
-        st.divergence_after = float(wind->divergence_after);
-        st.residual = float(wind->residual);
-        st.cycles = wind->cycles;
-        st.converged = wind->converged;
-        st.rejected_triangles = std::uint32_t(frame->dynamic_voxelize.rejected +
-                                              (frame->static_rebuilt ? frame->static_voxelize.rejected : 0));
-        st.ms = frame->ms;
-        for (const auto& [pass, ms] : wind->ms)
-            st.ms.emplace_back("wind_" + pass, ms);
-        if (frame->pool_growths > 0)
-            m.log(LogLevel::Info,
-                  "the voxel tree's pools grew " + std::to_string(frame->pool_growths) + " times");
+        m.take_stats(*frame, *wind);
         return {};
     });
 }
 
-Outcome System::record(VkCommandBuffer commands) {
-    if (impl_->submission != Submission::HostCommands)
-        return invalid("record() needs Submission::HostCommands");
-    if (commands == VK_NULL_HANDLE) return invalid("commands is null");
-    // gust's own submission wrote the texture and waited on its fence; this makes those writes visible
-    // to the host's shaders in the host's submission order.
-    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-    barrier.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    barrier.dstStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
-                           VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT;
-    barrier.dstAccessMask = VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
-    VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dependency.memoryBarrierCount = 1;
-    dependency.pMemoryBarriers = &barrier;
-    impl_->ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
+std::size_t System::Impl::answers_offset() {
+    const std::size_t counters = VoxelWorld::readback_bytes() + WindSolver::readback_bytes();
+    return (counters + 15) / 16 * 16;
+}
+
+Outcome System::Impl::collect(Slot& slot) {
+    const auto* bytes = static_cast<const unsigned char*>(slot.readback.mapped());
+    auto done = world->collect(bytes);
+    if (!done) return device_failure(done.status());
+    const WindStats wind = solver->stats_from(bytes + VoxelWorld::readback_bytes());
+    const auto* answers = reinterpret_cast<const glm::vec3*>(bytes + answers_offset());
+    std::size_t at = 0;
+    for (QueryId id : slot.asked) {
+        Pending& pending = queries.at(id);
+        pending.answer.assign(answers + at, answers + at + pending.points.size());
+        pending.ready = true;
+        at += pending.points.size();
+    }
+    slot.asked.clear();
+    slot.used = false;
+    take_stats(*done, wind);
     return {};
+}
+
+Outcome System::step(float dt, VkCommandBuffer commands) {
+    if (impl_->submission != Submission::HostCommands)
+        return invalid("step(dt, commands) needs Submission::HostCommands");
+    if (commands == VK_NULL_HANDLE) return invalid("commands is null");
+    if (Outcome o = check_dt(dt); !o) return o;
+    return guarded([&]() -> Outcome {
+        Impl& m = *impl_;
+        const glm::ivec3 shift = m.scroll_cells();
+        if (shift == glm::ivec3(Impl::kTooFar))
+            return invalid("the focus moved more than a million cells in one step");
+        // The frame contract: the frame that last used this slot has completed, and so have those before.
+        const std::uint64_t n = m.frame;
+        Impl::Slot& slot = m.slots[n % m.slots.size()];
+        if (slot.used)
+            if (Outcome o = m.collect(slot); !o) return o;
+        if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
+        m.ctx->begin_frame(n);
+
+        std::vector<glm::vec3> points;
+        for (auto& [id, pending] : m.queries)
+            if (!pending.asked) {
+                points.insert(points.end(), pending.points.begin(), pending.points.end());
+                pending.asked = true;
+                slot.asked.push_back(id);
+            }
+        const std::size_t readback =
+            Impl::answers_offset() + std::max<std::size_t>(points.size(), 1) * sizeof(glm::vec3);
+        if (!slot.readback || slot.readback.size() < readback) {
+            auto grown = gpu::Buffer::create(*m.ctx, readback, gpu::MemoryUse::Readback);
+            if (!grown) return device_failure(grown.status());
+            slot.readback = std::move(*grown);
+        }
+        if (!points.empty() && slot.points.size() < points.size() * sizeof(glm::vec3)) {
+            auto grown =
+                gpu::Buffer::create(*m.ctx, points.size() * sizeof(glm::vec3), gpu::MemoryUse::Upload);
+            if (!grown) return device_failure(grown.status());
+            slot.points = std::move(*grown);
+        }
+
+        // Whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
+        // comes before this frame's work.
+        gpu::barrier(*m.ctx, commands);
+        if (shift != glm::ivec3(0)) {
+            m.solver->record_scroll(commands, shift);
+            if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
+        }
+        const std::vector<GpuInstance> dynamic = m.frame_instances();
+        if (Status s = m.world->record(commands, dynamic, dt); !s) return device_failure(s);
+        const SolidSource solid = solid_source(*m.world);
+        if (Status s = m.solver->record_step(commands, dt, &solid); !s) return device_failure(s);
+        m.solver->record_texels(commands, m.texels);
+        m.record_texture_copy(commands);
+        if (!points.empty()) {
+            std::memcpy(slot.points.mapped(), points.data(), points.size() * sizeof(glm::vec3));
+            m.solver->record_sample(commands, slot.points.address(),
+                                    slot.readback.address() + Impl::answers_offset(),
+                                    std::uint32_t(points.size()));
+        }
+        m.world->record_readback(commands, slot.readback.handle(), 0);
+        m.solver->record_readback(commands, slot.readback.handle(), VoxelWorld::readback_bytes());
+        // The readback copies reach the host once the frame completes; the host's later commands (its
+        // shaders sampling the wind texture) see every write of this frame.
+        VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+        barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+        barrier.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
+        barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_2_HOST_BIT;
+        barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT;
+        VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+        dependency.memoryBarrierCount = 1;
+        dependency.pMemoryBarriers = &barrier;
+        m.ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
+        slot.used = true;
+        ++m.frame;
+        m.publish_texture();
+        return {};
+    });
 }
 
 namespace {

@@ -106,6 +106,7 @@ HostVulkan::HostVulkan() {
                                       "vkGetDeviceQueue")(host_.device, host_.queue_family, 0, &queue_);
     VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool.queueFamilyIndex = host_.queue_family;
+    pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT; // frame() re-records its buffers
     load_device<PFN_vkCreateCommandPool>(gipa, instance, host_.device,
                                          "vkCreateCommandPool")(host_.device, &pool, nullptr, &pool_);
 }
@@ -139,9 +140,76 @@ bool HostVulkan::run(void (*record)(VkCommandBuffer, void*), void* user) {
     return ok;
 }
 
+bool HostVulkan::start_frames(std::uint32_t count) {
+    auto gipa = host_.get_instance_proc_addr;
+    VkInstance instance = host_.instance;
+    VkDevice device = host_.device;
+    if (!frame_commands_.empty() || count < 1 || count > 8) return false;
+    frame_commands_.resize(count);
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = pool_;
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = count;
+    if (load_device<PFN_vkAllocateCommandBuffers>(gipa, instance, device, "vkAllocateCommandBuffers")(
+            device, &alloc, frame_commands_.data()) != VK_SUCCESS)
+        return false;
+    VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    fence.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+    frame_fences_.resize(count);
+    for (VkFence& f : frame_fences_)
+        if (load_device<PFN_vkCreateFence>(gipa, instance, device, "vkCreateFence")(device, &fence, nullptr,
+                                                                                    &f) != VK_SUCCESS)
+            return false;
+    return true;
+}
+
+VkCommandBuffer HostVulkan::begin_frame() {
+    auto gipa = host_.get_instance_proc_addr;
+    VkInstance instance = host_.instance;
+    VkDevice device = host_.device;
+    if (frame_commands_.empty()) return VK_NULL_HANDLE;
+    const std::size_t slot = frames_ % frame_commands_.size();
+    VkFence fence = frame_fences_[slot];
+    VkCommandBuffer cmd = frame_commands_[slot];
+    if (load_device<PFN_vkWaitForFences>(gipa, instance, device, "vkWaitForFences")(
+            device, 1, &fence, VK_TRUE, UINT64_MAX) != VK_SUCCESS)
+        return VK_NULL_HANDLE;
+    load_device<PFN_vkResetFences>(gipa, instance, device, "vkResetFences")(device, 1, &fence);
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    load_device<PFN_vkBeginCommandBuffer>(gipa, instance, device, "vkBeginCommandBuffer")(cmd, &begin);
+    return cmd;
+}
+
+bool HostVulkan::submit_frame() {
+    auto gipa = host_.get_instance_proc_addr;
+    VkInstance instance = host_.instance;
+    VkDevice device = host_.device;
+    const std::size_t slot = frames_++ % frame_commands_.size();
+    VkCommandBuffer cmd = frame_commands_[slot];
+    load_device<PFN_vkEndCommandBuffer>(gipa, instance, device, "vkEndCommandBuffer")(cmd);
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    return load_device<PFN_vkQueueSubmit>(gipa, instance, device, "vkQueueSubmit")(
+               queue_, 1, &submit, frame_fences_[slot]) == VK_SUCCESS;
+}
+
+bool HostVulkan::finish_frames() {
+    auto gipa = host_.get_instance_proc_addr;
+    if (frame_fences_.empty()) return true;
+    return load_device<PFN_vkWaitForFences>(gipa, host_.instance, host_.device, "vkWaitForFences")(
+               host_.device, std::uint32_t(frame_fences_.size()), frame_fences_.data(), VK_TRUE,
+               UINT64_MAX) == VK_SUCCESS;
+}
+
 HostVulkan::~HostVulkan() {
     auto gipa = host_.get_instance_proc_addr;
     if (host_.device) {
+        finish_frames();
+        for (VkFence f : frame_fences_)
+            load_device<PFN_vkDestroyFence>(gipa, host_.instance, host_.device,
+                                            "vkDestroyFence")(host_.device, f, nullptr);
         if (pool_)
             load_device<PFN_vkDestroyCommandPool>(gipa, host_.instance, host_.device,
                                                   "vkDestroyCommandPool")(host_.device, pool_, nullptr);

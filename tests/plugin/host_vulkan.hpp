@@ -5,6 +5,7 @@
 #include <atomic>
 #include <gust/gust.hpp>
 #include <string>
+#include <vector>
 
 namespace gust::test {
 
@@ -24,6 +25,14 @@ class HostVulkan {
     int messages() const { return messages_.load(); }
     /// Records `record` into a command buffer of the host's own pool, submits it and waits.
     bool run(void (*record)(VkCommandBuffer, void*), void* user);
+    /// An engine's frame loop with `count` frames in flight (1..8): begin_frame() waits for the command
+    /// buffer it began `count` calls ago and begins it again (null on failure); submit_frame() ends and
+    /// submits it without waiting.
+    bool start_frames(std::uint32_t count);
+    VkCommandBuffer begin_frame();
+    bool submit_frame();
+    /// Waits for every submitted frame.
+    bool finish_frames();
 
   private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
@@ -34,6 +43,9 @@ class HostVulkan {
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
     VkQueue queue_ = VK_NULL_HANDLE;
     VkCommandPool pool_ = VK_NULL_HANDLE;
+    std::vector<VkCommandBuffer> frame_commands_;
+    std::vector<VkFence> frame_fences_;
+    std::uint64_t frames_ = 0;
     std::atomic<int> messages_{0};
     std::string error_;
 };

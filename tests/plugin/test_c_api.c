@@ -223,7 +223,8 @@ static void fills_the_documented_defaults(void) {
     CHECK_FREE_RESULT(gust_system_desc_defaults(&desc), GUST_OK);
     CHECK(desc.header_version == GUST_HEADER_VERSION);
     CHECK(desc.host == NULL && desc.device == NULL && !desc.validation);
-    CHECK(desc.submission == GUST_SUBMISSION_OWN_QUEUE && desc.voxelize == GUST_VOXELIZE_AUTO);
+    CHECK(desc.submission == GUST_SUBMISSION_OWN_QUEUE && desc.frames_in_flight == 2 &&
+          desc.voxelize == GUST_VOXELIZE_AUTO);
     CHECK(desc.domain.cells[0] == 32 && desc.domain.cells[1] == 16 && desc.domain.cells[2] == 32);
     CHECK(desc.domain.cell_size == 1.0f && desc.domain.voxels_per_cell == 4 && desc.domain.branching == 4);
     CHECK(desc.domain.focus.x == 0.0f && desc.domain.focus.y == 0.0f && desc.domain.focus.z == 0.0f);
@@ -398,7 +399,8 @@ static void rejects_bad_frame_inputs(gust_system system) {
     CHECK_RESULT(system, gust_system_set_emitters(system, NULL, 0), GUST_OK);
 
     /* Own queue: there is nothing to record into a host's command buffer. */
-    CHECK_RESULT(system, gust_system_record(system, VK_NULL_HANDLE), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_step_commands(system, 0.05f, VK_NULL_HANDLE),
+                 GUST_ERROR_INVALID_ARGUMENT);
 }
 
 static void rejects_bad_queries(gust_system system) {
@@ -871,8 +873,9 @@ static void host_buffer_destroy(host_engine* host, host_buffer* buffer) {
     HOST_LOAD(host, vkFreeMemory)(host->device, buffer->memory, NULL);
 }
 
-/* Records gust_system_record into a one-time command buffer and runs it on the host's queue. */
-static void host_record_and_submit(host_engine* host, gust_system system) {
+/* Records one gust_system_step_commands into a one-time command buffer and runs it on the host's queue,
+ * waiting for it: one frame in flight. */
+static void host_step(host_engine* host, gust_system system) {
     VkCommandPoolCreateInfo pool_info = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool_info.queueFamilyIndex = host->queue_family;
     VkCommandPool pool = VK_NULL_HANDLE;
@@ -886,7 +889,7 @@ static void host_record_and_submit(host_engine* host, gust_system system) {
     VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     CHECK(HOST_LOAD(host, vkBeginCommandBuffer)(commands, &begin) == VK_SUCCESS);
-    CHECK_RESULT(system, gust_system_record(system, commands), GUST_OK);
+    CHECK_RESULT(system, gust_system_step_commands(system, 0.05f, commands), GUST_OK);
     CHECK(HOST_LOAD(host, vkEndCommandBuffer)(commands) == VK_SUCCESS);
     VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
     submit.commandBufferCount = 1;
@@ -917,6 +920,7 @@ static void runs_on_a_host_device_with_host_commands(void) {
                                      0};
     desc.host = &device;
     desc.submission = GUST_SUBMISSION_HOST_COMMANDS;
+    desc.frames_in_flight = 1;
     gust_system system = NULL;
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
     if (system) {
@@ -932,7 +936,10 @@ static void runs_on_a_host_device_with_host_commands(void) {
         CHECK_RESULT(system, gust_system_create_instance(system, skinned, transform, true, &instance),
                      GUST_OK);
         CHECK_RESULT(system, gust_system_set_ambient(system, kAmbient), GUST_OK);
-        CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+        CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_ERROR_INVALID_ARGUMENT);
+        /* With one frame in flight, a step's stats are those of the frame recorded by the step before. */
+        host_step(&host, system);
+        host_step(&host, system);
         gust_frame_stats before;
         CHECK_RESULT(system, gust_system_stats(system, &before), GUST_OK);
 
@@ -947,15 +954,16 @@ static void runs_on_a_host_device_with_host_commands(void) {
                      GUST_ERROR_INVALID_ARGUMENT);
         CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 8),
                      GUST_OK);
-        CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+        host_step(&host, system);
+        host_step(&host, system);
         gust_frame_stats after;
         CHECK_RESULT(system, gust_system_stats(system, &after), GUST_OK);
         /* As in simulates_a_small_world: (n + 2)^3 - (n - 2)^3 voxels for n = 8, then n = 16. */
         CHECK(before.voxels == 10 * 10 * 10 - 6 * 6 * 6);
         CHECK(after.voxels == 18 * 18 * 18 - 14 * 14 * 14);
 
-        host_record_and_submit(&host, system);
-        CHECK_RESULT(system, gust_system_record(system, VK_NULL_HANDLE), GUST_ERROR_INVALID_ARGUMENT);
+        CHECK_RESULT(system, gust_system_step_commands(system, 0.05f, VK_NULL_HANDLE),
+                     GUST_ERROR_INVALID_ARGUMENT);
         gust_vec3 outside = vec3(100.0f, 4.0f, 0.0f), velocity;
         CHECK_RESULT(system, gust_system_query(system, &outside, 1, &velocity), GUST_OK);
         CHECK(equal3(velocity, kAmbient));

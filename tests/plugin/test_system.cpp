@@ -230,7 +230,7 @@ TEST_F(SystemTest, rejectsBadTimeStepsPointsAndEmittersAndKeepsWorking) {
     EXPECT_EQ(system_->set_emitters({&bad, 1}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->set_ambient({kNaN, 0, 0}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->set_focus({0, kNaN, 0}).code(), ErrorCode::InvalidArgument);
-    EXPECT_EQ(system_->record(VK_NULL_HANDLE).code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(system_->step(0.05f, VK_NULL_HANDLE).code(), ErrorCode::InvalidArgument) << "own-queue system";
     EXPECT_EQ(system_->export_vdb(nullptr).code(), ErrorCode::InvalidArgument);
     ASSERT_TRUE(system_->step(0.05f));
 }
@@ -256,6 +256,15 @@ TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {
     desc = small_desc(watch);
     desc.submission = Submission::HostCommands;
     EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument) << "host commands need a host";
+    for (std::uint32_t frames : {0u, 9u}) {
+        HostVulkan host;
+        ASSERT_TRUE(host.ok()) << host.error();
+        desc = small_desc(watch);
+        desc.host = &host.device();
+        desc.submission = Submission::HostCommands;
+        desc.frames_in_flight = frames;
+        EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument) << frames << " in flight";
+    }
     desc = small_desc(watch);
     desc.device = "no such device";
     EXPECT_EQ(System::create(desc, system).code(), ErrorCode::DeviceUnsupported);
@@ -264,13 +273,14 @@ TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {
     EXPECT_EQ(library_version(), kHeaderVersion);
 }
 
-/// The same scene on gust's own device, on a device the test creates as a host, and with the host's
-/// command buffer: the same wind.
+/// The same scene on gust's own device, on a device the test creates as a host, and recorded into the
+/// host's command buffers with two frames in flight: the same wind.
 TEST(SystemHostDevice, givesTheSameWindAsItsOwnDeviceInBothSubmissionModes) {
     const Vec3 points[] = {{-5.5f, 2.0f, 0.0f}, {-3.0f, 2.0f, 2.2f}, {3.0f, 3.5f, 1.0f}, {0.0f, 6.0f, -4.0f}};
     Vec3 wind[3][4];
     HostVulkan host;
     ASSERT_TRUE(host.ok()) << host.error();
+    ASSERT_TRUE(host.start_frames(2));
     for (int mode = 0; mode < 3; ++mode) {
         Watch watch;
         SystemDesc desc = small_desc(watch);
@@ -289,13 +299,19 @@ TEST(SystemHostDevice, givesTheSameWindAsItsOwnDeviceInBothSubmissionModes) {
         ASSERT_TRUE(system->set_ambient({3.0f, 0.0f, 0.0f}));
         for (int f = 0; f < 4; ++f) {
             ASSERT_TRUE(system->set_transform(moving, translation(3.0f, 2.0f, 0.5f * float(f))));
-            ASSERT_TRUE(system->step(0.05f));
-            if (mode == 2) {
-                System* s = system.get();
-                ASSERT_TRUE(host.run(
-                    [](VkCommandBuffer cmd, void* user) { static_cast<System*>(user)->record(cmd); }, s));
+            if (mode < 2) {
+                ASSERT_TRUE(system->step(0.05f));
+                continue;
             }
+            EXPECT_EQ(system->step(0.05f).code(), ErrorCode::InvalidArgument)
+                << "host commands: step(dt, commands)";
+            VkCommandBuffer commands = host.begin_frame();
+            ASSERT_NE(commands, VK_NULL_HANDLE);
+            const Outcome stepped = system->step(0.05f, commands);
+            ASSERT_TRUE(host.submit_frame());
+            ASSERT_TRUE(stepped) << stepped.message();
         }
+        ASSERT_TRUE(host.finish_frames());
         ASSERT_TRUE(system->query(points, wind[mode]));
         system.reset();
         EXPECT_EQ(watch.errors, 0) << watch.last;
@@ -307,6 +323,103 @@ TEST(SystemHostDevice, givesTheSameWindAsItsOwnDeviceInBothSubmissionModes) {
             EXPECT_NEAR(wind[mode][i].z, wind[0][i].z, 1e-4f) << "mode " << mode << " point " << i;
         }
     EXPECT_EQ(host.messages(), 0);
+}
+
+/// A System recording into a host's frames, `frames` in flight.
+class HostFrames : public ::testing::Test {
+  protected:
+    void start(std::uint32_t frames) {
+        ASSERT_TRUE(host_.ok()) << host_.error();
+        ASSERT_TRUE(host_.start_frames(frames));
+        SystemDesc desc = small_desc(watch_);
+        desc.voxelize = VoxelizePath::Compute;
+        desc.host = &host_.device();
+        desc.submission = Submission::HostCommands;
+        desc.frames_in_flight = frames;
+        const Outcome created = System::create(desc, system_);
+        ASSERT_TRUE(created) << created.message();
+    }
+    /// Records one step into the next host frame and submits it.
+    void frame() {
+        VkCommandBuffer commands = host_.begin_frame();
+        ASSERT_NE(commands, VK_NULL_HANDLE);
+        const Outcome stepped = system_->step(0.05f, commands);
+        ASSERT_TRUE(host_.submit_frame());
+        ASSERT_TRUE(stepped) << stepped.message();
+    }
+    void TearDown() override {
+        EXPECT_TRUE(host_.finish_frames());
+        system_.reset();
+        EXPECT_EQ(watch_.errors, 0) << watch_.last;
+        EXPECT_EQ(host_.messages(), 0);
+    }
+
+    HostVulkan host_;
+    Watch watch_;
+    std::unique_ptr<System> system_;
+};
+
+TEST_F(HostFrames, statsAndAsyncAnswersArriveFramesInFlightStepsLater) {
+    const std::uint32_t frames = 3;
+    start(frames);
+    Box box(1.0f);
+    MeshId mesh = 0;
+    InstanceId instance = 0;
+    ASSERT_TRUE(system_->create_mesh(box.desc(), mesh));
+    ASSERT_TRUE(system_->create_instance(mesh, translation(0.0f, 2.0f, 0.0f), true, instance));
+    const Vec3 ambient{2.0f, 0.0f, 1.0f};
+    ASSERT_TRUE(system_->set_ambient(ambient));
+    const Vec3 points[] = {{500.0f, 0.0f, 0.0f}, {-4.0f, 2.0f, 0.0f}};
+    QueryId id = 0;
+    ASSERT_TRUE(system_->query_async(points, id));
+    Vec3 answer[2];
+    for (std::uint32_t step = 0; step < frames + 2; ++step) {
+        frame();
+        if (step < frames) {
+            EXPECT_EQ(system_->fetch(id, answer).code(), ErrorCode::NotReady) << "after step " << step;
+            EXPECT_EQ(system_->stats().voxels, 0u) << "no frame has completed by step " << step;
+        } else {
+            EXPECT_EQ(system_->stats().frame, step - frames)
+                << "the frame recorded " << frames << " steps ago";
+            EXPECT_GT(system_->stats().voxels, 0u);
+        }
+        if (step == frames) {
+            ASSERT_TRUE(system_->fetch(id, answer));
+            EXPECT_EQ(answer[0].x, ambient.x);
+            EXPECT_EQ(answer[0].z, ambient.z);
+            EXPECT_TRUE(std::isfinite(answer[1].x) && std::isfinite(answer[1].y) &&
+                        std::isfinite(answer[1].z));
+            EXPECT_GT(answer[1].x, 0.5f) << "the ambient wind blows through the domain";
+        }
+    }
+}
+
+/// Vertices staged for a frame are recorded into it by handle; the mesh is destroyed while that frame
+/// still waits for submission. Without retiring by frame index, the submission would name a destroyed
+/// buffer (the validation layer's error fails the test).
+TEST_F(HostFrames, keepWhatARecordedFrameUsesUntilItCompletes) {
+    start(2);
+    Box box(1.0f);
+    MeshDesc deforming = box.desc();
+    deforming.deforming = true;
+    MeshId mesh = 0;
+    InstanceId instance = 0;
+    ASSERT_TRUE(system_->create_mesh(deforming, mesh));
+    ASSERT_TRUE(system_->create_instance(mesh, translation(0.0f, 2.0f, 0.0f), true, instance));
+    frame();
+    std::vector<float> bigger = box.positions;
+    for (float& p : bigger)
+        p *= 1.5f;
+    ASSERT_TRUE(system_->set_vertices(mesh, bigger.data(), 8));
+    VkCommandBuffer commands = host_.begin_frame();
+    ASSERT_NE(commands, VK_NULL_HANDLE);
+    ASSERT_TRUE(system_->step(0.05f, commands));
+    ASSERT_TRUE(system_->destroy_instance(instance));
+    ASSERT_TRUE(system_->destroy_mesh(mesh));
+    ASSERT_TRUE(host_.submit_frame());
+    for (int f = 0; f < 3; ++f)
+        frame();
+    EXPECT_EQ(system_->stats().voxels, 0u) << "the mesh is gone from the frames completed last";
 }
 
 } // namespace

@@ -138,8 +138,8 @@ typedef struct gust_wind_settings {
 
 /// How a system's GPU work reaches a queue.
 typedef enum gust_submission {
-    GUST_SUBMISSION_OWN_QUEUE = 0,     ///< step submits and waits on gust's queue or the host's queue
-    GUST_SUBMISSION_HOST_COMMANDS = 1, ///< host device only: gust_system_record records into host commands
+    GUST_SUBMISSION_OWN_QUEUE = 0,     ///< gust_system_step submits and waits on gust's or the host's queue
+    GUST_SUBMISSION_HOST_COMMANDS = 1, ///< host device only: gust_system_step_commands records the frame
 } gust_submission;
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
@@ -156,6 +156,7 @@ typedef struct gust_system_desc {
     bool validation;              ///< own device: enable the Khronos validation layer
     const char* device;           ///< own device: index or name substring (NULL: GUST_DEVICE, then best)
     gust_submission submission;   ///< how GPU work reaches a queue
+    uint32_t frames_in_flight;    ///< host commands: frames the host keeps in flight, 1..8 (default 2)
     gust_voxelize_path voxelize;  ///< voxelizer path
     gust_wind_domain domain;      ///< the simulated box
     gust_wind_settings wind;      ///< solver numerics
@@ -207,7 +208,7 @@ typedef struct gust_wind_texture {
     VkFormat format;            ///< rgb: m/s, a: 1 - solid fraction
     uint32_t extent[3];         ///< texels per axis
     float world_to_texture[16]; ///< column-major: uvw = world_to_texture * (p, 1), domain -> [0, 1]^3
-    VkImageLayout layout;       ///< VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step and record
+    VkImageLayout layout;       ///< VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step
     uint64_t frame;             ///< the frame whose wind it holds
 } gust_wind_texture;
 
@@ -340,12 +341,14 @@ gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
 gust_result gust_system_set_focus(gust_system system, gust_vec3 position);
 
 /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh the wind
-/// texture and answer pending queries. Blocks until the GPU is done.
+/// texture and answer pending queries. Blocks until the GPU is done (GUST_SUBMISSION_OWN_QUEUE).
 gust_result gust_system_step(gust_system system, float dt);
 
-/// With GUST_SUBMISSION_HOST_COMMANDS: records the wind texture's layout transition into the host's
-/// `commands` (recording state); call after gust_system_step and before the host's draws.
-gust_result gust_system_record(gust_system system, VkCommandBuffer commands);
+/// The same with GUST_SUBMISSION_HOST_COMMANDS: records the whole frame into the host's `commands`
+/// (recording state, outside a render pass) without waiting. When frame n is recorded, the host's command
+/// buffer of frame n - frames_in_flight must have completed; stats and async answers arrive then
+/// (docs/api.md "Submission").
+gust_result gust_system_step_commands(gust_system system, float dt, VkCommandBuffer commands);
 
 /// Wind velocity (m/s) at `count` points into `velocities` (count entries, caller-owned); points outside
 /// the domain get the ambient wind. Blocks for a GPU round trip.

@@ -126,8 +126,8 @@ struct WindSettings {
 
 /// How a System's GPU work reaches a queue.
 enum class Submission : std::int32_t {
-    OwnQueue = 0,     ///< step() submits and waits on gust's queue (own device) or the host's queue
-    HostCommands = 1, ///< the per-frame wind texture update is recorded by record() into the host's buffer
+    OwnQueue = 0,     ///< step(dt) submits and waits on gust's queue (own device) or the host's queue
+    HostCommands = 1, ///< host device: step(dt, commands) records the whole frame into the host's buffer
 };
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
@@ -144,6 +144,9 @@ struct SystemDesc {
     bool validation = false;                       ///< own device: enable the Khronos validation layer
     const char* device = nullptr; ///< own device: index or name substring (null: GUST_DEVICE, then best)
     Submission submission = Submission::OwnQueue;
+    /// HostCommands: frames the host keeps in flight, 1..8. When step(dt, commands) records frame n, the
+    /// command buffer of frame n - frames_in_flight must have completed (docs/api.md "Submission").
+    std::uint32_t frames_in_flight = 2;
     VoxelizePath voxelize = VoxelizePath::Auto;
     WindDomain domain;
     WindSettings wind;
@@ -298,17 +301,21 @@ class System {
     Outcome set_focus(const Vec3& position);
 
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
-    /// the wind texture and answer pending queries. Blocks until the GPU is done.
+    /// the wind texture and answer pending queries. Blocks until the GPU is done (Submission::OwnQueue).
     Outcome step(float dt);
-    /// With Submission::HostCommands: records into the host's command buffer the memory barrier that makes
-    /// the wind texture's new contents visible to its shaders (docs/api.md); call after step(), before draws.
-    Outcome record(VkCommandBuffer commands);
+    /// The same with Submission::HostCommands: records the whole frame into the host's `commands` (in the
+    /// recording state, outside a render pass) and returns without waiting. The host submits the buffers
+    /// to the queue in HostDevice in the order recorded. Work and results follow the frame contract of
+    /// docs/api.md: stats() and async answers arrive frames_in_flight steps later, and resources gust
+    /// replaces or frees are kept until then.
+    Outcome step(float dt, VkCommandBuffer commands);
 
     /// Wind velocity at each point (m/s), sampled from the current field; points outside the domain
     /// get the ambient wind. `velocities` must hold points.size() entries. Blocks for a GPU round trip.
     Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities);
     /// Queues the points; the answer is ready after the next step() (frame N's question is answered
-    /// with frame N+1's field) and is fetched with fetch(). Points are copied.
+    /// with frame N+1's field; HostCommands: once that frame completed, frames_in_flight steps later) and
+    /// is fetched with fetch(). Points are copied.
     Outcome query_async(std::span<const Vec3> points, QueryId& id);
     /// The answer to `id` (then forgotten); NotReady before the next step().
     Outcome fetch(QueryId id, std::span<Vec3> velocities);
@@ -317,7 +324,7 @@ class System {
 
     /// The wind texture (valid until the System is destroyed; contents change at each step).
     const WindTexture& wind_texture() const;
-    /// The last step's statistics.
+    /// The last step's statistics (HostCommands: those of the frame recorded frames_in_flight steps ago).
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
