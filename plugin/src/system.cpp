@@ -679,11 +679,11 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         m.ctx->begin_frame(n);
 
         std::vector<glm::vec3> points;
-        for (auto& [id, pending] : m.queries)
+        std::vector<QueryId> asked;
+        for (const auto& [id, pending] : m.queries)
             if (!pending.asked) {
                 points.insert(points.end(), pending.points.begin(), pending.points.end());
-                pending.asked = true;
-                slot.asked.push_back(id);
+                asked.push_back(id);
             }
         const std::size_t readback =
             Impl::answers_offset() + std::max<std::size_t>(points.size(), 1) * sizeof(glm::vec3);
@@ -731,6 +731,10 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         dependency.memoryBarrierCount = 1;
         dependency.pMemoryBarriers = &barrier;
         m.ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
+        // Only a frame recorded whole answers its queries; after an error they wait for the next one.
+        for (QueryId id : asked)
+            m.queries.at(id).asked = true;
+        slot.asked = std::move(asked);
         slot.used = true;
         ++m.frame;
         m.publish_texture();

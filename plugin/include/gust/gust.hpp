@@ -307,7 +307,7 @@ class System {
     /// recording state, outside a render pass) and returns without waiting. The host submits the buffers
     /// to the queue in HostDevice in the order recorded. Work and results follow the frame contract of
     /// docs/api.md: stats() and async answers arrive frames_in_flight steps later, and resources gust
-    /// replaces or frees are kept until then.
+    /// replaces or frees are kept until then. After an error `commands` may hold part of a frame: reset it.
     Outcome step(float dt, VkCommandBuffer commands);
 
     /// Wind velocity at each point (m/s), sampled from the current field; points outside the domain
