@@ -15,6 +15,36 @@
 namespace gust::test {
 namespace {
 
+/// This frame's dynamic instances of a scene at time t (deforming meshes posed), moving since t - stride.
+std::vector<GpuInstance> dynamic_at(const SceneDesc& scene, SceneRuntime& runtime, VoxelWorld& world,
+                                    std::vector<GpuMesh>& meshes, double t, double stride) {
+    std::vector<GpuInstance> dynamic;
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        if (scene.objects[i].is_static) continue;
+        if (runtime.deforms(i)) {
+            EXPECT_TRUE(world.update_positions(meshes[i], runtime.positions(i, t)));
+        }
+        GpuInstance inst{&meshes[i], runtime.model(i, t)};
+        inst.prev_model = runtime.model(i, t - stride);
+        dynamic.push_back(inst);
+    }
+    return dynamic;
+}
+
+/// The voxels of a from-scratch voxelization of `statics` and `dynamic`, sorted and unique.
+std::vector<std::uint32_t> scratch_voxels(Voxelizer& scratch, const std::vector<GpuInstance>& statics,
+                                          const std::vector<GpuInstance>& dynamic, const GridDesc& grid) {
+    std::vector<GpuInstance> everything = statics;
+    everything.insert(everything.end(), dynamic.begin(), dynamic.end());
+    EXPECT_TRUE(scratch.voxelize(everything, grid, VoxelizeMethod::Compute));
+    auto fragments = scratch.read_fragments();
+    EXPECT_TRUE(fragments);
+    std::vector<std::uint32_t> voxels = fragments ? *fragments : std::vector<std::uint32_t>{};
+    std::sort(voxels.begin(), voxels.end());
+    voxels.erase(std::unique(voxels.begin(), voxels.end()), voxels.end());
+    return voxels;
+}
+
 using Param = std::tuple<std::string, std::uint32_t>; // scene file, branching
 
 class WorldMatchesScratch : public GpuTestWithParam<Param> {};
@@ -58,29 +88,15 @@ TEST_P(WorldMatchesScratch, afterEveryFrame) {
     const double stride = 3.0 / frames;
     std::uint32_t growths = 0;
     for (int f = 0; f < frames; ++f) {
-        const double t = f * stride;
-        std::vector<GpuInstance> dynamic;
-        for (std::size_t i = 0; i < meshes.size(); ++i) {
-            if (scene->objects[i].is_static) continue;
-            if (runtime->deforms(i)) {
-                ASSERT_TRUE((*world)->update_positions(meshes[i], runtime->positions(i, t)));
-            }
-            GpuInstance inst{&meshes[i], runtime->model(i, t)};
-            inst.prev_model = runtime->model(i, t - stride);
-            dynamic.push_back(inst);
-        }
+        const std::vector<GpuInstance> dynamic =
+            dynamic_at(*scene, *runtime, **world, meshes, f * stride, stride);
         auto step = (*world)->step(dynamic, float(stride));
         ASSERT_TRUE(step) << step.message();
         EXPECT_EQ(step->static_rebuilt, f == 0 || step->pool_growths > 0);
         EXPECT_EQ(step->tree.exhausted, 0u);
         growths += step->pool_growths;
 
-        std::vector<GpuInstance> everything = statics;
-        everything.insert(everything.end(), dynamic.begin(), dynamic.end());
-        ASSERT_TRUE((*scratch)->voxelize(everything, *grid, VoxelizeMethod::Compute));
-        std::vector<std::uint32_t> expected = *(*scratch)->read_fragments();
-        std::sort(expected.begin(), expected.end());
-        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        const std::vector<std::uint32_t> expected = scratch_voxels(**scratch, statics, dynamic, *grid);
         const auto leaves = (*world)->tree().leaf_voxels();
         ASSERT_TRUE(leaves);
         ASSERT_EQ(*leaves, expected) << file << " frame " << f;
@@ -191,17 +207,8 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
     for (std::uint64_t n = 0; n < frames; ++n) {
         if (n >= kFrames) collect(n);
         ctx.begin_frame(n);
-        const double t = double(n) * stride;
-        std::vector<GpuInstance> dynamic;
-        for (std::size_t i = 0; i < meshes.size(); ++i) {
-            if (scene->objects[i].is_static) continue;
-            if (runtime->deforms(i)) {
-                ASSERT_TRUE((*world)->update_positions(meshes[i], runtime->positions(i, t)));
-            }
-            GpuInstance inst{&meshes[i], runtime->model(i, t)};
-            inst.prev_model = runtime->model(i, t - stride);
-            dynamic.push_back(inst);
-        }
+        const std::vector<GpuInstance> dynamic =
+            dynamic_at(*scene, *runtime, **world, meshes, double(n) * stride, stride);
         Status recorded;
         ASSERT_TRUE(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
             recorded = (*world)->record(cmd, dynamic, float(stride));
@@ -209,12 +216,7 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
             (*world)->record_readback(cmd, readbacks[n % kFrames].handle(), 0);
         }));
         ASSERT_TRUE(recorded) << recorded.message();
-        std::vector<GpuInstance> everything = statics;
-        everything.insert(everything.end(), dynamic.begin(), dynamic.end());
-        ASSERT_TRUE((*scratch)->voxelize(everything, *grid, VoxelizeMethod::Compute));
-        std::vector<std::uint32_t> expected = *(*scratch)->read_fragments();
-        std::sort(expected.begin(), expected.end());
-        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        const std::vector<std::uint32_t> expected = scratch_voxels(**scratch, statics, dynamic, *grid);
         const auto leaves = (*world)->tree().leaf_voxels();
         ASSERT_TRUE(leaves);
         matches.push_back(*leaves == expected);

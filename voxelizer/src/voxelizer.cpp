@@ -35,6 +35,13 @@ template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_
     return {a, N};
 }
 
+std::uint64_t triangles_of(std::span<const GpuInstance> instances) {
+    std::uint64_t triangles = 0;
+    for (const GpuInstance& inst : instances)
+        triangles += inst.mesh->triangle_count();
+    return triangles;
+}
+
 glm::mat4 world_to_grid(const GridDesc& grid) {
     const float inv_h = 1.0f / grid.voxel_size;
     glm::mat4 m(inv_h);
@@ -298,14 +305,7 @@ Status Voxelizer::record(VkCommandBuffer cmd, std::span<const GpuInstance> insta
                          VoxelizeMethod method, float dt) {
     auto methods = prepare(instances, grid, method, dt);
     if (!methods) return methods.status();
-    std::uint64_t triangles = 0;
-    for (const GpuInstance& inst : instances)
-        triangles += inst.mesh->triangles_;
-    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
-    if (Status s = ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * triangles));
-        !s)
-        return s;
-    if (Status s = ensure_pass(instances.size()); !s) return s;
+    if (Status s = ensure_pass(instances); !s) return s;
     record_pass(cmd, instances, *methods, grid);
     method_ = methods->empty() ? method_ : methods->back();
     return {};
@@ -388,26 +388,25 @@ Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const G
     return {};
 }
 
-Status Voxelizer::ensure_pass(std::size_t instances) {
+Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances) {
+    // First guess so a pass rarely overflows: small triangles emit a few voxels each (4.2 per triangle
+    // for the full dragon at 512^3). Big triangles still grow the list after the pass.
+    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
+    if (Status s = ensure_capacity(
+            std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * triangles_of(instances)));
+        !s)
+        return s;
     if (inv_dt_ > 0.0f)
         if (Status s = ensure_velocity_capacity(); !s) return s;
-    return ensure_instances(instances);
+    return ensure_instances(instances.size());
 }
 
 Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                                      std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
     VoxelizeStats stats;
-    for (const GpuInstance& inst : instances)
-        stats.triangles += inst.mesh->triangles_;
-    // First guess so a one-shot call rarely redoes its pass: small triangles emit a few voxels each
-    // (4.2 per triangle for the full dragon at 512^3). Big triangles still grow the list below.
-    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
-    if (Status s =
-            ensure_capacity(std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * stats.triangles));
-        !s)
-        return s;
+    stats.triangles = triangles_of(instances);
     for (;;) {
-        if (Status s = ensure_pass(instances.size()); !s) return s;
+        if (Status s = ensure_pass(instances); !s) return s;
         const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
         Status recorded =
             ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_pass(cmd, instances, methods, grid); });

@@ -149,8 +149,8 @@ class Voxelizer {
     /// Validates a call and picks each instance's path.
     Result<std::vector<VoxelizeMethod>> prepare(std::span<const GpuInstance> instances, const GridDesc& grid,
                                                 VoxelizeMethod method, float dt);
-    /// Sizes the instance and velocity buffers for a pass over `instances`.
-    Status ensure_pass(std::size_t instances);
+    /// Sizes the fragment list (first guess), the instance and the velocity buffers for a pass.
+    Status ensure_pass(std::span<const GpuInstance> instances);
     /// Records one pass (instance records, staged positions, the passes) into `cmd`.
     void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
                      std::span<const VoxelizeMethod> methods, const GridDesc& grid);
