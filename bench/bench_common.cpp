@@ -107,6 +107,14 @@ std::string failed_cell(std::vector<std::string>& notes, const std::string& what
     return "failed (note " + std::to_string(notes.size()) + ")";
 }
 
+std::string block_name(std::string_view bench, const gust::gpu::DeviceInfo& device) {
+    return device.type == "cpu" ? std::string(bench) : std::string(bench) + "-gpu";
+}
+
+std::string heading_device(const gust::gpu::DeviceInfo& device) {
+    return device.type == "cpu" ? std::string() : " (on " + device.name + ")";
+}
+
 gust::Status write_block(const std::filesystem::path& path, std::string_view name, const std::string& body) {
     const std::string begin_marker = "<!-- bench:" + std::string(name) + ":begin -->";
     const std::string end_marker = "<!-- bench:" + std::string(name) + ":end -->";

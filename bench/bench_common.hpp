@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <gust/gpu/context.hpp>
 #include <gust/gpu/result.hpp>
 #include <gust/scene/mesh.hpp>
 #include <string>
@@ -70,6 +71,13 @@ std::string command_line(int argc, char** argv);
 
 /// A table cell for a failed measurement pointing at its note, so long messages stay out of the table.
 std::string failed_cell(std::vector<std::string>& notes, const std::string& what, const std::string& error);
+
+/// The results block a bench run writes: `bench` on a CPU-emulated device (lavapipe, what CI has), and
+/// `bench`-gpu on a real one, so that docs/results.md keeps both and neither run overwrites the other.
+std::string block_name(std::string_view bench, const gust::gpu::DeviceInfo& device);
+
+/// What a block's heading adds after its title: nothing on a CPU device, " (on <device name>)" on a GPU.
+std::string heading_device(const gust::gpu::DeviceInfo& device);
 
 /// Replaces (or appends) the `<!-- bench:name:begin/end -->` block in `path`, leaving the rest byte for byte.
 gust::Status write_block(const std::filesystem::path& path, std::string_view name, const std::string& body);

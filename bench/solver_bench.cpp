@@ -26,6 +26,7 @@
 
 namespace {
 
+using gust::bench::block_name;
 using gust::bench::Clock;
 using gust::bench::command_line;
 using gust::bench::cpu_model;
@@ -33,6 +34,7 @@ using gust::bench::failed_cell;
 using gust::bench::fmt_ms;
 using gust::bench::fmt_ratio;
 using gust::bench::grouped;
+using gust::bench::heading_device;
 using gust::bench::load_average;
 using gust::bench::ms_since;
 using gust::bench::RunInfo;
@@ -793,9 +795,16 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
         << " s; a solver that did not converge at its cap is not timed. Wall s is around "
            "`WindSolver::step()` (the whole step), pressure ms the `pressure` pass's GPU time; medians over "
            "the timed runs; the ratio columns divide a solver's medians by "
-        << base << "'s at the same grid and tolerance. Grids above " << grouped(options.solve_max_cells)
-        << " cells are left out: Jacobi's iterations grow with the square of the grid's width, so at 128^3 "
-           "one solve would take about 32 times as long as at 64^3, hours on lavapipe.\n\n";
+        << base << "'s at the same grid and tolerance.";
+    const bool left_out = std::any_of(steps.begin(), steps.end(), [&](const StepRow& row) {
+        return cell_count(row.cells) > options.solve_max_cells;
+    });
+    if (left_out)
+        out << " Grids above " << grouped(options.solve_max_cells)
+            << " cells (`--solve-max-cells`) are left out: Jacobi's iterations grow with the square of the "
+               "grid's width, so at 128^3 one solve would take about 32 times as long as at 64^3, hours on "
+               "lavapipe.";
+    out << "\n\n";
     out << "| Grid | Tolerance | Solver | Converged | V-cycles / iterations | Residual / divergence | Runs | "
            "Wall s | Pressure GPU ms | Wall / "
         << base << " | Pressure GPU / " << base << " | Wall s at the cap |\n";
@@ -927,8 +936,8 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
                    const gust::gpu::DeviceInfo& device, const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
-    out << "## Wind solver: step time, MGPCG, multigrid and Jacobi to a tolerance, bytes against "
-           "bandwidth\n\n";
+    out << "## Wind solver: step time, MGPCG, multigrid and Jacobi to a tolerance, bytes against bandwidth"
+        << heading_device(device) << "\n\n";
     out << "Command: `" << run.command << "`\n\n";
     out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
         << "); CPU " << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started
@@ -1057,7 +1066,9 @@ int main(int argc, char** argv) {
     const std::string body = render(steps, solves, defaults, *bandwidth, options, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
-        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s)
+        if (gust::Status s =
+                gust::bench::write_block(options.write, block_name(kBlock, (*ctx)->info()), body);
+            !s)
             return fail(s.message());
         std::cerr << "wrote the solver block of " << options.write << "\n";
     }

@@ -32,6 +32,7 @@
 namespace {
 
 using gust::bench::asset_path;
+using gust::bench::block_name;
 using gust::bench::Clock;
 using gust::bench::command_line;
 using gust::bench::cpu_model;
@@ -39,6 +40,7 @@ using gust::bench::failed_cell;
 using gust::bench::fmt_ms;
 using gust::bench::fmt_ratio;
 using gust::bench::grouped;
+using gust::bench::heading_device;
 using gust::bench::load_asset;
 using gust::bench::load_average;
 using gust::bench::ms_since;
@@ -793,7 +795,8 @@ std::string render(const std::vector<TreeRow>& depth_rows, const std::vector<Tre
                    const Plan& plan, const gust::gpu::DeviceInfo& device, const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
-    out << "## Sparse tree: build time, bytes and incremental frames (seed tables 2 and 3)\n\n";
+    out << "## Sparse tree: build time, bytes and incremental frames (seed tables 2 and 3)"
+        << heading_device(device) << "\n\n";
     out << "Command: `" << run.command << "`\n\n";
     out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
         << "); CPU " << cpu_model() << ", " << usable_cores() << " usable cores. Run started " << run.started
@@ -914,7 +917,9 @@ int main(int argc, char** argv) {
         render(depth_rows, byte_rows, grids, *world, dragon->triangle_count(), plan, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
-        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s)
+        if (gust::Status s =
+                gust::bench::write_block(options.write, block_name(kBlock, (*ctx)->info()), body);
+            !s)
             return fail(s.message());
         std::cerr << "wrote the tree block of " << options.write << "\n";
     }

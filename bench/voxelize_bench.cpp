@@ -25,6 +25,7 @@
 
 namespace {
 
+using gust::bench::block_name;
 using gust::bench::Clock;
 using gust::bench::command_line;
 using gust::bench::cpu_model;
@@ -32,6 +33,7 @@ using gust::bench::failed_cell;
 using gust::bench::fmt_ms;
 using gust::bench::fmt_ratio;
 using gust::bench::grouped;
+using gust::bench::heading_device;
 using gust::bench::load_asset;
 using gust::bench::load_average;
 using gust::bench::ms_since;
@@ -230,7 +232,7 @@ std::string render(const std::vector<Row>& rows, const Options& options, const g
                    const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
-    out << "## Voxelizer: time against grid resolution (seed table 1)\n\n";
+    out << "## Voxelizer: time against grid resolution (seed table 1)" << heading_device(device) << "\n\n";
     out << "Command: `" << run.command << "`\n\n";
     out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
         << "); CPU " << cpu_model() << ", " << usable_cores() << " usable cores, TBB arena of "
@@ -435,7 +437,9 @@ int main(int argc, char** argv) {
     const std::string body = render(rows, options, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
-        if (gust::Status s = gust::bench::write_block(options.write, kBlock, body); !s)
+        if (gust::Status s =
+                gust::bench::write_block(options.write, block_name(kBlock, (*ctx)->info()), body);
+            !s)
             return fail(s.message());
         std::cerr << "wrote the voxelize block of " << options.write << "\n";
     }

@@ -18,8 +18,11 @@ layout(location = 5) flat out vec3 out_va;
 layout(location = 6) flat out vec3 out_vb;
 layout(location = 7) flat out vec3 out_vc;
 
-// Half a pixel plus a little, so centres exactly on a dilated edge are never lost to the fill rule.
-const float kDilation = 0.5 + 1e-3;
+// Half a pixel plus a margin, so centres exactly on a dilated edge are never lost to the fill rule or to
+// the rasterizer snapping vertices to its sub-pixel grid: Vulkan guarantees at least 4 sub-pixel bits,
+// so a vertex moves by at most 1/32 pixel, and 1/16 outlasts that. Extra pixels cost only their exact
+// tests, which reject them.
+const float kDilation = 0.5 + 1.0 / 16.0;
 
 void emit(vec2 p, Setup s, vec4 clip) {
     out_a = s.a;
