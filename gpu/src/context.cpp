@@ -538,6 +538,8 @@ Status Context::finish_device(std::uint32_t queue_index) {
     info_.max_storage_buffer_range = props.limits.maxStorageBufferRange;
     info_.max_allocation_size = m3.maxMemoryAllocationSize;
     info_.subgroup_size = p11.subgroupSize;
+    info_.max_workgroup_size =
+        std::min(props.limits.maxComputeWorkGroupInvocations, props.limits.maxComputeWorkGroupSize[0]);
 
     VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool_info.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;

@@ -5,22 +5,26 @@
 // scale.
 #include "solver_common.glsl"
 
-layout(local_size_x = kSolverGroupSize) in;
+// The workgroup is as wide as the device allows (constant 0, a power of two from 64 to 1024): at 128^3
+// there are 32,768 partials, and a narrow group would add them one slow load after another.
+layout(local_size_x_id = 0) in;
+
+shared vec2 sums[gl_WorkGroupSize.x];
 
 void main() {
     uint t = gl_LocalInvocationIndex;
     Vec2Ref partials = Vec2Ref(sb().b.partials);
     vec2 sum = vec2(0.0);
-    for (uint g = t; g < sb().b.partial_count; g += kSolverGroupSize) sum += partials.v[g];
-    group_sums[t] = sum;
+    for (uint g = t; g < sb().b.partial_count; g += gl_WorkGroupSize.x) sum += partials.v[g];
+    sums[t] = sum;
     barrier();
-    [[unroll]] for (uint s = kSolverGroupSize / 2u; s > 0u; s >>= 1u) {
-        if (t < s) group_sums[t] += group_sums[t + s];
+    for (uint s = gl_WorkGroupSize.x / 2u; s > 0u; s >>= 1u) {
+        if (t < s) sums[t] += sums[t + s];
         barrier();
     }
     if (t != 0u) return;
     StateRef st = state();
-    vec2 total = group_sums[0];
+    vec2 total = sums[0];
     if (pc.parity == 0u) {
         st.s.cg_beta = cg_beta(total.x, total.y, st.s.cg_rz);
         st.s.cg_rz = total.x;

@@ -11,6 +11,11 @@ using shaderio::kCellWords;
 
 namespace detail {
 
+// The coarsest level is at most 4 cells per axis (grids are at most 256 per axis, so the level cap is
+// never what stops the halving), and coarse_solve.comp holds it in one workgroup, a thread per cell.
+static_assert(4 * 4 * 4 <= shaderio::kSolverGroupSize, "coarse_solve.comp needs a thread per coarsest cell");
+static_assert(256 >> (shaderio::kMaxGridLevels - 1) <= 4, "the level cap must not stop the halving early");
+
 std::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size) {
     std::vector<GridLevel> levels;
     glm::ivec3 dims(cells);

@@ -127,8 +127,14 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                             {&m.project, words(project_comp)},
                             {&m.scroll, words(scroll_comp)},
                             {&m.sample, words(sample_comp)}};
+    // cg_scalars.comp sums every level-0 workgroup's partial in one workgroup: as wide as the device
+    // allows (a power of two, up to 1024), so that each thread adds few of them.
+    const std::uint32_t sum_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, 1024u));
     for (const Stage& stage : stages) {
-        auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(SolverPush));
+        const std::uint32_t constants[] = {sum_group};
+        auto pipeline = gpu::Pipeline::compute(
+            ctx, stage.code, sizeof(SolverPush),
+            stage.pipeline == &m.cg_scalars ? std::span(constants) : std::span<const std::uint32_t>());
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }

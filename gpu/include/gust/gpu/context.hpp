@@ -102,6 +102,9 @@ struct DeviceInfo {
     std::uint64_t max_storage_buffer_range = 0;
     std::uint64_t max_allocation_size = 0;
     std::uint32_t subgroup_size = 0;
+    /// Largest one-dimensional compute workgroup: min(maxComputeWorkGroupInvocations,
+    /// maxComputeWorkGroupSize[0]); Vulkan guarantees 128.
+    std::uint32_t max_workgroup_size = 0;
 };
 
 /// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
