@@ -343,11 +343,8 @@ GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
     return r;
 }
 
-/// The open voxels of a cell that its pressure stands for: the largest 6-connected component of its
-/// free voxels (the first found on a tie). One pressure per cell cannot stand for two sides of a wall,
-/// so faces open only into this component; then any chain of open faces is a chain of free voxels,
-/// and a watertight surface, however thin, lets no air through.
-GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
+/// cell_fluid for any v: the flood fill on whole CellBits.
+GUST_INLINE CellBits cell_fluid_general(CellBits occupied, uint v, CellBits faces[6]) {
     CellBits free_voxels = bits_and_not(bits_all(v), occupied);
     CellBits remaining = free_voxels;
     CellBits best = bits_none();
@@ -373,6 +370,80 @@ GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
         remaining = bits_and_not(remaining, component);
     }
     return best;
+}
+
+/// A cell of at most 64 voxels (v <= 4) as two words, low bits first.
+struct Bits64 {
+    uint lo;
+    uint hi;
+};
+
+GUST_INLINE Bits64 b64(uint lo, uint hi) {
+    Bits64 r;
+    r.lo = lo;
+    r.hi = hi;
+    return r;
+}
+
+/// Moved up by s (1..31; a cell of v <= 4 steps by 1, v and v^2) positions.
+GUST_INLINE Bits64 b64_up(Bits64 a, uint s) {
+    return b64(a.lo << s, (a.hi << s) | (a.lo >> (32u - s)));
+}
+
+/// Moved down by s (1..31) positions.
+GUST_INLINE Bits64 b64_down(Bits64 a, uint s) {
+    return b64((a.lo >> s) | (a.hi << (32u - s)), a.hi >> s);
+}
+
+/// cell_fluid_general for v <= 4, with the same fill on two words: a shader keeps them in registers,
+/// where the general form's 16-word arrays, indexed by run-time shifts, go to memory (on an H100 that
+/// made the fill most of the solid pass).
+GUST_INLINE CellBits cell_fluid_small(CellBits occupied, uint v, CellBits faces[6]) {
+    CellBits all = bits_all(v);
+    Bits64 free_voxels = b64(all.w[0] & ~occupied.w[0], all.w[1] & ~occupied.w[1]);
+    Bits64 remaining = free_voxels;
+    Bits64 best = b64(0u, 0u);
+    uint best_count = 0u;
+    uint n = v * v * v;
+    for (uint seeds = 0u; seeds < n; ++seeds) {
+        if (remaining.lo == 0u && remaining.hi == 0u) break;
+        Bits64 component = remaining.lo != 0u ? b64(remaining.lo & (0u - remaining.lo), 0u)
+                                              : b64(0u, remaining.hi & (0u - remaining.hi));
+        for (uint step = 0u; step < n; ++step) {
+            Bits64 grown = component;
+            uint stride = 1u;
+            for (uint a = 0u; a < 3u; ++a) {
+                Bits64 up = b64_up(
+                    b64(component.lo & ~faces[2u * a + 1u].w[0], component.hi & ~faces[2u * a + 1u].w[1]),
+                    stride);
+                Bits64 down = b64_down(
+                    b64(component.lo & ~faces[2u * a].w[0], component.hi & ~faces[2u * a].w[1]), stride);
+                grown = b64(grown.lo | up.lo | down.lo, grown.hi | up.hi | down.hi);
+                stride *= v;
+            }
+            grown = b64(grown.lo & free_voxels.lo, grown.hi & free_voxels.hi);
+            if (grown.lo == component.lo && grown.hi == component.hi) break;
+            component = grown;
+        }
+        uint count = uint(bitCount(component.lo)) + uint(bitCount(component.hi));
+        if (count > best_count) {
+            best = component;
+            best_count = count;
+        }
+        remaining = b64(remaining.lo & ~component.lo, remaining.hi & ~component.hi);
+    }
+    CellBits r = bits_none();
+    r.w[0] = best.lo;
+    r.w[1] = best.hi;
+    return r;
+}
+
+/// The open voxels of a cell that its pressure stands for: the largest 6-connected component of its
+/// free voxels (the first found on a tie). One pressure per cell cannot stand for two sides of a wall,
+/// so faces open only into this component; then any chain of open faces is a chain of free voxels,
+/// and a watertight surface, however thin, lets no air through.
+GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
+    return v * v * v <= 64u ? cell_fluid_small(occupied, v, faces) : cell_fluid_general(occupied, v, faces);
 }
 
 /// Open fraction of the face between cells `low` and `high` along `axis` (their fluid voxel sets):

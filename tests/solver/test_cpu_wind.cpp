@@ -42,6 +42,28 @@ TEST(CellKernels, fluidOfAnEmptyCellIsTheWholeCellAndOfAFullOneNothing) {
     EXPECT_EQ(bits_count(cell_fluid(all, 4, faces)), 0u);
 }
 
+// Cells of up to 64 voxels take the two-word fill; it must pick the same component as the general one,
+// ties included, on cells whose free voxels split into many pieces.
+TEST(CellKernels, twoWordFillMatchesTheGeneralFill) {
+    std::mt19937 random(7);
+    for (std::uint32_t v : {1u, 2u, 3u, 4u}) {
+        CellBits faces[6];
+        const CellBits all = layers(v, faces);
+        for (int trial = 0; trial < 400; ++trial) {
+            const std::uint32_t percent = std::uniform_int_distribution<std::uint32_t>(0, 100)(random);
+            CellBits occupied = bits_none();
+            for (std::uint32_t i = 0; i < v * v * v; ++i)
+                if (std::uniform_int_distribution<std::uint32_t>(0, 99)(random) < percent)
+                    occupied.w[i / 32] |= 1u << (i % 32);
+            const CellBits small = cell_fluid_small(occupied, v, faces);
+            const CellBits general = cell_fluid_general(occupied, v, faces);
+            ASSERT_TRUE(bits_equal(small, general))
+                << "v " << v << ", trial " << trial << ", " << percent << "%";
+            ASSERT_TRUE(bits_equal(bits_and(small, all), small));
+        }
+    }
+}
+
 TEST(CellKernels, faceFractionCountsVoxelPairsOpenOnBothSides) {
     CellBits faces[6];
     const CellBits all = layers(4, faces);
