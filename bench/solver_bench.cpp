@@ -92,6 +92,8 @@ struct Options {
     bool cold_start = false;
     /// Step-time table: V-cycles per step at most (SolverDesc::max_cycles).
     std::uint32_t max_cycles = gust::SolverDesc{}.max_cycles;
+    /// Frame-budget table: V-cycles per step (0: no such table).
+    std::uint32_t frame_cycles = 2;
     std::string write;
     std::string device;
 };
@@ -772,6 +774,41 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
     out << "\n";
 }
 
+/// The frame-budget table: the step-time scene with a fixed number of V-cycles a step, as a game that
+/// gives the solver a slice of its frame would run it, and how far those cycles got.
+void render_budget(std::ostringstream& out, const std::vector<StepRow>& rows, const Options& options,
+                   std::vector<std::string>& notes) {
+    if (rows.empty()) return;
+    out << "### Step time at a frame budget of " << options.frame_cycles << " V-cycles\n\n";
+    out << "The step-time scene and settings with at most " << options.frame_cycles
+        << " V-cycles a step (`--frame-cycles`, `SolverDesc::max_cycles`), converged or not, as a game that "
+           "gives the solver a fixed slice of its frame would run it; the warm start carries the rest of the "
+           "solve into the next step. Same warm-up and timed steps, medians over the timed steps. Residual / "
+           "divergence is max |residual| / max |divergence before projection| after the last cycle; "
+           "divergence after / before is the largest divergence left by the projection over the largest "
+           "before it.\n\n";
+    out << "| Grid | Steps | `pressure` ms | Total GPU ms | Wall ms | V-cycles | Residual / divergence | "
+           "Divergence after / before |\n|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    for (const StepRow& row : rows) {
+        out << "| " << size_name(row.cells) << " | ";
+        if (!row.error.empty()) {
+            out << failed_cell(notes, size_name(row.cells) + " at the frame budget", row.error)
+                << " | | | | | | |\n";
+            continue;
+        }
+        const auto ratio = [&](auto field) {
+            return median_of(row.steps, [&](const StepSample& s) {
+                return s.stats.divergence_before > 0.0 ? field(s.stats) / s.stats.divergence_before : 0.0;
+            });
+        };
+        out << row.steps.size() << " | " << fmt_ms(row.pass("pressure")) << " | " << fmt_ms(row.total())
+            << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
+            << fmt_sci(ratio([](const gust::WindStats& w) { return w.residual; })) << " | "
+            << fmt_sci(ratio([](const gust::WindStats& w) { return w.divergence_after; })) << " |\n";
+    }
+    out << "\n";
+}
+
 void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
                    const std::vector<StepRow>& steps, const Options& options,
                    std::vector<std::string>& notes) {
@@ -932,8 +969,8 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
 
 /// The Markdown body of the results block: heading, command, machine, the three sections and notes.
 std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow>& solves,
-                   const gust::SolverDesc& desc, double bandwidth, const Options& options,
-                   const gust::gpu::DeviceInfo& device, const RunInfo& run) {
+                   const std::vector<StepRow>& budget_rows, const gust::SolverDesc& desc, double bandwidth,
+                   const Options& options, const gust::gpu::DeviceInfo& device, const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
     out << "## Wind solver: step time, MGPCG, multigrid and Jacobi to a tolerance, bytes against bandwidth"
@@ -946,6 +983,7 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
         << " at the end (a load above the core count means other processes shared the cores).\n\n";
     render_steps(out, steps, desc, options, notes);
     render_solves(out, solves, steps, options, notes);
+    render_budget(out, budget_rows, options, notes);
     render_bytes(out, steps, desc, bandwidth, options);
     if (!notes.empty()) {
         out << "Notes:\n\n";
@@ -981,6 +1019,9 @@ int main(int argc, char** argv) {
                  "step-time table: start every pressure solve from zero (SolverDesc::warm_start = false)");
     app.add_option("--max-cycles", options.max_cycles, "step-time table: V-cycles per step at most")
         ->check(CLI::Range(1, 1000));
+    app.add_option("--frame-cycles", options.frame_cycles,
+                   "frame-budget table: V-cycles per step, converged or not (0: leave the table out)")
+        ->check(CLI::Range(0, 1000));
     app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
     app.add_option("--device", options.device, "Vulkan device index or name substring");
     CLI11_PARSE(app, argc, argv);
@@ -1062,8 +1103,28 @@ int main(int argc, char** argv) {
             solves.push_back(std::move(solve));
         }
     }
+    std::vector<StepRow> budget_rows;
+    for (glm::uvec3 cells : options.frame_cycles > 0 ? sizes : std::vector<glm::uvec3>{}) {
+        std::cerr << size_name(cells) << " at " << options.frame_cycles << " V-cycles a step:" << std::endl;
+        gust::SolverDesc desc = defaults;
+        desc.cells = cells;
+        desc.max_cycles = options.frame_cycles;
+        StepRow row;
+        row.cells = cells;
+        auto scene = Scene::create(**ctx, desc);
+        if (!scene) {
+            row.error = scene.message();
+        } else if (auto solver = make_solver(**ctx, desc, **scene); !solver) {
+            row.error = solver.message();
+        } else if (gust::Status s = bench_steps(**scene, **solver, options.repeat, options.budget_s, row);
+                   !s) {
+            row.error = s.message();
+        }
+        budget_rows.push_back(std::move(row));
+    }
 
-    const std::string body = render(steps, solves, defaults, *bandwidth, options, (*ctx)->info(), run);
+    const std::string body =
+        render(steps, solves, budget_rows, defaults, *bandwidth, options, (*ctx)->info(), run);
     std::cout << body << std::flush;
     if (!options.write.empty()) {
         if (gust::Status s =
