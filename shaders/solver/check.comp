@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // One thread after the solve's start and after each V-cycle (or block of Jacobi iterations): records the
-// residual and, once it is within tolerance of the divergence before projection, zeroes the live
+// residual (and, from pc.iterations, how many the step recorded) and, once it is within tolerance of the divergence before projection, zeroes the live
 // dispatches so the remaining recorded work does nothing. The reference is max |b|, not the first
 // residual: a warm start begins with a small residual, and measuring against it would stop short.
 #include "solver_common.glsl"
@@ -10,6 +10,7 @@ layout(local_size_x = 1) in;
 
 void main() {
     StateRef st = state();
+    st.s.recorded = pc.iterations;
     if (st.s.done != 0u) return;
     float residual = uintBitsToFloat(st.s.residual_scratch);
     st.s.residual = st.s.residual_scratch;

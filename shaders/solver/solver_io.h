@@ -74,6 +74,7 @@ struct SolverState {
     float cg_alpha;                   ///< step length along the search direction
     float cg_beta;                    ///< weight of the previous search direction
     float warm_scale;                 ///< s of the warm start x0 = s·φ of the last step (0: from zero)
+    uint recorded;                    ///< V-cycles (Jacobi: blocks) this step recorded, from check's push
 };
 
 /// Slots of the dispatch buffer: one per multigrid level, the coarsest solve, then a full copy that
@@ -539,7 +540,7 @@ GUST_NAMESPACE_END
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
-static_assert(sizeof(gust::shaderio::SolverState) == 64);
+static_assert(sizeof(gust::shaderio::SolverState) == 68);
 #endif
 
 #endif

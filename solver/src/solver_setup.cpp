@@ -16,6 +16,12 @@ namespace detail {
 static_assert(4 * 4 * 4 <= shaderio::kSolverGroupSize, "coarse_solve.comp needs a thread per coarsest cell");
 static_assert(256 >> (shaderio::kMaxGridLevels - 1) <= 4, "the level cap must not stop the halving early");
 
+std::uint32_t cycles_to_record(const WindStats& last, std::uint32_t max_cycles) {
+    const std::uint32_t wanted =
+        last.converged ? last.cycles + std::max(4u, last.cycles / 2) : 2 * std::max(last.cycles_recorded, 1u);
+    return std::min(wanted, max_cycles);
+}
+
 std::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size) {
     std::vector<GridLevel> levels;
     glm::ivec3 dims(cells);

@@ -100,6 +100,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     Impl& m = *solver->impl_;
     m.levels = detail::build_levels(desc.cells, desc.cell_size);
     solver->levels_ = std::uint32_t(m.levels.size());
+    solver->cycles_to_record_ = desc.max_cycles;
 
     struct Stage {
         gpu::Pipeline* pipeline;
@@ -568,17 +569,25 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     push.parity = 3;
     push.iterations = desc_.pressure == PressureSolver::MultigridPCG ? 1 : 0;
     run(m.divergence, cell_groups);
-    run(m.check, {1, 1, 1});
+    // Only the cycles this step may need are recorded (cycles_to_record_): each one left over after
+    // convergence still costs its empty dispatches and barriers. The check stores the count.
+    const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+    const std::uint32_t recorded = desc_.pressure == PressureSolver::Jacobi ? blocks : cycles_to_record_;
+    auto check = [&]() {
+        push.iterations = recorded;
+        run(m.check, {1, 1, 1});
+    };
+    check();
     if (desc_.pressure == PressureSolver::Multigrid) {
-        for (std::uint32_t cycle = 0; cycle < desc_.max_cycles; ++cycle) {
+        for (std::uint32_t cycle = 0; cycle < recorded; ++cycle) {
             v_cycle();
             push.level = 0;
             push.parity = 1;
             run_slot(m.residual, 0);
-            run(m.check, {1, 1, 1});
+            check();
         }
     } else if (desc_.pressure == PressureSolver::MultigridPCG) {
-        for (std::uint32_t iteration = 0; iteration < desc_.max_cycles; ++iteration) {
+        for (std::uint32_t iteration = 0; iteration < recorded; ++iteration) {
             v_cycle();
             push.level = 0;
             for (std::uint32_t stage = 0; stage < 5; ++stage) {
@@ -589,14 +598,13 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
                     run_slot(m.cg_scalars, shaderio::kCoarseSlot);
                 }
             }
-            run(m.check, {1, 1, 1});
+            check();
         }
         const VkBufferCopy solution{0, 0, cell_count() * sizeof(float)};
         vk.vkCmdCopyBuffer(cmd, m.cg_cells.handle(), m.pressure.handle(), 1, &solution);
         gpu::barrier(ctx_, cmd);
     } else {
         push.level = 0;
-        const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
         for (std::uint32_t block = 0; block < blocks; ++block) {
             for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
                 push.parity = 2 + (i & 1);
@@ -604,7 +612,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             }
             push.parity = 1;
             run_slot(m.residual, 0);
-            run(m.check, {1, 1, 1});
+            check();
         }
     }
     m.profiler.end(cmd);
@@ -618,7 +626,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.has_guess = true;
 }
 
-WindStats WindSolver::stats_from(const void* readback) const {
+WindStats WindSolver::stats_from(const void* readback) {
     SolverState st;
     std::memcpy(&st, readback, sizeof(st));
     WindStats stats;
@@ -628,9 +636,10 @@ WindStats WindSolver::stats_from(const void* readback) const {
     stats.converged = st.done != 0;
     const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
     const std::uint32_t per_check = jacobi ? detail::kJacobiBlock : 1;
-    const std::uint32_t limit =
-        jacobi ? (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock : desc_.max_cycles;
-    stats.cycles = std::min(st.checks, limit) * per_check;
+    // The check after the start counts too, so an unfinished solve has one check more than cycles.
+    stats.cycles = std::min(st.checks, st.recorded) * per_check;
+    stats.cycles_recorded = st.recorded * per_check;
+    if (!jacobi) cycles_to_record_ = detail::cycles_to_record(stats, desc_.max_cycles);
     stats.cut_cells = st.cut_cells;
     stats.fluid_cells = st.fluid_cells;
     stats.moving_fragments = st.fragments;

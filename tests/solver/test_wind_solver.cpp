@@ -393,6 +393,49 @@ TEST_F(WindSolverTest, warmStartCutsTheCyclesOfLaterStepsOnAnUnchangedSceneAndSt
     EXPECT_LT(later[1], later[0]);
 }
 
+// A step records the V-cycles the last one suggests (docs/solver.md, "Cycles recorded"): the first all
+// max_cycles, a later one half again what the last ran (at least 4 more), and after a step that ran out
+// unconverged twice what that one recorded. Still air with no solid converges at once, so a box and an
+// emitter appearing then meet a step recorded short: it stops unconverged, and the next records more.
+TEST_F(WindSolverTest, recordsTheCyclesTheLastStepSuggests) {
+    SolverDesc desc;
+    desc.cells = {16, 16, 16};
+    auto solver = make(ctx(), desc);
+    ASSERT_TRUE(solver);
+    SolidWorld solids(ctx(), desc);
+    solids.update({}, 0.05f);
+    std::vector<WindStats> steps;
+    bool ran_out = false;
+    for (int step = 0; step < 8; ++step) {
+        if (step == 3) {
+            solids.update({{box({5.3f, 3.2f, 6.1f}, {9.6f, 10.4f, 10.2f}), glm::mat4(1.0f), std::nullopt}},
+                          0.05f);
+            const Emitter fan{EmitterType::Omni, {4, 8, 8}, {1, 0, 0}, 6.0f, 4.0f, 1.0f, 0.0f};
+            ASSERT_TRUE(solver->set_emitters(std::span(&fan, 1)));
+        }
+        const SolidSource source = solids.source();
+        auto stats = solver->step(0.05f, &source);
+        ASSERT_TRUE(stats) << stats.message();
+        std::uint32_t expected = desc.max_cycles;
+        if (!steps.empty()) {
+            const WindStats& last = steps.back();
+            expected =
+                last.converged ? last.cycles + std::max(4u, last.cycles / 2) : 2 * last.cycles_recorded;
+            expected = std::min(expected, desc.max_cycles);
+        }
+        EXPECT_EQ(stats->cycles_recorded, expected) << "step " << step;
+        EXPECT_LE(stats->cycles, stats->cycles_recorded) << "step " << step;
+        if (!stats->converged) {
+            EXPECT_EQ(stats->cycles, stats->cycles_recorded) << "step " << step;
+            ran_out = true;
+        }
+        steps.push_back(*stats);
+    }
+    EXPECT_LT(steps[2].cycles_recorded, desc.max_cycles) << "still air needs few cycles";
+    EXPECT_TRUE(ran_out) << "the box and the fan needed more than the still air's steps recorded";
+    EXPECT_TRUE(steps.back().converged);
+}
+
 TEST_F(WindSolverTest, tenTimesTheCflStepStaysBounded) {
     SolverDesc desc;
     desc.cells = {16, 16, 16};

@@ -82,13 +82,14 @@ struct SolidSource {
 
 /// What one step did.
 struct WindStats {
-    double divergence_before = 0.0; ///< max |divergence| before projection, 1/s
-    double divergence_after = 0.0;  ///< the same after, 1/s
-    double residual = 0.0;          ///< max |residual| at the last check, 1/s
-    std::uint32_t cycles = 0;       ///< V-cycles (multigrid) or iterations (Jacobi) run
-    bool converged = false;         ///< the tolerance was met
-    std::uint32_t cut_cells = 0;    ///< cells holding solid voxels
-    std::uint32_t fluid_cells = 0;  ///< cells with an open face
+    double divergence_before = 0.0;    ///< max |divergence| before projection, 1/s
+    double divergence_after = 0.0;     ///< the same after, 1/s
+    double residual = 0.0;             ///< max |residual| at the last check, 1/s
+    std::uint32_t cycles = 0;          ///< V-cycles (multigrid) or iterations (Jacobi) run
+    std::uint32_t cycles_recorded = 0; ///< V-cycles or iterations the step recorded (docs/solver.md)
+    bool converged = false;            ///< the tolerance was met
+    std::uint32_t cut_cells = 0;       ///< cells holding solid voxels
+    std::uint32_t fluid_cells = 0;     ///< cells with an open face
     std::uint32_t moving_fragments = 0;
     std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (when timed)
 };
@@ -155,8 +156,9 @@ class WindSolver {
     static std::size_t readback_bytes();
     /// Records a copy of the recorded step's counters into `dst` at `offset`.
     void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
-    /// The stats of a recorded step from its readback (no pass timings).
-    WindStats stats_from(const void* readback) const;
+    /// The stats of a recorded step from its readback (no pass timings); they also set how many
+    /// V-cycles the steps recorded from now on hold (docs/solver.md, "Cycles recorded").
+    WindStats stats_from(const void* readback);
     /// scroll() recorded (the origin moves now).
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
     /// Fails when `texels` is too small for write_texels() or record_texels().
@@ -186,6 +188,7 @@ class WindSolver {
     glm::vec3 ambient_{0.0f};
     std::uint32_t levels_ = 1;
     float last_dt_ = 0.0f;
+    std::uint32_t cycles_to_record_ = 0; ///< V-cycles the next step records (MGPCG and multigrid)
     std::unique_ptr<Impl> impl_;
 };
 
