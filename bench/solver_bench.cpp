@@ -360,6 +360,9 @@ struct StepRow {
     double cycles() const {
         return median_of(steps, [](const StepSample& s) { return s.stats.cycles; });
     }
+    double recorded() const {
+        return median_of(steps, [](const StepSample& s) { return s.stats.cycles_recorded; });
+    }
 };
 
 /// Steps the scene and a default (MGPCG) solver from the uniform ambient wind, moving the box every
@@ -732,7 +735,9 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "solver MGPCG (`PressureSolver::MultigridPCG`: conjugate gradients preconditioned by one "
            "multigrid V-cycle per iteration, "
         << desc.smoothing << " + " << desc.smoothing << " red-black sweeps), tolerance "
-        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles << " iterations (V-cycles), "
+        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles
+        << " iterations (V-cycles), of which a step records what the last step suggests (Recorded; "
+           "docs/solver.md, \"Cycles recorded\"), "
         << (desc.warm_start
                 ? "each solve starting from the last step's pressure scaled to fit (the warm start)"
                 : "each solve starting from zero (`--cold-start`)")
@@ -747,15 +752,15 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
     out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Steps |";
     for (const char* pass : kPasses)
         out << " `" << pass << "` ms |";
-    out << " Total GPU ms | Wall ms | V-cycles | Converged |\n|--:|--:|--:|--:|--:|--:|";
+    out << " Total GPU ms | Wall ms | V-cycles | Recorded | Converged |\n|--:|--:|--:|--:|--:|--:|";
     for (std::size_t i = 0; i < std::size(kPasses); ++i)
         out << "--:|";
-    out << "--:|--:|--:|---|\n";
+    out << "--:|--:|--:|--:|---|\n";
     for (const StepRow& row : rows) {
         out << "| " << size_name(row.cells) << " | " << grouped(cell_count(row.cells)) << " | ";
         if (!row.error.empty()) {
             out << failed_cell(notes, size_name(row.cells) + " steps", row.error) << " |";
-            for (std::size_t i = 0; i < std::size(kPasses) + 8; ++i)
+            for (std::size_t i = 0; i < std::size(kPasses) + 9; ++i)
                 out << " |";
             out << "\n";
             continue;
@@ -769,7 +774,7 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
         for (const char* pass : kPasses)
             out << " " << fmt_ms(row.pass(pass)) << " |";
         out << " " << fmt_ms(row.total()) << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
-            << converged << " of " << row.steps.size() << " |\n";
+            << row.recorded() << " | " << converged << " of " << row.steps.size() << " |\n";
     }
     out << "\n";
 }
@@ -932,9 +937,10 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "b and zeroes x, p and r_old), the warm start (q = L phi with the sums b*q and q*q; left out with "
            "`--cold-start`), the start (x0 = s*phi and r0 = b - s*q) and the copy of x into the pressure. "
            "Measured ms are that table's pass medians; the step row sums them (the step-time table's total "
-           "is the median of the sums). A step records all "
+           "is the median of the sums). A step records the V-cycles the last step suggests (the step-time "
+           "table's recorded column, at most "
         << desc.max_cycles
-        << " iterations and the check zeroes the dispatches of those after convergence, so the measured "
+        << ") and the check zeroes the dispatches of those left after convergence, so the measured "
            "pressure ms also holds their empty dispatches. Accessed at bandwidth ms is what the accessed "
            "bytes would take at the copy bandwidth, for a kernel whose loads all miss the cache.\n\n";
     out << "| Grid | Pass | Dispatches | Accessed MB | Unique MB | Accessed / unique | Floor ms | Measured "
