@@ -19,13 +19,16 @@ void main() {
     uint base = block * mask_stride(tb.log2_branching);
     uint layer = pc.pinned != 0u ? 0u : words;
     uint flag = 1u << (bit % 32u);
-    uint before = atomicOr(masks().v[base + layer + bit / 32u], flag);
-    bool newly = (before & flag) == 0u;
+    // Many fragments share a voxel: a plain read first skips the atomic once the bit is set (bits and
+    // the frame stamp only grow during a pass, so a stale read only costs an atomic).
+    uint word = base + layer + bit / 32u;
+    bool newly = (masks().v[word] & flag) == 0u && (atomicOr(masks().v[word], flag) & flag) == 0u;
     if (pc.pinned != 0u) {
         if (newly) atomicAdd(state().s.static_voxels, 1u);
         return;
     }
     if (newly && (masks().v[base + bit / 32u] & flag) == 0u) atomicAdd(state().s.dynamic_voxels, 1u);
+    if (masks().v[base + 2u * words] == pc.frame) return;
     if (atomicExchange(masks().v[base + 2u * words], pc.frame) == pc.frame) return;
     uint slot = atomicAdd(state().s.leaves_next, 1u);
     if (slot < tb.list_capacity) WordsRef(tb.leaves[pc.frame & 1u]).v[slot] = node;
