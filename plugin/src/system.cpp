@@ -181,7 +181,8 @@ struct System::Impl {
         gpu::Buffer readback; ///< world counters, solver counters, then answers at answers_offset()
         gpu::Buffer points;   ///< async query points asked in the frame
         std::vector<QueryId> asked;
-        bool used = false; ///< a recorded frame's results wait here
+        bool used = false;       ///< a recorded frame's results wait here
+        std::uint64_t frame = 0; ///< the frame they belong to (gpu::Context::begin_frame)
     };
     std::vector<Slot> slots;
     static std::size_t answers_offset();
@@ -645,7 +646,8 @@ Outcome System::Impl::collect(Slot& slot) {
     const auto* bytes = static_cast<const unsigned char*>(slot.readback.mapped());
     auto done = world->collect(bytes);
     if (!done) return device_failure(done.status());
-    const WindStats wind = solver->stats_from(bytes + VoxelWorld::readback_bytes());
+    WindStats wind = solver->stats_from(bytes + VoxelWorld::readback_bytes());
+    wind.ms = solver->timings(slot.frame);
     const auto* answers = reinterpret_cast<const glm::vec3*>(bytes + answers_offset());
     std::size_t at = 0;
     for (QueryId id : slot.asked) {
@@ -736,6 +738,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
             m.queries.at(id).asked = true;
         slot.asked = std::move(asked);
         slot.used = true;
+        slot.frame = n;
         ++m.frame;
         m.publish_texture();
         return {};

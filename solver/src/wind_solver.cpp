@@ -626,6 +626,10 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.has_guess = true;
 }
 
+std::vector<std::pair<std::string, double>> WindSolver::timings(std::uint64_t frame) const {
+    return impl_->profiler.read_frame(frame);
+}
+
 WindStats WindSolver::stats_from(const void* readback) {
     SolverState st;
     std::memcpy(&st, readback, sizeof(st));

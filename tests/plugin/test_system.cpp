@@ -392,6 +392,28 @@ TEST_F(HostFrames, statsAndAsyncAnswersArriveFramesInFlightStepsLater) {
             EXPECT_GT(answer[1].x, 0.5f) << "the ambient wind blows through the domain";
         }
     }
+
+    // Per-pass GPU timings come back with the frame's stats: the passes a blocking step on gust's own
+    // queue times, in its order.
+    std::unique_ptr<System> own;
+    SystemDesc desc = small_desc(watch_);
+    desc.voxelize = VoxelizePath::Compute;
+    ASSERT_TRUE(System::create(desc, own));
+    MeshId own_mesh = 0;
+    ASSERT_TRUE(own->create_mesh(box.desc(), own_mesh));
+    ASSERT_TRUE(own->create_instance(own_mesh, translation(0.0f, 2.0f, 0.0f), true, instance));
+    ASSERT_TRUE(own->set_ambient(ambient));
+    for (int step = 0; step < 2; ++step)
+        ASSERT_TRUE(own->step(0.05f));
+    std::vector<std::string> recorded, blocking;
+    for (const auto& [pass, ms] : system_->stats().ms) {
+        recorded.push_back(pass);
+        EXPECT_TRUE(std::isfinite(ms) && ms >= 0.0) << pass << " " << ms;
+    }
+    for (const auto& [pass, ms] : own->stats().ms)
+        blocking.push_back(pass);
+    EXPECT_FALSE(blocking.empty());
+    EXPECT_EQ(recorded, blocking);
 }
 
 /// Vertices staged for a frame are recorded into it by handle; the mesh is destroyed while that frame

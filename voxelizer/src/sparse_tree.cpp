@@ -293,6 +293,10 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     profiler_.end(cmd);
 }
 
+std::vector<std::pair<std::string, double>> SparseTree::timings(std::uint64_t frame) const {
+    return profiler_.read_frame(frame);
+}
+
 TreeStats SparseTree::stats_from(const void* readback) const {
     TreeState st{};
     std::memcpy(&st, readback, sizeof(st));

@@ -97,6 +97,7 @@ namespace {
 /// Written by record_readback() ahead of the voxelizers' and the tree's counters.
 struct ReadbackHeader {
     std::uint64_t frame;
+    std::uint64_t recorded_in; ///< gpu::Context::recording_frame(), which the profilers' slots follow
     std::uint32_t static_rebuilt;
     std::uint32_t unused;
 };
@@ -125,7 +126,7 @@ std::size_t VoxelWorld::readback_bytes() {
 }
 
 void VoxelWorld::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
-    const ReadbackHeader header{recorded_frame_, recorded_rebuild_ ? 1u : 0u, 0};
+    const ReadbackHeader header{recorded_frame_, ctx_->recording_frame(), recorded_rebuild_ ? 1u : 0u, 0};
     ctx_->vk().vkCmdUpdateBuffer(cmd, dst, offset, sizeof(header), &header);
     offset += sizeof(header);
     static_->record_readback(cmd, dst, offset);
@@ -147,6 +148,9 @@ Result<WorldFrame> VoxelWorld::collect(const void* readback) {
     auto moving = dynamic_->collect(bytes + Voxelizer::readback_bytes());
     if (!moving) return moving.status();
     out.tree = tree_->stats_from(bytes + 2 * Voxelizer::readback_bytes());
+    if (out.static_rebuilt) append_ms(out.ms, "voxelize_static_", static_->timings(header.recorded_in));
+    append_ms(out.ms, "voxelize_", dynamic_->timings(header.recorded_in));
+    append_ms(out.ms, "", tree_->timings(header.recorded_in));
     out.static_voxelize = *fixed;
     out.dynamic_voxelize = *moving;
     // The static counters are new only in a frame that voxelized the static set.

@@ -332,6 +332,10 @@ void Voxelizer::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize 
                                 capacities);
 }
 
+std::vector<std::pair<std::string, double>> Voxelizer::timings(std::uint64_t frame) const {
+    return profiler_.read_frame(frame);
+}
+
 Result<VoxelizeStats> Voxelizer::collect(const void* readback) {
     Readback r;
     std::memcpy(&r, readback, sizeof(r));

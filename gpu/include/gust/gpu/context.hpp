@@ -151,13 +151,15 @@ class Context {
 
     /// Frames in flight (work recorded into the host's command buffers, which run later): from the first
     /// call on, buffers released are kept until retire() says the frames that may use them completed,
-    /// and timestamps are off (a query pool would be reused before it is read). `frame` numbers the frame
-    /// being recorded; buffers released from now on are tagged with it.
+    /// and each Profiler writes the frame's timestamps into a slot of its own (Profiler::read_frame).
+    /// `frame` numbers the frame being recorded; buffers released from now on are tagged with it.
     void begin_frame(std::uint64_t frame);
     /// Destroys the buffers released while recording frames up to `completed` (which have completed).
     void retire(std::uint64_t completed);
     /// True once begin_frame() was called: recorded work may still be pending when a call returns.
     bool deferred() const { return deferred_; }
+    /// The frame begin_frame() last named (0 before the first call).
+    std::uint64_t recording_frame() const { return recording_frame_; }
     /// Internal: called by Buffer when it is released while deferred().
     void release_later(VkBuffer buffer, VkDeviceMemory memory);
 

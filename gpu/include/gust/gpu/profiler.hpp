@@ -1,6 +1,7 @@
 // GPU timestamps around named passes, read back after the submission completes.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <gust/gpu/context.hpp>
 #include <string>
@@ -9,11 +10,15 @@
 
 namespace gust::gpu {
 
-/// Records begin/end timestamps per named pass. One recording at a time; reuse with reset().
+/// Records begin/end timestamps per named pass. One recording at a time; reuse with reset(). With
+/// frames in flight (Context::begin_frame) each recorded frame writes its own set of queries, one of
+/// kFrameSlots kept round by frame number, so a frame's timings can be read once it has completed.
 class Profiler {
   public:
-    /// Up to `max_passes` passes per recording. A device without timestamps, or a Context with frames in
-    /// flight (Context::deferred), yields empty results.
+    /// Frames whose timings are kept: up to 8 in flight and the one being recorded.
+    static constexpr std::uint32_t kFrameSlots = 9;
+
+    /// Up to `max_passes` passes per recording. A device without timestamps yields empty results.
     static Result<Profiler> create(Context& ctx, std::uint32_t max_passes = 32);
     Profiler() = default;
     ~Profiler();
@@ -22,20 +27,28 @@ class Profiler {
     Profiler(const Profiler&) = delete;
     Profiler& operator=(const Profiler&) = delete;
 
-    /// Resets the queries; record before the first begin().
+    /// Resets the queries of this recording (the frame being recorded, when frames are in flight);
+    /// record before the first begin().
     void reset(VkCommandBuffer cmd);
     /// Starts the pass `name` (passes do not nest).
     void begin(VkCommandBuffer cmd, std::string name);
     /// Ends the current pass.
     void end(VkCommandBuffer cmd);
-    /// Milliseconds per pass, in recording order, once the commands have completed.
+    /// Milliseconds per pass of the last recording, in recording order, once its commands completed.
     std::vector<std::pair<std::string, double>> read() const;
+    /// The same for the recording made while Context::begin_frame(`frame`) was current; empty when
+    /// nothing was recorded in that frame, or its slot was recorded again since.
+    std::vector<std::pair<std::string, double>> read_frame(std::uint64_t frame) const;
 
   private:
     Context* ctx_ = nullptr;
     VkQueryPool pool_ = VK_NULL_HANDLE;
     std::uint32_t capacity_ = 0;
-    std::vector<std::string> names_;
+    std::uint32_t slot_ = 0;
+    std::array<std::vector<std::string>, kFrameSlots> names_;
+    std::array<std::uint64_t, kFrameSlots> frames_{};
+    std::array<bool, kFrameSlots> recorded_{};
+    std::vector<std::pair<std::string, double>> read_slot(std::uint32_t slot) const;
     void release();
 };
 

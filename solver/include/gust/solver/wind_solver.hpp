@@ -159,6 +159,9 @@ class WindSolver {
     /// The stats of a recorded step from its readback (no pass timings); they also set how many
     /// V-cycles the steps recorded from now on hold (docs/solver.md, "Cycles recorded").
     WindStats stats_from(const void* readback);
+    /// GPU milliseconds per pass of the step recorded while gpu::Context::begin_frame(`frame`) was
+    /// current, once that frame completed; empty if none was recorded then.
+    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
     /// scroll() recorded (the origin moves now).
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
     /// Fails when `texels` is too small for write_texels() or record_texels().

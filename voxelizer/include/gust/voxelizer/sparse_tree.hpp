@@ -73,6 +73,9 @@ class SparseTree {
     void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
     /// The stats of a recorded update from its readback.
     TreeStats stats_from(const void* readback) const;
+    /// GPU milliseconds per pass of the update recorded while gpu::Context::begin_frame(`frame`) was
+    /// current, once that frame completed; empty if none was recorded then.
+    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
 
     /// Grows the pools (never shrinks); contents are kept. Takes effect from the next update.
     Status reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks);

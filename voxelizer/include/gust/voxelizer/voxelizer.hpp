@@ -118,6 +118,9 @@ class Voxelizer {
     void record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const;
     /// The stats of a recorded pass from its readback; grows the lists it overflowed.
     Result<VoxelizeStats> collect(const void* readback);
+    /// GPU milliseconds per pass of the pass recorded while gpu::Context::begin_frame(`frame`) was
+    /// current, once that frame completed; empty if none was recorded then.
+    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
 
     /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
     Result<std::vector<std::uint32_t>> read_fragments() const;
