@@ -451,10 +451,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         vk.vkCmdDispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     };
+    // Indirect dispatches are the pressure solve's many small passes, each followed by another
+    // dispatch (or the check, whose run() ends in a full barrier), so a compute barrier suffices.
     auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
         p.bind(cmd, &push, sizeof(push));
         vk.vkCmdDispatchIndirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
-        gpu::barrier(ctx_, cmd);
+        gpu::compute_barrier(ctx_, cmd);
     };
     auto copy = [&](const gpu::Buffer& from, const gpu::Buffer& to) {
         const VkBufferCopy region{0, 0, face_count() * sizeof(float)};

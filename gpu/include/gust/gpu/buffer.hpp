@@ -64,4 +64,8 @@ void update(const Context& ctx, VkCommandBuffer cmd, const Buffer& dst, const vo
 /// Full memory barrier between two recorded passes (compute/graphics/transfer/indirect).
 void barrier(const Context& ctx, VkCommandBuffer cmd);
 
+/// Barrier between two compute dispatches: shader writes made visible to shader reads and writes and
+/// to indirect dispatch arguments. Cheaper than barrier() where a pass is many small dispatches.
+void compute_barrier(const Context& ctx, VkCommandBuffer cmd);
+
 } // namespace gust::gpu
