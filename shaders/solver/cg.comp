@@ -44,6 +44,6 @@ void main() {
             group_max_add(r);
         }
         uint bits;
-        if (group_max_end(bits)) atomicMax(st.s.residual_scratch, bits);
+        if (group_max_end(bits) && bits > st.s.residual_scratch) atomicMax(st.s.residual_scratch, bits);
     }
 }

@@ -14,6 +14,8 @@
 
 layout(local_size_x = kSolverGroupSize) in;
 
+shared uint group_fluid;
+
 void main() {
     int i = thread_index();
     ivec3 n = sb().b.dims;
@@ -30,6 +32,8 @@ void main() {
         return;
     }
     group_max_begin();
+    if (gl_LocalInvocationIndex == 0u) group_fluid = 0u;
+    barrier();
     if (inside && pc.parity == 3u) {
         float s = state().s.warm_scale;
         float b = load_cell(kCellTarget, i);
@@ -55,16 +59,22 @@ void main() {
             store_cell(kCellSolution, i, 0.0);
             store_cell(kCellDirection, i, 0.0);
             store_cell(kCellOldResidual, i, 0.0);
-            if (diag > 0.0) atomicAdd(state().s.fluid_cells, 1u);
+            if (diag > 0.0) atomicAdd(group_fluid, 1u);
         }
     }
+    // One global atomic per group, and none where an earlier group already left a larger maximum (it
+    // only grows, so a stale read costs an atomic, never a lost maximum): tens of thousands of groups on
+    // one word were most of this pass on an H100.
     uint bits;
     if (group_max_end(bits)) {
-        if (pc.parity == 0u)
-            atomicMax(state().s.divergence_before, bits);
-        else if (pc.parity == 1u)
-            atomicMax(state().s.divergence_after, bits);
-        else
-            atomicMax(state().s.residual_scratch, bits);
+        StateRef st = state();
+        if (pc.parity == 0u) {
+            if (bits > st.s.divergence_before) atomicMax(st.s.divergence_before, bits);
+            if (group_fluid > 0u) atomicAdd(st.s.fluid_cells, group_fluid);
+        } else if (pc.parity == 1u) {
+            if (bits > st.s.divergence_after) atomicMax(st.s.divergence_after, bits);
+        } else if (bits > st.s.residual_scratch) {
+            atomicMax(st.s.residual_scratch, bits);
+        }
     }
 }

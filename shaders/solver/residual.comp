@@ -15,5 +15,6 @@ void main() {
         group_max_add(r);
     }
     uint bits;
-    if (group_max_end(bits) && pc.parity == 1u) atomicMax(state().s.residual_scratch, bits);
+    if (group_max_end(bits) && pc.parity == 1u && bits > state().s.residual_scratch)
+        atomicMax(state().s.residual_scratch, bits);
 }
