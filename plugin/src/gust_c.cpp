@@ -477,6 +477,26 @@ std::uint32_t count32(std::size_t n) {
     return static_cast<std::uint32_t>(n);
 }
 
+/// A debug call that fills a list of C++ entries, run for a C array of `capacity` entries: the call
+/// writes into a list of its own type and `convert` turns each of the first min(capacity, total) into a
+/// C entry, which keeps the C and C++ structs free to differ at the cost of a copy (these are debug
+/// calls). `*count` receives the total, as the C++ call's count does.
+template <class Entry, class CEntry, class Call, class Convert>
+gust::Outcome fill_list(CEntry* out, std::size_t capacity, std::size_t* count, const char* name, Call call,
+                        Convert convert) {
+    if (!count) return invalid("count (the output) is NULL");
+    *count = 0;
+    if (capacity > 0 && !out)
+        return invalid(std::string(name) + " is NULL but capacity is " + std::to_string(capacity));
+    std::vector<Entry> list(capacity);
+    std::size_t total = 0;
+    if (gust::Outcome outcome = call(std::span<Entry>(list), total); !outcome) return outcome;
+    for (std::size_t i = 0; i < std::min(capacity, total); ++i)
+        out[i] = convert(list[i]);
+    *count = total;
+    return {};
+}
+
 } // namespace
 
 extern "C" {
@@ -799,45 +819,31 @@ gust_result gust_system_debug_voxel_grid(gust_system system, gust_voxel_grid_inf
     });
 }
 
-// The C++ calls write into a list of their own types; converting through one of `capacity` entries keeps the
-// C and C++ structs free to differ, at the cost of a copy (these are debug calls).
 gust_result gust_system_debug_voxels(gust_system system, gust_voxel_coord* voxels, size_t capacity,
                                      size_t* count) {
-    return on_system(system, "gust_system_debug_voxels", [&](gust::System& s) -> gust::Outcome {
-        if (!count) return invalid("count (the output) is NULL");
-        *count = 0;
-        if (capacity > 0 && !voxels)
-            return invalid("voxels is NULL but capacity is " + std::to_string(capacity));
-        std::vector<gust::VoxelCoord> out(capacity);
-        std::size_t total = 0;
-        gust::Outcome outcome = s.debug_voxels(out, total);
-        if (!outcome) return outcome;
-        for (std::size_t v = 0; v < std::min(capacity, total); ++v)
-            voxels[v] = {out[v].i, out[v].j, out[v].k};
-        *count = total;
-        return {};
+    return on_system(system, "gust_system_debug_voxels", [&](gust::System& s) {
+        return fill_list<gust::VoxelCoord>(
+            voxels, capacity, count, "voxels",
+            [&](std::span<gust::VoxelCoord> out, std::size_t& total) { return s.debug_voxels(out, total); },
+            [](const gust::VoxelCoord& v) {
+                return gust_voxel_coord{v.i, v.j, v.k};
+            });
     });
 }
 
 gust_result gust_system_debug_tree_nodes(gust_system system, gust_tree_node* nodes, size_t capacity,
                                          size_t* count) {
-    return on_system(system, "gust_system_debug_tree_nodes", [&](gust::System& s) -> gust::Outcome {
-        if (!count) return invalid("count (the output) is NULL");
-        *count = 0;
-        if (capacity > 0 && !nodes)
-            return invalid("nodes is NULL but capacity is " + std::to_string(capacity));
-        std::vector<gust::TreeNode> out(capacity);
-        std::size_t total = 0;
-        gust::Outcome outcome = s.debug_tree_nodes(out, total);
-        if (!outcome) return outcome;
-        for (std::size_t n = 0; n < std::min(capacity, total); ++n)
-            nodes[n] = {.min = to_c(out[n].min),
-                        .size = out[n].size,
-                        .level = out[n].level,
-                        .state = static_cast<gust_tree_node_state>(out[n].state),
-                        .refined = out[n].refined};
-        *count = total;
-        return {};
+    return on_system(system, "gust_system_debug_tree_nodes", [&](gust::System& s) {
+        return fill_list<gust::TreeNode>(
+            nodes, capacity, count, "nodes",
+            [&](std::span<gust::TreeNode> out, std::size_t& total) { return s.debug_tree_nodes(out, total); },
+            [](const gust::TreeNode& n) {
+                return gust_tree_node{.min = to_c(n.min),
+                                      .size = n.size,
+                                      .level = n.level,
+                                      .state = static_cast<gust_tree_node_state>(n.state),
+                                      .refined = n.refined};
+            });
     });
 }
 
