@@ -19,8 +19,8 @@ Result<Profiler> Profiler::create(Context& ctx, std::uint32_t max_passes) {
 void Profiler::reset(VkCommandBuffer cmd) {
     slot_ = ctx_->deferred() ? std::uint32_t(ctx_->recording_frame() % kFrameSlots) : 0;
     names_[slot_].clear();
-    frames_[slot_] = ctx_->recording_frame();
-    recorded_[slot_] = ctx_->deferred();
+    // A blocking recording belongs to no frame, so read_frame() never returns it.
+    frames_[slot_] = ctx_->deferred() ? ctx_->recording_frame() : kNoFrame;
     if (pool_) ctx_->vk().vkCmdResetQueryPool(cmd, pool_, slot_ * 2 * capacity_, 2 * capacity_);
 }
 
@@ -45,7 +45,7 @@ std::vector<std::pair<std::string, double>> Profiler::read() const {
 
 std::vector<std::pair<std::string, double>> Profiler::read_frame(std::uint64_t frame) const {
     const auto slot = std::uint32_t(frame % kFrameSlots);
-    if (!recorded_[slot] || frames_[slot] != frame) return {};
+    if (frames_[slot] != frame) return {};
     return read_slot(slot);
 }
 
@@ -86,7 +86,6 @@ Profiler& Profiler::operator=(Profiler&& other) noexcept {
         slot_ = other.slot_;
         names_ = std::move(other.names_);
         frames_ = other.frames_;
-        recorded_ = other.recorded_;
     }
     return *this;
 }

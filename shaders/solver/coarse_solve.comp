@@ -15,8 +15,8 @@ void main() {
     int count = level.dims.x * level.dims.y * level.dims.z;
     int i = int(gl_LocalInvocationIndex);
     bool mine = i < count;
-    // cell_operator's faces in its order: the weight, and the neighbour's index or -1 for an open
-    // domain side (its φ is 0); a closed face has weight 0.
+    // cell_operator's faces in its order (face_coupling): the weight, 0 for a closed face, and the
+    // neighbour's index, or -1 for an open domain side (its φ is 0).
     float w[6];
     int neighbour[6];
     float diag = 0.0;
@@ -28,20 +28,8 @@ void main() {
         uint open = grid_open_sides();
         for (uint a = 0u; a < 3u; ++a)
             for (uint s = 0u; s < 2u; ++s) {
-                uint k = 2u * a + s;
-                ivec3 f = s == 0u ? c : c + axis_unit(a);
-                ivec3 nb = s == 0u ? c - axis_unit(a) : c + axis_unit(a);
-                float weight = load_weight(int(level.faces) + face_index(level.dims, a, f)) * level.inv_h2[a];
-                w[k] = 0.0;
-                neighbour[k] = -1;
-                if (weight == 0.0) continue;
-                if (inside_cells(level.dims, nb)) {
-                    w[k] = weight;
-                    neighbour[k] = cell_index(level.dims, nb);
-                } else if ((open >> k & 1u) != 0u) {
-                    w[k] = weight;
-                }
-                diag += w[k];
+                w[2u * a + s] = face_coupling(level, open, c, a, s, neighbour[2u * a + s]);
+                diag += w[2u * a + s];
             }
         phi_shared[i] = load_cell(kCellPressure, int(level.cells) + i);
         rhs = load_cell(kCellRhs, int(level.cells) + i);

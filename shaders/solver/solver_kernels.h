@@ -200,6 +200,23 @@ GUST_INLINE float cell_divergence(ivec3 c) {
     return net / grid_h();
 }
 
+/// Face 2a + s of cell c of `level` (s = 0: the low side) in the Laplacian: its weight over h², 0 when
+/// the face is closed or an inflow side, and in `neighbour` the cell across it (index within the level),
+/// or -1 beyond an open domain side, where φ = 0.
+GUST_INLINE float face_coupling(GridLevel level, uint open, ivec3 c, uint a, uint s,
+                                GUST_OUT(int) neighbour) {
+    ivec3 f = s == 0u ? c : c + axis_unit(a);
+    ivec3 nb = s == 0u ? c - axis_unit(a) : c + axis_unit(a);
+    neighbour = -1;
+    float w = load_weight(int(level.faces) + face_index(level.dims, a, f)) * level.inv_h2[a];
+    if (w == 0.0f) return 0.0f;
+    if (inside_cells(level.dims, nb)) {
+        neighbour = cell_index(level.dims, nb);
+        return w;
+    }
+    return (open >> (2u * a + s) & 1u) != 0u ? w : 0.0f;
+}
+
 /// The weighted Laplacian at cell c of level l: diag = Σ w over the open faces, off = Σ w·(φ_nb − centre)
 /// (φ = 0 beyond open domain sides; inflow sides add nothing), so (Lφ)_c = off − diag·(φ_c − centre).
 /// With centre = φ_c, off is (Lφ)_c itself, summed from differences: off − diag·φ_c would cancel the
@@ -213,17 +230,14 @@ GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, float centre, GUST_O
     off = 0.0f;
     for (uint a = 0u; a < 3u; ++a)
         for (uint s = 0u; s < 2u; ++s) {
-            ivec3 f = s == 0u ? c : c + axis_unit(a);
-            ivec3 nb = s == 0u ? c - axis_unit(a) : c + axis_unit(a);
-            float w = load_weight(int(level.faces) + face_index(level.dims, a, f)) * level.inv_h2[a];
+            int nb;
+            float w = face_coupling(level, open, c, a, s, nb);
             if (w == 0.0f) continue;
-            if (inside_cells(level.dims, nb)) {
-                diag += w;
-                off += w * (load_cell(field, int(level.cells) + cell_index(level.dims, nb)) - centre);
-            } else if ((open >> (2u * a + s) & 1u) != 0u) {
-                diag += w;
+            diag += w;
+            if (nb >= 0)
+                off += w * (load_cell(field, int(level.cells) + nb) - centre);
+            else
                 off -= w * centre;
-            }
         }
 }
 

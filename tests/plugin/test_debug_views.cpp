@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <gust/gust.hpp>
 #include <set>
+#include <span>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -37,26 +38,26 @@ Bounds box_at(float x, float y, float z) {
 /// (n + 2)^3 − (n − 2)^3.
 constexpr std::size_t kBoxVoxels = 6 * 6 * 6 - 2 * 2 * 2;
 
-std::vector<VoxelCoord> all_voxels(System& system) {
+/// Everything a span-filling debug call lists: asks for the count with an empty span, then fills a list
+/// of that size and checks the call gives the same count again.
+template <class T>
+std::vector<T> all_of(System& system, Outcome (System::*call)(std::span<T>, std::size_t&)) {
     std::size_t count = 0;
-    EXPECT_TRUE(system.debug_voxels({}, count));
-    std::vector<VoxelCoord> voxels(count);
+    EXPECT_TRUE((system.*call)({}, count));
+    std::vector<T> list(count);
     std::size_t again = 0;
-    const Outcome o = system.debug_voxels(voxels, again);
+    const Outcome o = (system.*call)(list, again);
     EXPECT_TRUE(o) << o.message();
     EXPECT_EQ(again, count);
-    return voxels;
+    return list;
+}
+
+std::vector<VoxelCoord> all_voxels(System& system) {
+    return all_of(system, &System::debug_voxels);
 }
 
 std::vector<TreeNode> all_nodes(System& system) {
-    std::size_t count = 0;
-    EXPECT_TRUE(system.debug_tree_nodes({}, count));
-    std::vector<TreeNode> nodes(count);
-    std::size_t again = 0;
-    const Outcome o = system.debug_tree_nodes(nodes, again);
-    EXPECT_TRUE(o) << o.message();
-    EXPECT_EQ(again, count);
-    return nodes;
+    return all_of(system, &System::debug_tree_nodes);
 }
 
 /// Voxels of `voxels` that lie outside the surface of `box` (see kBoxVoxels), as "(i,j,k)" strings.

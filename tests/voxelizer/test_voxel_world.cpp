@@ -15,6 +15,20 @@
 namespace gust::test {
 namespace {
 
+/// Uploads every object of the scene into `world` (into `meshes`, which the instances point into) and
+/// makes the static ones, posed at t = 0, its static set (`statics`).
+void upload_scene(const SceneDesc& scene, SceneRuntime& runtime, VoxelWorld& world,
+                  std::vector<GpuMesh>& meshes, std::vector<GpuInstance>& statics) {
+    for (std::size_t i = 0; i < runtime.object_count(); ++i) {
+        auto mesh = world.upload(view_of(runtime.mesh(i)));
+        ASSERT_TRUE(mesh) << mesh.message();
+        meshes.push_back(std::move(*mesh));
+    }
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+        if (scene.objects[i].is_static) statics.push_back({&meshes[i], runtime.model(i, 0.0)});
+    world.set_static(statics);
+}
+
 /// This frame's dynamic instances of a scene at time t (deforming meshes posed), moving since t - stride.
 std::vector<GpuInstance> dynamic_at(const SceneDesc& scene, SceneRuntime& runtime, VoxelWorld& world,
                                     std::vector<GpuMesh>& meshes, double t, double stride) {
@@ -73,15 +87,8 @@ TEST_P(WorldMatchesScratch, afterEveryFrame) {
     ASSERT_TRUE(scratch);
 
     std::vector<GpuMesh> meshes;
-    for (std::size_t i = 0; i < runtime->object_count(); ++i) {
-        auto mesh = (*world)->upload(view_of(runtime->mesh(i)));
-        ASSERT_TRUE(mesh) << mesh.message();
-        meshes.push_back(std::move(*mesh));
-    }
     std::vector<GpuInstance> statics;
-    for (std::size_t i = 0; i < meshes.size(); ++i)
-        if (scene->objects[i].is_static) statics.push_back({&meshes[i], runtime->model(i, 0.0)});
-    (*world)->set_static(statics);
+    ASSERT_NO_FATAL_FAILURE(upload_scene(*scene, *runtime, **world, meshes, statics));
 
     // Frames spread over three seconds of the animation, so the movers cross the whole scene.
     const int frames = 10;
@@ -173,15 +180,8 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
     auto scratch = Voxelizer::create(ctx);
     ASSERT_TRUE(scratch);
     std::vector<GpuMesh> meshes;
-    for (std::size_t i = 0; i < runtime->object_count(); ++i) {
-        auto mesh = (*world)->upload(view_of(runtime->mesh(i)));
-        ASSERT_TRUE(mesh) << mesh.message();
-        meshes.push_back(std::move(*mesh));
-    }
     std::vector<GpuInstance> statics;
-    for (std::size_t i = 0; i < meshes.size(); ++i)
-        if (scene->objects[i].is_static) statics.push_back({&meshes[i], runtime->model(i, 0.0)});
-    (*world)->set_static(statics);
+    ASSERT_NO_FATAL_FAILURE(upload_scene(*scene, *runtime, **world, meshes, statics));
 
     std::vector<gpu::Buffer> readbacks;
     for (std::uint64_t i = 0; i < kFrames; ++i) {

@@ -20,7 +20,7 @@ class Profiler {
 
     /// Up to `max_passes` passes per recording. A device without timestamps yields empty results.
     static Result<Profiler> create(Context& ctx, std::uint32_t max_passes = 32);
-    Profiler() = default;
+    Profiler() { frames_.fill(kNoFrame); }
     ~Profiler();
     Profiler(Profiler&& other) noexcept;
     Profiler& operator=(Profiler&& other) noexcept;
@@ -46,8 +46,8 @@ class Profiler {
     std::uint32_t capacity_ = 0;
     std::uint32_t slot_ = 0;
     std::array<std::vector<std::string>, kFrameSlots> names_;
-    std::array<std::uint64_t, kFrameSlots> frames_{};
-    std::array<bool, kFrameSlots> recorded_{};
+    static constexpr std::uint64_t kNoFrame = ~std::uint64_t(0);
+    std::array<std::uint64_t, kFrameSlots> frames_; ///< the frame each slot was recorded in, or kNoFrame
     std::vector<std::pair<std::string, double>> read_slot(std::uint32_t slot) const;
     void release();
 };
