@@ -112,7 +112,7 @@ std::string block_name(std::string_view bench, const gust::gpu::DeviceInfo& devi
 }
 
 std::string heading_device(const gust::gpu::DeviceInfo& device) {
-    return device.type == "cpu" ? std::string() : " (on " + device.name + ")";
+    return device.type == "cpu" ? std::string() : " (on " + std::string(device.name) + ")";
 }
 
 gust::Status write_block(const std::filesystem::path& path, std::string_view name, const std::string& body) {

@@ -21,6 +21,7 @@
 #include <span>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -40,7 +41,7 @@ using gust::bench::ms_since;
 using gust::bench::RunInfo;
 using gust::bench::usable_cores;
 using gust::bench::utc_now;
-using PassMs = std::vector<std::pair<std::string, double>>;
+using PassMs = gust::gpu::Timings;
 
 /// Names this tool in its error and Vulkan messages.
 constexpr const char* kTool = "gust_bench_solver";
@@ -149,7 +150,7 @@ std::string fmt_sci(double x) {
 }
 
 /// Milliseconds of the pass `name`, or a negative number when the step did not time it.
-double pass_ms(const PassMs& passes, const std::string& name) {
+double pass_ms(const PassMs& passes, std::string_view name) {
     for (const auto& [pass, ms] : passes)
         if (pass == name) return ms;
     return -1.0;
@@ -558,7 +559,7 @@ struct Traffic {
 
 /// What the byte counts depend on: the grid hierarchy and what one step found.
 struct Workload {
-    std::vector<gust::shaderio::GridLevel> levels;
+    std::pmr::vector<gust::shaderio::GridLevel> levels;
     std::uint32_t smoothing = 0;  ///< SolverDesc::smoothing
     std::uint32_t cell_words = 0; ///< words of a cell's voxel set
     double cycles = 0.0;          ///< V-cycles per step (median)
@@ -1051,7 +1052,8 @@ int main(int argc, char** argv) {
     auto ctx = gust::gpu::Context::create(context);
     if (!ctx) return fail("cannot create a Vulkan context: " + ctx.message());
     if ((*ctx)->info().timestamp_period_ns <= 0.0f)
-        return fail((*ctx)->info().name + " has no timestamps, and every table here is in GPU time");
+        return fail(std::string((*ctx)->info().name) +
+                    " has no timestamps, and every table here is in GPU time");
     std::cerr << "device: " << (*ctx)->info().name << "\n";
 
     auto bandwidth = copy_bandwidth(**ctx, options.repeat);

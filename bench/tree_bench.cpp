@@ -47,7 +47,7 @@ using gust::bench::ms_since;
 using gust::bench::RunInfo;
 using gust::bench::usable_cores;
 using gust::bench::utc_now;
-using PassMs = std::vector<std::pair<std::string, double>>;
+using PassMs = gust::gpu::Timings;
 
 /// Names this tool in its error and Vulkan messages.
 constexpr const char* kTool = "gust_bench_tree";
@@ -754,7 +754,8 @@ void render_world(std::ostringstream& out, const WorldResult& world, const Plan&
     std::vector<std::string> order;
     const auto collect = [&](const std::vector<FrameSample>& frames, bool rebuild) {
         for (const FrameSample& f : frames)
-            for (const auto& [name, ms] : f.frame.ms) {
+            for (const auto& [pass, ms] : f.frame.ms) {
+                const std::string name(pass);
                 if (!passes.count(name)) order.push_back(name);
                 (rebuild ? passes[name].second : passes[name].first).push_back(ms);
             }

@@ -115,7 +115,7 @@ int run_voxelize(const VoxelizeArgs& args) {
     ms["voxelize"] = ms_since(start);
     nlohmann::ordered_json gpu_ms;
     for (const auto& [pass, t] : stats->ms)
-        gpu_ms[pass] = t;
+        gpu_ms[std::string(pass)] = t;
 
     start = Clock::now();
     auto fragments = (*voxelizer)->read_fragments();

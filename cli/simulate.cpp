@@ -164,9 +164,9 @@ int run_simulate(const SimulateArgs& args) {
         line["dense_bytes"] = std::uint64_t(grid->res) * grid->res * grid->res * 4;
         nlohmann::ordered_json ms;
         for (const auto& [pass, value] : step->ms)
-            ms[pass] = value;
+            ms[std::string(pass)] = value;
         for (const auto& [pass, value] : air->ms)
-            ms["wind_" + pass] = value;
+            ms["wind_" + std::string(pass)] = value;
         line["ms"] = ms;
         line["divergence_before"] = air->divergence_before;
         line["divergence_after"] = air->divergence_after;

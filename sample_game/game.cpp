@@ -376,7 +376,7 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double t, doub
     line["converged"] = s.converged;
     nlohmann::json ms = nlohmann::json::object();
     for (const auto& [name, value] : s.ms)
-        ms[name] = value;
+        ms[std::string(name)] = value;
     line["gpu_ms"] = ms;
     const glm::vec3 ambient = world_->ambient(t);
     line["ambient"] = {ambient.x, ambient.y, ambient.z};

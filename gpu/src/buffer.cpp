@@ -21,7 +21,7 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
     info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                  VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | extra_usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    if (VkResult r = vk.vkCreateBuffer(ctx.device(), &info, nullptr, &b.buffer_); r != VK_SUCCESS)
+    if (VkResult r = vk.vkCreateBuffer(ctx.device(), &info, ctx.allocator(), &b.buffer_); r != VK_SUCCESS)
         return Result<Buffer>::failure(std::string("vkCreateBuffer failed: ") + to_string(r));
 
     VkMemoryRequirements req;
@@ -49,7 +49,7 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
     alloc.pNext = &flags;
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = type;
-    if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, nullptr, &b.memory_); r != VK_SUCCESS)
+    if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, ctx.allocator(), &b.memory_); r != VK_SUCCESS)
         return Result<Buffer>::failure("cannot allocate " + std::to_string(req.size) +
                                        " bytes: " + to_string(r));
     vk.vkBindBufferMemory(ctx.device(), b.buffer_, b.memory_, 0);
@@ -72,8 +72,8 @@ void Buffer::release() {
     if (ctx_->deferred() && buffer_) {
         ctx_->release_later(buffer_, memory_);
     } else {
-        if (buffer_) vk.vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
-        if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, nullptr);
+        if (buffer_) vk.vkDestroyBuffer(ctx_->device(), buffer_, ctx_->allocator());
+        if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, ctx_->allocator());
     }
     buffer_ = VK_NULL_HANDLE;
     memory_ = VK_NULL_HANDLE;

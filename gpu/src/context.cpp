@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <array>
 #include <cctype>
+#include <charconv>
 #include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
@@ -12,10 +14,17 @@ namespace {
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return s;
+bool contains_ignoring_case(std::string_view text, std::string_view part) {
+    const auto same = [](char a, char b) {
+        return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+    };
+    return std::search(text.begin(), text.end(), part.begin(), part.end(), same) != text.end();
 }
+
+/// What device_requirements() lists beyond the features.
+constexpr std::uint32_t kApiVersion = VK_API_VERSION_1_3;
+constexpr std::array<const char*, 0> kRequiredExtensions{};
+constexpr std::array kOptionalExtensions{VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME};
 
 const char* type_name(VkPhysicalDeviceType type) {
     switch (type) {
@@ -83,23 +92,26 @@ struct FeatureChain {
     FeatureChain& operator=(const FeatureChain&) = delete;
 };
 
-std::vector<VkExtensionProperties> device_extensions(const Dispatch& vk, VkPhysicalDevice physical) {
+std::pmr::vector<VkExtensionProperties> device_extensions(const Dispatch& vk, VkPhysicalDevice physical,
+                                                          std::pmr::memory_resource* memory) {
     std::uint32_t count = 0;
     vk.vkEnumerateDeviceExtensionProperties(physical, nullptr, &count, nullptr);
-    std::vector<VkExtensionProperties> exts(count);
+    std::pmr::vector<VkExtensionProperties> exts(count, memory);
     vk.vkEnumerateDeviceExtensionProperties(physical, nullptr, &count, exts.data());
     return exts;
 }
 
-bool has_extension(const std::vector<VkExtensionProperties>& exts, const std::string& name) {
-    return std::any_of(exts.begin(), exts.end(),
-                       [&](const VkExtensionProperties& e) { return name == e.extensionName; });
+bool has_extension(std::span<const VkExtensionProperties> exts, const char* name) {
+    return std::any_of(exts.begin(), exts.end(), [&](const VkExtensionProperties& e) {
+        return std::strcmp(name, e.extensionName) == 0;
+    });
 }
 
-std::vector<VkQueueFamilyProperties> queue_families(const Dispatch& vk, VkPhysicalDevice physical) {
+std::pmr::vector<VkQueueFamilyProperties> queue_families(const Dispatch& vk, VkPhysicalDevice physical,
+                                                         std::pmr::memory_resource* memory) {
     std::uint32_t count = 0;
     vk.vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, nullptr);
-    std::vector<VkQueueFamilyProperties> families(count);
+    std::pmr::vector<VkQueueFamilyProperties> families(count, memory);
     vk.vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, families.data());
     return families;
 }
@@ -124,28 +136,27 @@ Status load_instance_functions(Dispatch& vk, VkInstance instance) {
 }
 
 // What `physical` lacks of device_requirements(), every item named; ok when nothing.
-Status check_support(const Dispatch& vk, VkPhysicalDevice physical) {
-    const DeviceRequirements req = device_requirements();
+Status check_support(const Dispatch& vk, VkPhysicalDevice physical, std::pmr::memory_resource* memory) {
     VkPhysicalDeviceProperties props;
     vk.vkGetPhysicalDeviceProperties(physical, &props);
-    const std::string device = std::string("device '") + props.deviceName + "'";
-    if (props.apiVersion < req.api_version)
-        return Status::failure(device + " supports only Vulkan " + version_string(props.apiVersion) +
-                               "; gust needs " + version_string(req.api_version));
+    const auto device = [&] { return "device '" + std::string(props.deviceName) + "'"; }; // on failure only
+    if (props.apiVersion < kApiVersion)
+        return Status::failure(device() + " supports only Vulkan " + version_string(props.apiVersion) +
+                               "; gust needs " + version_string(kApiVersion));
     FeatureChain have;
     vk.vkGetPhysicalDeviceFeatures2(physical, &have.f2);
     std::string missing_features;
     for_each_feature(have.f2.features, have.f12, have.f13, [&](VkBool32 supported, const char* name) {
         if (!supported) append(missing_features, name);
     });
-    const std::vector<VkExtensionProperties> exts = device_extensions(vk, physical);
+    const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk, physical, memory);
     std::string missing_extensions;
-    for (const char* name : req.extensions)
+    for (const char* name : kRequiredExtensions)
         if (!has_extension(exts, name)) append(missing_extensions, name);
     std::string message;
-    if (!missing_features.empty()) message = device + " lacks required features: " + missing_features;
+    if (!missing_features.empty()) message = device() + " lacks required features: " + missing_features;
     if (!missing_extensions.empty())
-        message += (message.empty() ? device : std::string(";")) +
+        message += (message.empty() ? device() : std::string(";")) +
                    " lacks required extensions: " + missing_extensions;
     if (!message.empty()) return Status::failure(message);
     return {};
@@ -180,7 +191,9 @@ VkDebugUtilsMessengerCreateInfoEXT messenger_info(Context* ctx) {
 
 DeviceRequirements device_requirements() {
     DeviceRequirements req;
-    req.optional_extensions = {VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME};
+    req.api_version = kApiVersion;
+    req.extensions.assign(kRequiredExtensions.begin(), kRequiredExtensions.end());
+    req.optional_extensions.assign(kOptionalExtensions.begin(), kOptionalExtensions.end());
     FeatureChain chain;
     for_each_feature(chain.f2.features, chain.f12, chain.f13,
                      [&](VkBool32&, const char* name) { req.features.push_back(name); });
@@ -214,7 +227,7 @@ Status check_device_support(PFN_vkGetInstanceProcAddr get_instance_proc_addr, Vk
     Dispatch vk;
     vk.vkGetInstanceProcAddr = get_instance_proc_addr;
     if (Status s = load_instance_functions(vk, instance); !s) return s;
-    return check_support(vk, physical_device);
+    return check_support(vk, physical_device, std::pmr::new_delete_resource());
 }
 
 const char* to_string(VkResult result) {
@@ -250,14 +263,21 @@ const char* to_string(VkResult result) {
     }
 }
 
+Context::Context(std::pmr::memory_resource* memory)
+    : host_memory_(memory),
+      allocator_(memory), info_{.name = std::pmr::string(memory), .driver = std::pmr::string(memory)},
+      device_names_(memory), released_(memory), last_message_(memory) {}
+
 Result<std::unique_ptr<Context>> Context::create(const ContextDesc& desc) {
-    std::unique_ptr<Context> ctx(new Context());
+    std::pmr::memory_resource* memory = desc.memory ? desc.memory : std::pmr::new_delete_resource();
+    std::unique_ptr<Context> ctx(new (memory) Context(memory));
     if (Status s = ctx->init(desc); !s) return s;
     return ctx;
 }
 
 Result<std::unique_ptr<Context>> Context::adopt(const HostDevice& host) {
-    std::unique_ptr<Context> ctx(new Context());
+    std::pmr::memory_resource* memory = host.memory ? host.memory : std::pmr::new_delete_resource();
+    std::unique_ptr<Context> ctx(new (memory) Context(memory));
     if (Status s = ctx->init_adopted(host); !s) return s;
     return ctx;
 }
@@ -273,7 +293,7 @@ void Context::report(Severity severity, bool validation, const std::string& mess
 
 std::string Context::last_validation_message() const {
     std::lock_guard lock(message_mutex_);
-    return last_message_;
+    return std::string(last_message_);
 }
 
 Status Context::init(const ContextDesc& desc) {
@@ -294,18 +314,18 @@ Status Context::init(const ContextDesc& desc) {
         return Status::failure("the Vulkan loader supports only " + version_string(version) +
                                "; gust needs Vulkan 1.3");
 
-    std::vector<const char*> layers;
-    std::vector<const char*> extensions;
+    std::pmr::vector<const char*> layers(host_memory_);
+    std::pmr::vector<const char*> extensions(host_memory_);
     std::uint32_t count = 0;
     vk_.vkEnumerateInstanceExtensionProperties(nullptr, &count, nullptr);
-    std::vector<VkExtensionProperties> available(count);
+    std::pmr::vector<VkExtensionProperties> available(count, host_memory_);
     vk_.vkEnumerateInstanceExtensionProperties(nullptr, &count, available.data());
     bool debug_utils = false;
     for (const auto& e : available)
         if (std::strcmp(e.extensionName, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) == 0) debug_utils = true;
     if (desc.validation) {
         vk_.vkEnumerateInstanceLayerProperties(&count, nullptr);
-        std::vector<VkLayerProperties> props(count);
+        std::pmr::vector<VkLayerProperties> props(count, host_memory_);
         vk_.vkEnumerateInstanceLayerProperties(&count, props.data());
         const bool found = std::any_of(props.begin(), props.end(), [](const VkLayerProperties& p) {
             return std::strcmp(p.layerName, kValidationLayer) == 0;
@@ -330,7 +350,7 @@ Status Context::init(const ContextDesc& desc) {
     info.ppEnabledLayerNames = layers.data();
     info.enabledExtensionCount = std::uint32_t(extensions.size());
     info.ppEnabledExtensionNames = extensions.data();
-    if (VkResult r = vk_.vkCreateInstance(&info, nullptr, &instance_); r != VK_SUCCESS)
+    if (VkResult r = vk_.vkCreateInstance(&info, allocator(), &instance_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateInstance failed: ") + to_string(r));
 
     if (Status s = load_instance_functions(vk_, instance_); !s) return s;
@@ -340,37 +360,40 @@ Status Context::init(const ContextDesc& desc) {
 #undef GUST_LOAD
     }
     if (debug_utils && vk_.vkCreateDebugUtilsMessengerEXT)
-        vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger, nullptr, &messenger_);
+        vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger, allocator(), &messenger_);
 
-    std::string override_spec = desc.device;
+    std::string_view override_spec = desc.device;
     if (override_spec.empty())
         if (const char* env = std::getenv("GUST_DEVICE")) override_spec = env;
     if (Status s = pick_device(override_spec); !s) return s;
     return create_device();
 }
 
-Status Context::pick_device(const std::string& override_spec) {
+Status Context::pick_device(std::string_view override_spec) {
     std::uint32_t count = 0;
     vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
-    std::vector<VkPhysicalDevice> devices(count);
+    std::pmr::vector<VkPhysicalDevice> devices(count, host_memory_);
     vk_.vkEnumeratePhysicalDevices(instance_, &count, devices.data());
     if (devices.empty())
         return Status::failure("no Vulkan device found (install mesa-vulkan-drivers for lavapipe)");
 
-    std::string list;
     int best_rank = -1;
     for (std::uint32_t i = 0; i < count; ++i) {
         VkPhysicalDeviceProperties props;
         vk_.vkGetPhysicalDeviceProperties(devices[i], &props);
-        std::string entry =
-            std::to_string(i) + ": " + props.deviceName + " (" + type_name(props.deviceType) + ")";
-        device_names_.push_back(entry);
-        list += (list.empty() ? "" : ", ") + entry;
+        std::array<char, 16> index{};
+        std::to_chars(index.data(), index.data() + index.size() - 1, i);
+        std::pmr::string& entry = device_names_.emplace_back(index.data());
+        entry.append(": ")
+            .append(props.deviceName)
+            .append(" (")
+            .append(type_name(props.deviceType))
+            .append(")");
         const bool usable = props.apiVersion >= VK_API_VERSION_1_3;
         if (!override_spec.empty()) {
-            const bool by_index = override_spec.find_first_not_of("0123456789") == std::string::npos &&
-                                  std::stoul(override_spec) == i;
-            const bool by_name = lower(props.deviceName).find(lower(override_spec)) != std::string::npos;
+            const bool by_index = override_spec.find_first_not_of("0123456789") == std::string_view::npos &&
+                                  override_spec == index.data();
+            const bool by_name = contains_ignoring_case(props.deviceName, override_spec);
             if ((by_index || by_name) && physical_ == VK_NULL_HANDLE) {
                 if (!usable)
                     return Status::failure("device '" + std::string(props.deviceName) +
@@ -387,8 +410,12 @@ Status Context::pick_device(const std::string& override_spec) {
         }
     }
     if (physical_ == VK_NULL_HANDLE) {
+        std::string list;
+        for (const std::pmr::string& entry : device_names_)
+            list.append(list.empty() ? "" : ", ").append(entry);
         if (!override_spec.empty())
-            return Status::failure("no Vulkan device matches '" + override_spec + "'; devices: " + list);
+            return Status::failure("no Vulkan device matches '" + std::string(override_spec) +
+                                   "'; devices: " + list);
         return Status::failure("no Vulkan 1.3 device found; devices: " + list);
     }
     return {};
@@ -422,60 +449,62 @@ Status Context::init_adopted(const HostDevice& host) {
             return Status::failure("HostDevice::on_message needs VK_EXT_debug_utils enabled on the host's "
                                    "instance");
         const VkDebugUtilsMessengerCreateInfoEXT info = messenger_info(this);
-        if (VkResult r = vk_.vkCreateDebugUtilsMessengerEXT(instance_, &info, nullptr, &messenger_);
+        if (VkResult r = vk_.vkCreateDebugUtilsMessengerEXT(instance_, &info, allocator(), &messenger_);
             r != VK_SUCCESS)
             return Status::failure(std::string("vkCreateDebugUtilsMessengerEXT failed: ") + to_string(r));
     }
 
-    if (Status s = check_support(vk_, physical_); !s) return s;
+    if (Status s = check_support(vk_, physical_, host_memory_); !s) return s;
     VkPhysicalDeviceProperties props;
     vk_.vkGetPhysicalDeviceProperties(physical_, &props);
-    const std::string device = std::string("device '") + props.deviceName + "'";
-    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
+    const std::string_view device = props.deviceName;
+    const std::pmr::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_, host_memory_);
     if (host.queue_family >= families.size())
         return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) +
-                               " out of range (" + device + " has " + std::to_string(families.size()) +
-                               " queue families)");
+                               " out of range (device '" + std::string(device) + "' has " +
+                               std::to_string(families.size()) + " queue families)");
     const VkQueueFamilyProperties& family = families[host.queue_family];
     if (host.queue_index >= family.queueCount)
         return Status::failure("HostDevice::queue_index " + std::to_string(host.queue_index) +
                                " out of range (queue family " + std::to_string(host.queue_family) + " has " +
                                std::to_string(family.queueCount) + " queues)");
     if (!graphics_and_compute(family))
-        return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) + " of " +
-                               device + " does not support both graphics and compute");
+        return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) +
+                               " of device '" + std::string(device) +
+                               "' does not support both graphics and compute");
     queue_family_ = host.queue_family;
 
-    const std::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_);
+    const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_, host_memory_);
     std::string unsupported;
-    for (const std::string& name : host.enabled_extensions)
-        if (!has_extension(exts, name)) append(unsupported, name.c_str());
+    for (const char* name : host.enabled_extensions)
+        if (name && !has_extension(exts, name)) append(unsupported, name);
     if (!unsupported.empty())
-        return Status::failure("HostDevice::enabled_extensions lists " + unsupported + ", which " + device +
-                               " does not support");
+        return Status::failure("HostDevice::enabled_extensions lists " + unsupported + ", which device '" +
+                               std::string(device) + "' does not support");
     info_.conservative_rasterization =
-        std::find(host.enabled_extensions.begin(), host.enabled_extensions.end(),
-                  VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) != host.enabled_extensions.end();
+        std::any_of(host.enabled_extensions.begin(), host.enabled_extensions.end(), [](const char* name) {
+            return name && std::strcmp(name, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) == 0;
+        });
     device_ = host.device;
     return finish_device(host.queue_index);
 }
 
 Status Context::create_device() {
-    if (Status s = check_support(vk_, physical_); !s) return s;
+    if (Status s = check_support(vk_, physical_, host_memory_); !s) return s;
     VkPhysicalDeviceProperties props;
     vk_.vkGetPhysicalDeviceProperties(physical_, &props);
 
-    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
+    const std::pmr::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_, host_memory_);
     const auto family = std::find_if(families.begin(), families.end(), graphics_and_compute);
     if (family == families.end())
         return Status::failure(std::string("device '") + props.deviceName +
                                "' has no graphics+compute queue");
     queue_family_ = std::uint32_t(family - families.begin());
 
-    const DeviceRequirements req = device_requirements();
-    const std::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_);
-    std::vector<const char*> enabled = req.extensions;
-    for (const char* name : req.optional_extensions)
+    const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_, host_memory_);
+    std::pmr::vector<const char*> enabled(kRequiredExtensions.begin(), kRequiredExtensions.end(),
+                                          host_memory_);
+    for (const char* name : kOptionalExtensions)
         if (has_extension(exts, name)) enabled.push_back(name);
     info_.conservative_rasterization = has_extension(exts, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
 
@@ -494,7 +523,7 @@ Status Context::create_device() {
     info.pQueueCreateInfos = &queue_info;
     info.enabledExtensionCount = std::uint32_t(enabled.size());
     info.ppEnabledExtensionNames = enabled.data();
-    if (VkResult r = vk_.vkCreateDevice(physical_, &info, nullptr, &device_); r != VK_SUCCESS)
+    if (VkResult r = vk_.vkCreateDevice(physical_, &info, allocator(), &device_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName +
                                "': " + to_string(r));
     return finish_device(0);
@@ -524,13 +553,13 @@ Status Context::finish_device(std::uint32_t queue_index) {
     VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     p2.pNext = &m3;
     vk_.vkGetPhysicalDeviceProperties2(physical_, &p2);
-    const std::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_);
+    const std::pmr::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_, host_memory_);
 
     info_.name = props.deviceName;
     info_.type = type_name(props.deviceType);
     info_.api_version = props.apiVersion;
     info_.vendor_id = props.vendorID;
-    info_.driver = std::string(p12.driverName) + " " + p12.driverInfo;
+    info_.driver.assign(p12.driverName).append(" ").append(p12.driverInfo);
     info_.timestamp_period_ns =
         (families[queue_family_].timestampValidBits > 0 && props.limits.timestampComputeAndGraphics)
             ? props.limits.timestampPeriod
@@ -544,10 +573,10 @@ Status Context::finish_device(std::uint32_t queue_index) {
     VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool_info.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pool_info.queueFamilyIndex = queue_family_;
-    if (VkResult r = vk_.vkCreateCommandPool(device_, &pool_info, nullptr, &pool_); r != VK_SUCCESS)
+    if (VkResult r = vk_.vkCreateCommandPool(device_, &pool_info, allocator(), &pool_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateCommandPool failed: ") + to_string(r));
     VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    if (VkResult r = vk_.vkCreateFence(device_, &fence_info, nullptr, &fence_); r != VK_SUCCESS)
+    if (VkResult r = vk_.vkCreateFence(device_, &fence_info, allocator(), &fence_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateFence failed: ") + to_string(r));
     return {};
 }
@@ -558,28 +587,30 @@ Context::~Context() {
         // synchronizes, and every gust submission has completed when submit_and_wait returns.
         if (owns_device_) vk_.vkDeviceWaitIdle(device_);
         retire(UINT64_MAX);
-        if (fence_) vk_.vkDestroyFence(device_, fence_, nullptr);
-        if (pool_) vk_.vkDestroyCommandPool(device_, pool_, nullptr);
-        if (owns_device_) vk_.vkDestroyDevice(device_, nullptr);
+        if (fence_) vk_.vkDestroyFence(device_, fence_, allocator());
+        if (pool_) vk_.vkDestroyCommandPool(device_, pool_, allocator());
+        if (owns_device_) vk_.vkDestroyDevice(device_, allocator());
     }
-    if (messenger_) vk_.vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
-    if (instance_ && owns_device_) vk_.vkDestroyInstance(instance_, nullptr);
+    if (messenger_) vk_.vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, allocator());
+    if (instance_ && owns_device_) vk_.vkDestroyInstance(instance_, allocator());
     if (loader_) dlclose(loader_);
 }
 
-Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record) {
+Status Context::begin_one_time(VkCommandBuffer& cmd) {
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = pool_;
     alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     alloc.commandBufferCount = 1;
-    VkCommandBuffer cmd = VK_NULL_HANDLE;
     if (VkResult r = vk_.vkAllocateCommandBuffers(device_, &alloc, &cmd); r != VK_SUCCESS)
         return Status::failure(std::string("vkAllocateCommandBuffers failed: ") + to_string(r));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     vk_.vkBeginCommandBuffer(cmd, &begin);
     if (!owns_device_) barrier(*this, cmd);
-    record(cmd);
+    return {};
+}
+
+Status Context::end_one_time(VkCommandBuffer cmd) {
     vk_.vkEndCommandBuffer(cmd);
 
     VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
@@ -615,8 +646,8 @@ void Context::retire(std::uint64_t completed) {
             released_[kept++] = r;
             continue;
         }
-        vk_.vkDestroyBuffer(device_, r.buffer, nullptr);
-        vk_.vkFreeMemory(device_, r.memory, nullptr);
+        vk_.vkDestroyBuffer(device_, r.buffer, allocator());
+        vk_.vkFreeMemory(device_, r.memory, allocator());
     }
     released_.resize(kept);
 }

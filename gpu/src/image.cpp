@@ -23,7 +23,7 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     info.usage = desc.usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    if (VkResult r = vk.vkCreateImage(ctx.device(), &info, nullptr, &img.image_); r != VK_SUCCESS)
+    if (VkResult r = vk.vkCreateImage(ctx.device(), &info, ctx.allocator(), &img.image_); r != VK_SUCCESS)
         return Result<Image>::failure(std::string("vkCreateImage failed: ") + to_string(r));
     VkMemoryRequirements req;
     vk.vkGetImageMemoryRequirements(ctx.device(), img.image_, &req);
@@ -33,7 +33,8 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = type;
-    if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, nullptr, &img.memory_); r != VK_SUCCESS)
+    if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, ctx.allocator(), &img.memory_);
+        r != VK_SUCCESS)
         return Result<Image>::failure("cannot allocate " + std::to_string(req.size) +
                                       " bytes: " + to_string(r));
     vk.vkBindImageMemory(ctx.device(), img.image_, img.memory_, 0);
@@ -42,7 +43,7 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     view.viewType = volume ? VK_IMAGE_VIEW_TYPE_3D : VK_IMAGE_VIEW_TYPE_2D;
     view.format = desc.format;
     view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    if (VkResult r = vk.vkCreateImageView(ctx.device(), &view, nullptr, &img.view_); r != VK_SUCCESS)
+    if (VkResult r = vk.vkCreateImageView(ctx.device(), &view, ctx.allocator(), &img.view_); r != VK_SUCCESS)
         return Result<Image>::failure(std::string("vkCreateImageView failed: ") + to_string(r));
     return img;
 }
@@ -85,9 +86,9 @@ void Image::copy_to(VkCommandBuffer cmd, const Buffer& dst) const {
 void Image::release() {
     if (!ctx_) return;
     const auto& vk = ctx_->vk();
-    if (view_) vk.vkDestroyImageView(ctx_->device(), view_, nullptr);
-    if (image_) vk.vkDestroyImage(ctx_->device(), image_, nullptr);
-    if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, nullptr);
+    if (view_) vk.vkDestroyImageView(ctx_->device(), view_, ctx_->allocator());
+    if (image_) vk.vkDestroyImage(ctx_->device(), image_, ctx_->allocator());
+    if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, ctx_->allocator());
     view_ = VK_NULL_HANDLE;
     image_ = VK_NULL_HANDLE;
     memory_ = VK_NULL_HANDLE;

@@ -1,4 +1,5 @@
 #include <gust/gpu/pipeline.hpp>
+#include <memory_resource>
 #include <utility>
 #include <vector>
 
@@ -11,14 +12,15 @@ Result<VkShaderModule> make_module(Context& ctx, std::span<const std::uint32_t> 
     info.codeSize = spirv.size_bytes();
     info.pCode = spirv.data();
     VkShaderModule module = VK_NULL_HANDLE;
-    if (VkResult r = ctx.vk().vkCreateShaderModule(ctx.device(), &info, nullptr, &module); r != VK_SUCCESS)
+    if (VkResult r = ctx.vk().vkCreateShaderModule(ctx.device(), &info, ctx.allocator(), &module);
+        r != VK_SUCCESS)
         return Result<VkShaderModule>::failure(std::string("vkCreateShaderModule failed: ") + to_string(r));
     return module;
 }
 
 /// Specialization info mapping constants[i] to constant_id i (entries owned by the caller).
 VkSpecializationInfo specialization(std::span<const std::uint32_t> constants,
-                                    std::vector<VkSpecializationMapEntry>& entries) {
+                                    std::pmr::vector<VkSpecializationMapEntry>& entries) {
     entries.clear();
     for (std::uint32_t i = 0; i < constants.size(); ++i)
         entries.push_back({i, i * std::uint32_t(sizeof(std::uint32_t)), sizeof(std::uint32_t)});
@@ -37,7 +39,7 @@ Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
     VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     info.pushConstantRangeCount = push_constant_bytes ? 1 : 0;
     info.pPushConstantRanges = &range;
-    if (VkResult r = ctx_->vk().vkCreatePipelineLayout(ctx_->device(), &info, nullptr, &layout_);
+    if (VkResult r = ctx_->vk().vkCreatePipelineLayout(ctx_->device(), &info, ctx_->allocator(), &layout_);
         r != VK_SUCCESS)
         return Status::failure(std::string("vkCreatePipelineLayout failed: ") + to_string(r));
     return {};
@@ -57,13 +59,13 @@ Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> 
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     info.stage.module = *module;
     info.stage.pName = "main";
-    std::vector<VkSpecializationMapEntry> entries;
+    std::pmr::vector<VkSpecializationMapEntry> entries(ctx.memory());
     const VkSpecializationInfo spec = specialization(constants, entries);
     info.stage.pSpecializationInfo = constants.empty() ? nullptr : &spec;
     info.layout = p.layout_;
-    VkResult r =
-        ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
-    ctx.vk().vkDestroyShaderModule(ctx.device(), *module, nullptr);
+    VkResult r = ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, ctx.allocator(),
+                                                   &p.pipeline_);
+    ctx.vk().vkDestroyShaderModule(ctx.device(), *module, ctx.allocator());
     if (r != VK_SUCCESS)
         return Result<Pipeline>::failure(std::string("vkCreateComputePipelines failed: ") + to_string(r));
     return p;
@@ -75,9 +77,9 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
     if (Status s = p.create_layout(desc.push_constant_bytes); !s) return s;
 
-    std::vector<VkPipelineShaderStageCreateInfo> stages;
-    std::vector<VkShaderModule> modules;
-    std::vector<VkSpecializationMapEntry> entries;
+    std::pmr::vector<VkPipelineShaderStageCreateInfo> stages(ctx.memory());
+    std::pmr::vector<VkShaderModule> modules(ctx.memory());
+    std::pmr::vector<VkSpecializationMapEntry> entries(ctx.memory());
     const VkSpecializationInfo spec = specialization(desc.constants, entries);
     auto add = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) -> Status {
         if (code.empty()) return {};
@@ -131,13 +133,13 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     info.pDynamicState = &dynamic;
     info.layout = p.layout_;
     if (status) {
-        VkResult r =
-            ctx.vk().vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_);
+        VkResult r = ctx.vk().vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &info,
+                                                        ctx.allocator(), &p.pipeline_);
         if (r != VK_SUCCESS)
             status = Status::failure(std::string("vkCreateGraphicsPipelines failed: ") + to_string(r));
     }
     for (VkShaderModule m : modules)
-        ctx.vk().vkDestroyShaderModule(ctx.device(), m, nullptr);
+        ctx.vk().vkDestroyShaderModule(ctx.device(), m, ctx.allocator());
     if (!status) return status;
     return p;
 }
@@ -149,8 +151,8 @@ void Pipeline::bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) 
 
 void Pipeline::release() {
     if (!ctx_) return;
-    if (pipeline_) ctx_->vk().vkDestroyPipeline(ctx_->device(), pipeline_, nullptr);
-    if (layout_) ctx_->vk().vkDestroyPipelineLayout(ctx_->device(), layout_, nullptr);
+    if (pipeline_) ctx_->vk().vkDestroyPipeline(ctx_->device(), pipeline_, ctx_->allocator());
+    if (layout_) ctx_->vk().vkDestroyPipelineLayout(ctx_->device(), layout_, ctx_->allocator());
     pipeline_ = VK_NULL_HANDLE;
     layout_ = VK_NULL_HANDLE;
 }

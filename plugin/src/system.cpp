@@ -92,7 +92,8 @@ template <class F> Outcome guarded(F&& body) {
 
 struct System::Impl {
     explicit Impl(const Hooks& h)
-        : hooks(h), memory(h), meshes(&memory), instances(&memory), queries(&memory) {}
+        : hooks(h), memory(h), meshes(&memory), instances(&memory),
+          queries(&memory), stats{.ms = FrameStats::Timings(&memory)}, slots(&memory) {}
 
     Hooks hooks;
     HookResource memory;
@@ -115,8 +116,9 @@ struct System::Impl {
         bool dynamic = false; ///< moving, or of a deforming mesh: voxelized every frame
     };
     struct Pending {
-        std::vector<glm::vec3> points;
-        std::vector<glm::vec3> answer;
+        explicit Pending(std::pmr::memory_resource* memory) : points(memory), answer(memory) {}
+        std::pmr::vector<glm::vec3> points;
+        std::pmr::vector<glm::vec3> answer;
         bool ready = false;
         bool asked = false; ///< HostCommands: recorded into a frame, answered when it completes
     };
@@ -137,7 +139,7 @@ struct System::Impl {
     std::uint64_t frame = 0;
 
     ~Impl() {
-        if (sampler) ctx->vk().vkDestroySampler(ctx->device(), sampler, nullptr);
+        if (sampler) ctx->vk().vkDestroySampler(ctx->device(), sampler, ctx->allocator());
     }
 
     void log(LogLevel level, const std::string& message) const {
@@ -172,19 +174,20 @@ struct System::Impl {
     glm::ivec3 scroll_cells() const;
     /// This step's dynamic instances (their last transforms become the previous ones); hands a changed
     /// static set to the world.
-    std::vector<GpuInstance> frame_instances();
+    std::pmr::vector<GpuInstance> frame_instances();
     /// Stats from a finished frame.
     void take_stats(const WorldFrame& frame, const WindStats& wind);
 
     /// HostCommands: per frame in flight, where its counters and async answers come back.
     struct Slot {
+        explicit Slot(std::pmr::memory_resource* memory) : asked(memory) {}
         gpu::Buffer readback; ///< world counters, solver counters, then answers at answers_offset()
         gpu::Buffer points;   ///< async query points asked in the frame
-        std::vector<QueryId> asked;
+        std::pmr::vector<QueryId> asked;
         bool used = false;       ///< a recorded frame's results wait here
         std::uint64_t frame = 0; ///< the frame they belong to (gpu::Context::begin_frame)
     };
-    std::vector<Slot> slots;
+    std::pmr::vector<Slot> slots;
     static std::size_t answers_offset();
     /// Reads a completed frame's slot: stats, async answers, growth for later frames.
     Outcome collect(Slot& slot);
@@ -211,10 +214,12 @@ struct System::Impl {
 
 namespace {
 
-Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::unique_ptr<gpu::Context>& out) {
+// `hooks` and `memory` belong to the System and outlive the Context.
+Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::memory_resource* memory,
+                       std::unique_ptr<gpu::Context>& out) {
     gpu::MessageCallback on_message;
     if (hooks.log)
-        on_message = [hooks](gpu::Severity severity, const std::string& message) {
+        on_message = [&hooks](gpu::Severity severity, const std::string& message) {
             const LogLevel level = severity == gpu::Severity::Error     ? LogLevel::Error
                                    : severity == gpu::Severity::Warning ? LogLevel::Warning
                                                                         : LogLevel::Info;
@@ -230,8 +235,8 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::unique_p
         host.queue_index = h.queue_index;
         host.get_instance_proc_addr = h.get_instance_proc_addr;
         host.get_device_proc_addr = h.get_device_proc_addr;
-        for (const char* name : h.enabled_extensions)
-            if (name) host.enabled_extensions.emplace_back(name);
+        host.enabled_extensions = h.enabled_extensions;
+        host.memory = memory;
         auto ctx = gpu::Context::adopt(host);
         if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
         out = std::move(*ctx);
@@ -241,6 +246,7 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::unique_p
     own.validation = desc.validation;
     own.device = desc.device ? desc.device : "";
     own.on_message = on_message;
+    own.memory = memory;
     auto ctx = gpu::Context::create(own);
     if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
     out = std::move(*ctx);
@@ -307,14 +313,16 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
     return guarded([&]() -> Outcome {
         HookResource memory(desc.hooks);
         void* place = memory.allocate(sizeof(Impl), alignof(Impl));
-        std::unique_ptr<System> system(new System());
+        std::unique_ptr<System> system(new (desc.hooks) System());
         system->impl_ = new (place) Impl(desc.hooks);
         Impl& m = *system->impl_;
         m.solver_desc = solver_desc;
         m.branching = b;
         m.submission = desc.submission;
         m.focus = to_glm(desc.domain.focus);
-        if (Outcome o = create_context(desc, desc.hooks, m.ctx); !o) return o;
+        // Without an allocate hook Vulkan keeps the driver's own allocator.
+        std::pmr::memory_resource* hooked = desc.hooks.allocate ? &m.memory : nullptr;
+        if (Outcome o = create_context(desc, m.hooks, hooked, m.ctx); !o) return o;
 
         auto grid = voxel_grid(solver_desc, b);
         if (!grid) return invalid(grid.message());
@@ -348,7 +356,8 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
         sampler.addressModeU = sampler.addressModeV = sampler.addressModeW =
             VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-        if (m.ctx->vk().vkCreateSampler(m.ctx->device(), &sampler, nullptr, &m.sampler) != VK_SUCCESS)
+        if (m.ctx->vk().vkCreateSampler(m.ctx->device(), &sampler, m.ctx->allocator(), &m.sampler) !=
+            VK_SUCCESS)
             return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
         m.texture.image = m.image.handle();
         m.texture.view = m.image.view();
@@ -357,10 +366,40 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         for (int a = 0; a < 3; ++a)
             m.texture.extent[a] = solver_desc.cells[a];
         if (Outcome o = m.refresh_texture(); !o) return o;
-        if (desc.submission == Submission::HostCommands) m.slots.resize(desc.frames_in_flight);
+        if (desc.submission == Submission::HostCommands)
+            for (std::uint32_t i = 0; i < desc.frames_in_flight; ++i)
+                m.slots.emplace_back(&m.memory);
         out = std::move(system);
         return {};
     });
+}
+
+namespace {
+/// What precedes a System in its block: the hooks that allocated it, for operator delete.
+struct alignas(std::max_align_t) SystemHeader {
+    Hooks hooks;
+};
+} // namespace
+
+void* System::operator new(std::size_t bytes, const Hooks& hooks) {
+    HookResource memory(hooks);
+    auto* block =
+        static_cast<std::byte*>(memory.allocate(sizeof(SystemHeader) + bytes, alignof(SystemHeader)));
+    new (block) SystemHeader{hooks};
+    return block + sizeof(SystemHeader);
+}
+
+// Not inlined: GCC would otherwise pair System::operator new with the ::operator delete it forwards to
+// and warn of a mismatch.
+[[gnu::noinline]] void System::operator delete(void* system) noexcept {
+    if (!system) return;
+    auto* block = static_cast<std::byte*>(system) - sizeof(SystemHeader);
+    HookResource memory(std::launder(reinterpret_cast<SystemHeader*>(block))->hooks);
+    memory.deallocate(block, sizeof(SystemHeader) + sizeof(System), alignof(SystemHeader));
+}
+
+void System::operator delete(void* system, const Hooks&) noexcept {
+    operator delete(system);
 }
 
 System::~System() {
@@ -431,7 +470,7 @@ Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t 
     if (vertex_count > 0 && !positions) return invalid("positions is null");
     if (stride < 12) return invalid("stride must be at least 12 bytes, got " + std::to_string(stride));
     return guarded([&]() -> Outcome {
-        std::vector<glm::vec3> packed(vertex_count);
+        std::pmr::vector<glm::vec3> packed(vertex_count, &impl_->memory);
         for (std::uint32_t v = 0; v < vertex_count; ++v) {
             const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(positions) +
                                                            std::size_t(v) * stride);
@@ -496,7 +535,7 @@ Outcome System::destroy_instance(InstanceId instance) {
 
 Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
     return guarded([&]() -> Outcome {
-        std::vector<Emitter> out;
+        std::pmr::vector<Emitter> out(&impl_->memory);
         for (const WindEmitter& e : emitters) {
             const int type = int(e.type);
             if (type < 0 || type > int(WindEmitterType::ConeMotor))
@@ -538,19 +577,19 @@ glm::ivec3 System::Impl::scroll_cells() const {
     return glm::ivec3(shift);
 }
 
-std::vector<GpuInstance> System::Impl::frame_instances() {
+std::pmr::vector<GpuInstance> System::Impl::frame_instances() {
     // Meshes in use cannot be destroyed, so the static set only changes through the instance calls that
     // set static_dirty; VoxelWorld::set_static still compares, so a transform set to its old value
     // voxelizes nothing.
     if (static_dirty) {
-        std::vector<GpuInstance> fixed;
+        std::pmr::vector<GpuInstance> fixed(&memory);
         for (const auto& [id, instance] : instances)
             if (!instance.dynamic)
                 fixed.push_back({&meshes.at(instance.mesh).gpu, instance.model, std::nullopt});
-        world->set_static(std::move(fixed));
+        world->set_static(fixed);
         static_dirty = false;
     }
-    std::vector<GpuInstance> dynamic;
+    std::pmr::vector<GpuInstance> dynamic(&memory);
     for (auto& [id, instance] : instances)
         if (instance.dynamic) {
             dynamic.push_back({&meshes.at(instance.mesh).gpu, instance.model, instance.prev});
@@ -580,9 +619,9 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
     st.rejected_triangles =
         std::uint32_t(world_frame.dynamic_voxelize.rejected +
                       (world_frame.static_rebuilt ? world_frame.static_voxelize.rejected : 0));
-    st.ms = world_frame.ms;
+    st.ms.assign(world_frame.ms.begin(), world_frame.ms.end());
     for (const auto& [pass, ms] : wind.ms)
-        st.ms.emplace_back("wind_" + pass, ms);
+        st.ms.emplace_back("wind_", ms).first.append(pass);
     if (world_frame.pool_growths > 0)
         log(LogLevel::Info,
             "the voxel tree's pools grew " + std::to_string(world_frame.pool_growths) + " times");
@@ -606,7 +645,7 @@ Outcome System::step(float dt) {
             if (Status s = m.solver->scroll(shift); !s) return device_failure(s);
             if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
         }
-        const std::vector<GpuInstance> dynamic = m.frame_instances();
+        const std::pmr::vector<GpuInstance> dynamic = m.frame_instances();
         auto frame = m.world->step(dynamic, dt);
         if (!frame) return device_failure(frame.status());
         const SolidSource solid = solid_source(*m.world);
@@ -615,7 +654,7 @@ Outcome System::step(float dt) {
         ++m.frame;
         if (Outcome o = m.refresh_texture(); !o) return o;
 
-        std::vector<glm::vec3> points;
+        std::pmr::vector<glm::vec3> points(&m.memory);
         for (const auto& [id, pending] : m.queries)
             if (!pending.ready) points.insert(points.end(), pending.points.begin(), pending.points.end());
         if (!points.empty()) {
@@ -680,8 +719,8 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
         m.ctx->begin_frame(n);
 
-        std::vector<glm::vec3> points;
-        std::vector<QueryId> asked;
+        std::pmr::vector<glm::vec3> points(&m.memory);
+        std::pmr::vector<QueryId> asked(&m.memory);
         for (const auto& [id, pending] : m.queries)
             if (!pending.asked) {
                 points.insert(points.end(), pending.points.begin(), pending.points.end());
@@ -708,7 +747,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
             m.solver->record_scroll(commands, shift);
             if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
         }
-        const std::vector<GpuInstance> dynamic = m.frame_instances();
+        const std::pmr::vector<GpuInstance> dynamic = m.frame_instances();
         if (Status s = m.world->record(commands, dynamic, dt); !s) return device_failure(s);
         const SolidSource solid = solid_source(*m.world);
         if (Status s = m.solver->record_step(commands, dt, &solid); !s) return device_failure(s);
@@ -759,7 +798,7 @@ Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) 
                        std::to_string(points.size()) + " points");
     if (Outcome o = check_points(points); !o) return o;
     return guarded([&]() -> Outcome {
-        std::vector<glm::vec3> at(points.size());
+        std::pmr::vector<glm::vec3> at(points.size(), &impl_->memory);
         for (std::size_t i = 0; i < points.size(); ++i)
             at[i] = to_glm(points[i]);
         auto answers = impl_->solver->sample(at);
@@ -774,7 +813,7 @@ Outcome System::query_async(std::span<const Vec3> points, QueryId& id) {
     id = 0;
     if (Outcome o = check_points(points); !o) return o;
     return guarded([&]() -> Outcome {
-        Impl::Pending pending;
+        Impl::Pending pending(&impl_->memory);
         pending.points.reserve(points.size());
         for (const Vec3& p : points)
             pending.points.push_back(to_glm(p));
@@ -891,7 +930,7 @@ Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
         const SparseTree& tree = m.world->tree();
         auto pool = tree.node_pool();
         if (!pool) return device_failure(pool.status());
-        const std::vector<glm::uvec2>& nodes = *pool;
+        const std::pmr::vector<glm::uvec2>& nodes = *pool;
         const GridDesc& grid = m.world->grid();
         const std::uint32_t log2_b = std::uint32_t(std::countr_zero(tree.branching()));
         const std::uint32_t children = 1u << (3 * log2_b), depth = tree.depth();
@@ -904,8 +943,8 @@ Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
             std::uint32_t node;
             glm::uvec3 corner; ///< in voxels
         };
-        std::vector<Visit> level_nodes{{0, glm::uvec3(0)}}, next;
-        std::vector<bool> reached(blocks, false);
+        std::pmr::vector<Visit> level_nodes({{0, glm::uvec3(0)}}, &m.memory), next(&m.memory);
+        std::pmr::vector<bool> reached(blocks, false, &m.memory);
         reached[0] = true;
         std::size_t total = 0;
         std::uint32_t extent = grid.res; // voxels across a node of this level

@@ -89,7 +89,8 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
     m.k.dims = glm::ivec3(desc.cells);
     m.k.h = desc.cell_size;
     m.k.origin = desc.origin;
-    m.k.levels = detail::build_levels(desc.cells, desc.cell_size);
+    const auto levels = detail::build_levels(desc.cells, desc.cell_size);
+    m.k.levels.assign(levels.begin(), levels.end());
     const GridLevel& last = m.k.levels.back();
     const std::size_t all_cells = last.cells + std::size_t(last.dims.x) * last.dims.y * last.dims.z;
     const std::size_t all_faces = last.faces + std::size_t(shaderio::faces_total(last.dims));
@@ -109,8 +110,10 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
 Status CpuWind::set_ambient(glm::vec3 velocity) {
     if (Status s = detail::validate_ambient(velocity); !s) return s;
     impl_->k.ambient = velocity;
-    if (impl_->last_dt == 0.0f)
-        impl_->k.face[shaderio::kFieldVelocity] = detail::uniform_faces(impl_->k.dims, velocity);
+    if (impl_->last_dt == 0.0f) {
+        const auto faces = detail::uniform_faces(impl_->k.dims, velocity);
+        impl_->k.face[shaderio::kFieldVelocity].assign(faces.begin(), faces.end());
+    }
     return Status{};
 }
 

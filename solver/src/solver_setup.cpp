@@ -22,8 +22,9 @@ std::uint32_t cycles_to_record(const WindStats& last, std::uint32_t max_cycles) 
     return std::min(wanted, max_cycles);
 }
 
-std::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size) {
-    std::vector<GridLevel> levels;
+std::pmr::vector<GridLevel> build_levels(glm::uvec3 cells, float cell_size,
+                                         std::pmr::memory_resource* memory) {
+    std::pmr::vector<GridLevel> levels(memory);
     glm::ivec3 dims(cells);
     glm::vec3 h(cell_size);
     std::uint32_t cell_offset = 0, face_offset = 0;
@@ -108,8 +109,9 @@ Status validate_ambient(glm::vec3 velocity) {
     return Status{};
 }
 
-std::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity) {
-    std::vector<float> out(std::size_t(shaderio::faces_total(cells)));
+std::pmr::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity,
+                                      std::pmr::memory_resource* memory) {
+    std::pmr::vector<float> out(std::size_t(shaderio::faces_total(cells)), memory);
     for (int i = 0; i < int(out.size()); ++i) {
         std::uint32_t axis;
         shaderio::face_from_index(cells, i, axis);

@@ -9,7 +9,9 @@
 namespace gust::detail {
 
 /// Levels from the wind grid down to at most 4 cells per axis; an axis already at one cell stays.
-std::vector<shaderio::GridLevel> build_levels(glm::uvec3 cells, float cell_size);
+std::pmr::vector<shaderio::GridLevel>
+build_levels(glm::uvec3 cells, float cell_size,
+             std::pmr::memory_resource* memory = std::pmr::get_default_resource());
 /// The six face layers of a cell of v^3 voxels (−x,+x,−y,+y,−z,+z), kCellWords words each.
 void face_masks(std::uint32_t v, std::uint32_t* out);
 std::uint32_t cell_words(std::uint32_t v);
@@ -30,7 +32,8 @@ inline constexpr std::uint32_t kViscosityIterations = 4;
 inline constexpr float kAirDensity = 1.2f;
 Status validate_dt(float dt);
 /// Face velocities of a uniform flow over a grid of `cells`.
-std::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity);
+std::pmr::vector<float> uniform_faces(glm::ivec3 cells, glm::vec3 velocity,
+                                      std::pmr::memory_resource* memory = std::pmr::get_default_resource());
 /// An ambient wind: finite and below 10,000 m/s.
 Status validate_ambient(glm::vec3 velocity);
 

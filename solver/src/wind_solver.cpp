@@ -57,7 +57,8 @@ float from_bits(std::uint32_t bits) {
 
 } // namespace
 
-struct WindSolver::Impl {
+struct WindSolver::Impl : gpu::HostObject {
+    explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
     gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces,
         vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
         cg_scalars, project, scroll, sample;
@@ -65,7 +66,7 @@ struct WindSolver::Impl {
         residual_buf, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf,
         emitters, state, dispatch, bindings, points, samples;
     gpu::Profiler profiler;
-    std::vector<GridLevel> levels;
+    std::pmr::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
     std::array<shaderio::GpuEmitter, shaderio::kMaxEmitters> emitter_data{}; ///< written by each step
     /// Records the bindings `b` into their buffer, between barriers (passes earlier in the command buffer
@@ -93,12 +94,12 @@ std::size_t WindSolver::cell_count() const {
 
 Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const SolverDesc& desc) {
     if (Status s = validate(desc); !s) return s;
-    std::unique_ptr<WindSolver> solver(new WindSolver(ctx));
+    std::unique_ptr<WindSolver> solver(new (ctx.memory()) WindSolver(ctx));
     solver->desc_ = desc;
     solver->origin_ = desc.origin;
-    solver->impl_ = std::make_unique<Impl>();
+    solver->impl_.reset(new (ctx.memory()) Impl(ctx.memory()));
     Impl& m = *solver->impl_;
-    m.levels = detail::build_levels(desc.cells, desc.cell_size);
+    m.levels = detail::build_levels(desc.cells, desc.cell_size, ctx.memory());
     solver->levels_ = std::uint32_t(m.levels.size());
     solver->cycles_to_record_ = desc.max_cycles;
 
@@ -183,7 +184,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     if (!profiler) return profiler.status();
     m.profiler = std::move(*profiler);
 
-    std::vector<LevelDispatch> dispatch(2 * kDispatchSlots, LevelDispatch{0, 0, 0});
+    std::pmr::vector<LevelDispatch> dispatch(2 * kDispatchSlots, LevelDispatch{0, 0, 0}, ctx.memory());
     for (std::size_t l = 0; l < m.levels.size(); ++l) {
         const glm::ivec3 d = m.levels[l].dims;
         dispatch[kDispatchSlots + l] = groups_for(std::uint64_t(d.x) * d.y * d.z);
@@ -236,7 +237,8 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
     if (Status s = detail::validate_ambient(velocity); !s) return s;
     ambient_ = velocity;
     if (last_dt_ > 0.0f) return Status{};
-    const std::vector<float> faces = detail::uniform_faces(glm::ivec3(desc_.cells), velocity);
+    const std::pmr::vector<float> faces =
+        detail::uniform_faces(glm::ivec3(desc_.cells), velocity, ctx_.memory());
     return upload(ctx_, impl_->velocity, faces.data(), faces.size() * sizeof(float));
 }
 
@@ -288,8 +290,8 @@ Result<std::vector<float>> WindSolver::read_pressure() const {
     return phi;
 }
 
-Result<std::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points) {
-    std::vector<glm::vec3> out(points.size());
+Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points) {
+    std::pmr::vector<glm::vec3> out(points.size(), ctx_.memory());
     if (points.empty()) return out;
     for (std::size_t i = 0; i < points.size(); ++i)
         if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y) || !std::isfinite(points[i].z))
@@ -331,14 +333,6 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     m.sample.bind(cmd, &push, sizeof(push));
     ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
     gpu::barrier(ctx_, cmd);
-}
-
-Status WindSolver::write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then) {
-    if (Status s = check_texels(texels); !s) return s;
-    return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        record_texels(cmd, texels);
-        if (then) then(cmd);
-    });
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {
@@ -628,14 +622,14 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.has_guess = true;
 }
 
-std::vector<std::pair<std::string, double>> WindSolver::timings(std::uint64_t frame) const {
+gpu::Timings WindSolver::timings(std::uint64_t frame) const {
     return impl_->profiler.read_frame(frame);
 }
 
 WindStats WindSolver::stats_from(const void* readback) {
     SolverState st;
     std::memcpy(&st, readback, sizeof(st));
-    WindStats stats;
+    WindStats stats(ctx_.memory());
     stats.divergence_before = from_bits(st.divergence_before);
     stats.divergence_after = from_bits(st.divergence_after);
     stats.residual = from_bits(st.residual);

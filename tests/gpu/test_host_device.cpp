@@ -402,7 +402,8 @@ TEST_F(HostDeviceTest, rejectsADeviceLackingARequiredFeatureNamingIt) {
 
 TEST_F(HostDeviceTest, rejectsEnabledExtensionsTheDeviceDoesNotSupport) {
     gpu::HostDevice host = host_device();
-    host.enabled_extensions = {"VK_GUST_no_such_extension"};
+    static constexpr const char* kUnknown[] = {"VK_GUST_no_such_extension"};
+    host.enabled_extensions = kUnknown;
     auto adopted = gpu::Context::adopt(host);
     ASSERT_FALSE(adopted);
     EXPECT_NE(adopted.message().find("VK_GUST_no_such_extension"), std::string::npos) << adopted.message();

@@ -407,11 +407,11 @@ TEST_F(HostFrames, statsAndAsyncAnswersArriveFramesInFlightStepsLater) {
         ASSERT_TRUE(own->step(0.05f));
     std::vector<std::string> recorded, blocking;
     for (const auto& [pass, ms] : system_->stats().ms) {
-        recorded.push_back(pass);
+        recorded.emplace_back(pass);
         EXPECT_TRUE(std::isfinite(ms) && ms >= 0.0) << pass << " " << ms;
     }
     for (const auto& [pass, ms] : own->stats().ms)
-        blocking.push_back(pass);
+        blocking.emplace_back(pass);
     EXPECT_FALSE(blocking.empty());
     EXPECT_EQ(recorded, blocking);
 }

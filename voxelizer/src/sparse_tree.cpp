@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
-#include <functional>
 #include <gust/voxelizer/sparse_tree.hpp>
 
 namespace gust {
@@ -68,7 +67,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     if (desc.node_blocks < 1 || desc.mask_blocks < 1)
         return Result<std::unique_ptr<SparseTree>>::failure("pool capacities must be at least one block");
 
-    std::unique_ptr<SparseTree> tree(new SparseTree(ctx));
+    std::unique_ptr<SparseTree> tree(new (ctx.memory()) SparseTree(ctx));
     tree->log2_b_ = log2_b;
     tree->levels_ = levels;
     tree->hysteresis_ = desc.hysteresis;
@@ -129,7 +128,7 @@ Status SparseTree::allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_
                           {&records_[1], list * sizeof(BlockRecord)},
                           {&leaves_[0], list * sizeof(std::uint32_t)},
                           {&leaves_[1], list * sizeof(std::uint32_t)}};
-    std::vector<gpu::Buffer> fresh;
+    std::pmr::vector<gpu::Buffer> fresh(ctx_.memory());
     for (const Want& want : wants) {
         auto b = gpu::Buffer::create(ctx_, want.bytes, gpu::MemoryUse::Device);
         if (!b) return b.status();
@@ -293,14 +292,14 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     profiler_.end(cmd);
 }
 
-std::vector<std::pair<std::string, double>> SparseTree::timings(std::uint64_t frame) const {
+gpu::Timings SparseTree::timings(std::uint64_t frame) const {
     return profiler_.read_frame(frame);
 }
 
 TreeStats SparseTree::stats_from(const void* readback) const {
     TreeState st{};
     std::memcpy(&st, readback, sizeof(st));
-    TreeStats out;
+    TreeStats out(ctx_.memory());
     out.frame = frame_;
     const std::uint64_t children = 1ull << (3 * log2_b_);
     const std::uint64_t stride = shaderio::mask_stride(log2_b_);
@@ -326,22 +325,22 @@ TreeStats SparseTree::stats_from(const void* readback) const {
     return out;
 }
 
-Result<std::vector<glm::uvec2>> SparseTree::node_pool() const {
+Result<std::pmr::vector<glm::uvec2>> SparseTree::node_pool() const {
     TreeState st{};
     std::memcpy(&st, state_.mapped(), sizeof(st));
-    std::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) << (3 * log2_b_));
+    std::pmr::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) << (3 * log2_b_), ctx_.memory());
     if (Status s = gpu::download(ctx_, nodes_, nodes.data(), nodes.size() * sizeof(glm::uvec2)); !s) return s;
     return nodes;
 }
 
-Result<std::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
+Result<std::pmr::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
     TreeState st{};
     std::memcpy(&st, state_.mapped(), sizeof(st));
     const std::uint32_t children = 1u << (3 * log2_b_);
     const std::uint32_t stride = shaderio::mask_stride(log2_b_);
     const std::uint32_t words = shaderio::mask_words(log2_b_);
-    std::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) * children);
-    std::vector<std::uint32_t> masks(std::size_t(st.mask_blocks_used) * stride);
+    std::pmr::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) * children, ctx_.memory());
+    std::pmr::vector<std::uint32_t> masks(std::size_t(st.mask_blocks_used) * stride, ctx_.memory());
     if (Status s = gpu::download(ctx_, nodes_, nodes.data(), nodes.size() * sizeof(glm::uvec2)); !s) return s;
     if (Status s = gpu::download(ctx_, masks_, masks.data(), masks.size() * sizeof(std::uint32_t)); !s)
         return s;
@@ -350,27 +349,27 @@ Result<std::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
     const auto decode = [&](std::uint32_t slot) {
         return glm::uvec3(slot & (b - 1), (slot >> log2_b_) & (b - 1), slot >> (2 * log2_b_));
     };
-    std::vector<std::uint32_t> out;
-    std::function<void(std::uint32_t, std::uint32_t, glm::uvec3, std::uint32_t)> walk =
-        [&](std::uint32_t node, std::uint32_t level, glm::uvec3 origin, std::uint32_t size) {
-            const std::uint32_t block = nodes[node].x;
-            if (block == 0) return;
-            if (level + 1 == levels_) {
-                if (block >= st.mask_blocks_used) return;
-                const std::uint32_t* m = &masks[std::size_t(block) * stride];
-                for (std::uint32_t bit = 0; bit < children; ++bit)
-                    if (((m[bit / 32] | m[words + bit / 32]) >> (bit % 32)) & 1u) {
-                        const glm::uvec3 v = origin + decode(bit);
-                        out.push_back(pack_voxel(v.x, v.y, v.z));
-                    }
-                return;
-            }
-            if (block >= st.node_blocks_used) return;
-            const std::uint32_t child_size = size >> log2_b_;
-            for (std::uint32_t c = 0; c < children; ++c)
-                walk(block * children + c, level + 1, origin + decode(c) * child_size, child_size);
-        };
-    walk(0, 0, glm::uvec3(0), 1u << (log2_b_ * levels_));
+    std::pmr::vector<std::uint32_t> out(ctx_.memory());
+    const auto walk = [&](const auto& self, std::uint32_t node, std::uint32_t level, glm::uvec3 origin,
+                          std::uint32_t size) -> void {
+        const std::uint32_t block = nodes[node].x;
+        if (block == 0) return;
+        if (level + 1 == levels_) {
+            if (block >= st.mask_blocks_used) return;
+            const std::uint32_t* m = &masks[std::size_t(block) * stride];
+            for (std::uint32_t bit = 0; bit < children; ++bit)
+                if (((m[bit / 32] | m[words + bit / 32]) >> (bit % 32)) & 1u) {
+                    const glm::uvec3 v = origin + decode(bit);
+                    out.push_back(pack_voxel(v.x, v.y, v.z));
+                }
+            return;
+        }
+        if (block >= st.node_blocks_used) return;
+        const std::uint32_t child_size = size >> log2_b_;
+        for (std::uint32_t c = 0; c < children; ++c)
+            self(self, block * children + c, level + 1, origin + decode(c) * child_size, child_size);
+    };
+    walk(walk, 0, 0, glm::uvec3(0), 1u << (log2_b_ * levels_));
     std::sort(out.begin(), out.end());
     return out;
 }

@@ -11,18 +11,16 @@ bool same_instance(const GpuInstance& a, const GpuInstance& b) {
     return a.mesh == b.mesh && a.model == b.model;
 }
 
-void append_ms(std::vector<std::pair<std::string, double>>& out, const std::string& prefix,
-               const std::vector<std::pair<std::string, double>>& passes) {
+void append_ms(gpu::Timings& out, const char* prefix, const gpu::Timings& passes) {
     for (const auto& [name, ms] : passes)
-        out.emplace_back(prefix + name, ms);
+        out.emplace_back(prefix, ms).first.append(name);
 }
 
 } // namespace
 
 Result<std::unique_ptr<VoxelWorld>> VoxelWorld::create(gpu::Context& ctx, const WorldDesc& desc) {
     if (Status s = validate_grid(desc.grid); !s) return s;
-    std::unique_ptr<VoxelWorld> world(new VoxelWorld(desc));
-    world->ctx_ = &ctx;
+    std::unique_ptr<VoxelWorld> world(new (ctx.memory()) VoxelWorld(ctx, desc));
     world->desc_.tree.res = desc.grid.res;
     auto static_voxelizer = Voxelizer::create(ctx);
     if (!static_voxelizer) return static_voxelizer.status();
@@ -36,11 +34,11 @@ Result<std::unique_ptr<VoxelWorld>> VoxelWorld::create(gpu::Context& ctx, const 
     return world;
 }
 
-void VoxelWorld::set_static(std::vector<GpuInstance> instances) {
+void VoxelWorld::set_static(std::span<const GpuInstance> instances) {
     const bool same = instances.size() == static_set_.size() &&
                       std::equal(instances.begin(), instances.end(), static_set_.begin(), same_instance);
     if (!same) static_dirty_ = true;
-    static_set_ = std::move(instances);
+    static_set_.assign(instances.begin(), instances.end());
 }
 
 Status VoxelWorld::move_grid(glm::vec3 origin) {
@@ -55,7 +53,7 @@ Status VoxelWorld::move_grid(glm::vec3 origin) {
 Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float dt) {
     if (!(dt > 0.0f))
         return Result<WorldFrame>::failure("frame time must be > 0 s, got " + std::to_string(dt));
-    WorldFrame out;
+    WorldFrame out(ctx_->memory());
     out.frame = frame_;
     const bool rebuild = static_dirty_;
     if (rebuild) {
@@ -139,7 +137,7 @@ Result<WorldFrame> VoxelWorld::collect(const void* readback) {
     ReadbackHeader header;
     std::memcpy(&header, bytes, sizeof(header));
     bytes += sizeof(header);
-    WorldFrame out;
+    WorldFrame out(ctx_->memory());
     out.frame = header.frame;
     out.static_rebuilt = header.static_rebuilt != 0;
     // The static counters stay as the last rebuild left them, so they are read every frame.

@@ -111,7 +111,7 @@ std::pair<glm::vec3, glm::vec3> mesh_bounds(const MeshView& mesh) {
 }
 
 Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const VoxelizerDesc& desc) {
-    std::unique_ptr<Voxelizer> v(new Voxelizer(ctx));
+    std::unique_ptr<Voxelizer> v(new (ctx.memory()) Voxelizer(ctx));
     // Index 1 of each pass writes velocities; index 0 compiles them out (kVelocities).
     for (std::uint32_t with_velocity = 0; with_velocity < 2; ++with_velocity) {
         const std::uint32_t constants[] = {with_velocity};
@@ -251,12 +251,12 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
             return Result<GpuMesh>::failure("index " + std::to_string(mesh.indices[i]) + " at position " +
                                             std::to_string(i) + " is out of range (" +
                                             std::to_string(mesh.vertex_count) + " vertices)");
-    GpuMesh out;
+    GpuMesh out(ctx_.memory());
     out.triangles_ = std::uint32_t(mesh.index_count / 3);
     out.vertices_ = std::uint32_t(mesh.vertex_count);
     if (out.triangles_ == 0) return out;
 
-    std::vector<float> packed(3 * mesh.vertex_count);
+    std::pmr::vector<float> packed(3 * mesh.vertex_count, ctx_.memory());
     for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
         const glm::vec3 p = mesh.position(v);
         std::memcpy(&packed[3 * v], &p, sizeof(p));
@@ -274,19 +274,20 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
     return out;
 }
 
-Result<std::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuInstance> instances,
-                                                       const GridDesc& grid, VoxelizeMethod method,
-                                                       float dt) {
+Result<std::pmr::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuInstance> instances,
+                                                            const GridDesc& grid, VoxelizeMethod method,
+                                                            float dt) {
+    using Methods = Result<std::pmr::vector<VoxelizeMethod>>;
     if (Status s = validate_grid(grid); !s) return s;
     if (!std::isfinite(dt) || dt < 0.0f)
-        return Result<std::vector<VoxelizeMethod>>::failure("frame time must be finite and >= 0, got " +
-                                                            std::to_string(dt));
+        return Methods::failure("frame time must be finite and >= 0, got " + std::to_string(dt));
     inv_dt_ = dt > 0.0f ? 1.0f / dt : 0.0f;
     for (const GpuInstance& inst : instances)
-        if (!inst.mesh) return Result<std::vector<VoxelizeMethod>>::failure("an instance has no mesh");
+        if (!inst.mesh) return Methods::failure("an instance has no mesh");
     if (method == VoxelizeMethod::Auto)
         if (Status s = choose_methods(instances, grid); !s) return s;
-    std::vector<VoxelizeMethod> methods;
+    std::pmr::vector<VoxelizeMethod> methods(ctx_.memory());
+    methods.reserve(instances.size());
     for (const GpuInstance& inst : instances)
         methods.push_back(method == VoxelizeMethod::Auto ? inst.mesh->measured_.at(grid.res) : method);
     return methods;
@@ -332,26 +333,27 @@ void Voxelizer::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize 
                                 capacities);
 }
 
-std::vector<std::pair<std::string, double>> Voxelizer::timings(std::uint64_t frame) const {
+gpu::Timings Voxelizer::timings(std::uint64_t frame) const {
     return profiler_.read_frame(frame);
 }
 
 Result<VoxelizeStats> Voxelizer::collect(const void* readback) {
     Readback r;
     std::memcpy(&r, readback, sizeof(r));
-    VoxelizeStats stats;
+    VoxelizeStats stats(ctx_.memory());
     stats.method = method_;
-    return take_counters(r.counters, r.capacity, r.large_capacity, stats);
+    if (Status s = take_counters(r.counters, r.capacity, r.large_capacity, stats); !s) return s;
+    return stats;
 }
 
-Result<VoxelizeStats> Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t capacity,
-                                               std::uint64_t large_capacity, VoxelizeStats stats) {
+Status Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t capacity,
+                                std::uint64_t large_capacity, VoxelizeStats& stats) {
     stats.rejected = counters.rejected;
     stats.fragments = counters.fragments;
     if (counters.wrapped)
-        return Result<VoxelizeStats>::failure("the fragment list would pass 2^32 entries (too many "
-                                              "voxels per triangle at this resolution); "
-                                              "lower the resolution or split the scene");
+        return Status::failure("the fragment list would pass 2^32 entries (too many "
+                               "voxels per triangle at this resolution); "
+                               "lower the resolution or split the scene");
     stats.truncated = counters.fragments > capacity || counters.large_peak > large_capacity;
     // Grow with headroom so that a scene growing slowly does not redo every frame.
     if (counters.fragments > capacity_)
@@ -362,7 +364,7 @@ Result<VoxelizeStats> Voxelizer::take_counters(const VoxelizeCounters& counters,
             return s;
     fragment_count_ = std::min<std::uint64_t>(counters.fragments, capacity);
     stats.capacity = capacity_;
-    return stats;
+    return {};
 }
 
 Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid) {
@@ -407,7 +409,7 @@ Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances) {
 
 Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
                                      std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
-    VoxelizeStats stats;
+    VoxelizeStats stats(ctx_.memory());
     stats.triangles = triangles_of(instances);
     for (;;) {
         if (Status s = ensure_pass(instances); !s) return s;
@@ -418,9 +420,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
         VoxelizeCounters counters{};
         if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
         stats.ms = profiler_.read();
-        auto taken = take_counters(counters, capacity, large_capacity, stats);
-        if (!taken) return taken.status();
-        stats = *taken;
+        if (Status s = take_counters(counters, capacity, large_capacity, stats); !s) return s;
         if (!stats.truncated) break;
         stats.truncated = false;
         ++stats.retries;
@@ -432,7 +432,7 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
                             std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
     const glm::mat4 to_grid = world_to_grid(grid);
     const auto& vk = ctx_.vk();
-    std::vector<VoxelizeInstance> records(instances.size());
+    std::pmr::vector<VoxelizeInstance> records(instances.size(), ctx_.memory());
     for (std::size_t i = 0; i < instances.size(); ++i) {
         const GpuInstance& inst = instances[i];
         const GpuMesh& mesh = *inst.mesh;

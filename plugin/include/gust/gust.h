@@ -34,7 +34,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 2
+#define GUST_VERSION_MINOR 3
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -82,8 +82,8 @@ typedef enum gust_log_level {
 typedef struct gust_hooks {
     /// Passed back to every hook; gust never dereferences it.
     void* user;
-    /// Host memory for gust's own objects (system, meshes, query buffers), aligned to `alignment` (a power of
-    /// two), or NULL; a NULL hook uses the default heap.
+    /// All host memory gust allocates for a system, Vulkan's host allocations included (docs/api.md "Host
+    /// memory"), aligned to `alignment` (a power of two), or NULL; a NULL hook uses the default heap.
     void* (*allocate)(void* user, size_t bytes, size_t alignment);
     /// Frees what `allocate` returned; required when `allocate` is given.
     void (*free)(void* user, void* memory);

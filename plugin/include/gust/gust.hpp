@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <memory_resource>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,7 +21,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 2;
+inline constexpr std::uint32_t kVersionMinor = 3;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -70,8 +71,11 @@ enum class LogLevel : std::int32_t { Info = 0, Warning = 1, Error = 2 };
 /// Host hooks, as plain function pointers with a user pointer (each may be null).
 struct Hooks {
     void* user = nullptr;
-    /// Host memory for gust's own objects (the System, meshes, query buffers); null uses operator new.
-    /// Must return memory aligned to `alignment` (a power of two) or null.
+    /// All host memory gust allocates for a System: the System itself, its meshes, queries and stats,
+    /// the voxelizer's and solver's containers, and Vulkan's host allocations (as VkAllocationCallbacks).
+    /// Null uses operator new, and the driver's own allocator for Vulkan. Called on the thread that
+    /// calls the System. Must return memory aligned to `alignment` (a power of two) or null.
+    /// docs/api.md "Host memory" lists what it does not cover (error messages, results handed back).
     void* (*allocate)(void* user, std::size_t bytes, std::size_t alignment) = nullptr;
     /// Frees what `allocate` returned; required when `allocate` is given.
     void (*free)(void* user, void* memory) = nullptr;
@@ -211,22 +215,24 @@ struct WindTexture {
 
 /// What one step did (GPU milliseconds per pass where the device has timestamps).
 struct FrameStats {
-    std::uint64_t frame = 0;                        ///< 0 for the first step
-    std::uint64_t fragments = 0;                    ///< voxel fragments of the static and moving surfaces
-    std::uint64_t voxels = 0;                       ///< voxels set in the tree's leaves
-    std::uint64_t nodes = 0;                        ///< tree nodes, root included
-    std::uint64_t refined = 0;                      ///< tree blocks handed out this step
-    std::uint64_t coarsened = 0;                    ///< tree blocks taken back this step
-    std::uint64_t pool_bytes = 0;                   ///< bytes of live tree blocks
-    std::uint64_t fragment_bytes = 0;               ///< bytes of the fragment lists
-    std::uint64_t dense_bytes = 0;                  ///< bytes a dense voxel grid of the same size would take
-    float divergence_before = 0.0f;                 ///< max |divergence| before projection, 1/s
-    float divergence_after = 0.0f;                  ///< the same after, 1/s
-    float residual = 0.0f;                          ///< max |residual| of the pressure solve, 1/s
-    std::uint32_t cycles = 0;                       ///< V-cycles the solve took
-    bool converged = false;                         ///< the solve met its tolerance
-    std::uint32_t rejected_triangles = 0;           ///< non-finite vertices after transform this frame
-    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass
+    std::uint64_t frame = 0;              ///< 0 for the first step
+    std::uint64_t fragments = 0;          ///< voxel fragments of the static and moving surfaces
+    std::uint64_t voxels = 0;             ///< voxels set in the tree's leaves
+    std::uint64_t nodes = 0;              ///< tree nodes, root included
+    std::uint64_t refined = 0;            ///< tree blocks handed out this step
+    std::uint64_t coarsened = 0;          ///< tree blocks taken back this step
+    std::uint64_t pool_bytes = 0;         ///< bytes of live tree blocks
+    std::uint64_t fragment_bytes = 0;     ///< bytes of the fragment lists
+    std::uint64_t dense_bytes = 0;        ///< bytes a dense voxel grid of the same size would take
+    float divergence_before = 0.0f;       ///< max |divergence| before projection, 1/s
+    float divergence_after = 0.0f;        ///< the same after, 1/s
+    float residual = 0.0f;                ///< max |residual| of the pressure solve, 1/s
+    std::uint32_t cycles = 0;             ///< V-cycles the solve took
+    bool converged = false;               ///< the solve met its tolerance
+    std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
+    /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate).
+    using Timings = std::pmr::vector<std::pair<std::pmr::string, double>>;
+    Timings ms;
 };
 
 /// Ticket of an asynchronous query (0 is never valid).
@@ -348,8 +354,13 @@ class System {
 
     struct Impl;
 
+    /// A System lives in the memory of its Hooks::allocate; delete gives it back there.
+    static void operator delete(void* system) noexcept;
+
   private:
     System() = default;
+    static void* operator new(std::size_t bytes, const Hooks& hooks);
+    static void operator delete(void* system, const Hooks& hooks) noexcept; ///< when the constructor throws
     Impl* impl_ = nullptr;
 };
 

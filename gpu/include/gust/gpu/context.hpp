@@ -6,11 +6,15 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <gust/gpu/host_memory.hpp>
 #include <gust/gpu/result.hpp>
 #include <gust/gpu/vk.hpp>
 #include <memory>
+#include <memory_resource>
 #include <mutex>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace gust::gpu {
@@ -30,6 +34,9 @@ struct ContextDesc {
     std::string device;
     /// Receives validation and driver messages; null prints nothing (they are still counted).
     MessageCallback on_message;
+    /// Host memory for the Context, the modules created on it and Vulkan's host allocations; null is
+    /// new/delete (and the driver's own allocator). Must outlive the Context.
+    std::pmr::memory_resource* memory = nullptr;
 };
 
 /// What gust needs from a device, for a host that creates the VkDevice gust adopts. Names are static
@@ -79,7 +86,8 @@ struct HostDevice {
     /// Loads every device function; null means vkGetDeviceProcAddr from get_instance_proc_addr.
     PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;
     /// Device extensions the host enabled; gust uses an optional extension only when it is listed here.
-    std::vector<std::string> enabled_extensions;
+    /// Read during adopt() only.
+    std::span<const char* const> enabled_extensions;
     /// Locked around every gust submission to the queue when not null (the host keeps it alive). Vulkan
     /// requires a queue to be externally synchronized, so a host that submits to the same queue from
     /// other threads passes the mutex it holds for its own submissions.
@@ -88,15 +96,17 @@ struct HostDevice {
     /// (which must have VK_EXT_debug_utils enabled); it also sees messages about the host's own calls.
     /// Null creates no messenger.
     MessageCallback on_message;
+    /// As ContextDesc::memory.
+    std::pmr::memory_resource* memory = nullptr;
 };
 
 /// What was chosen, for stats and `gust info`.
 struct DeviceInfo {
-    std::string name; ///< VkPhysicalDeviceProperties::deviceName
-    std::string type; ///< "discrete", "integrated", "virtual", "cpu" or "other"
+    std::pmr::string name; ///< VkPhysicalDeviceProperties::deviceName
+    std::string type;      ///< "discrete", "integrated", "virtual", "cpu" or "other" (no heap: short)
     std::uint32_t api_version = 0;
     std::uint32_t vendor_id = 0;
-    std::string driver;                      ///< driver name and info
+    std::pmr::string driver;                 ///< driver name and info
     bool conservative_rasterization = false; ///< VK_EXT_conservative_rasterization enabled
     float timestamp_period_ns = 0.0f;        ///< 0 when the queue has no timestamps
     std::uint64_t max_storage_buffer_range = 0;
@@ -111,7 +121,7 @@ struct DeviceInfo {
 /// (one thread records and submits at a time). With an adopted device, gust submits to the host's
 /// queue, which Vulkan requires to be externally synchronized: the host must not submit to that queue
 /// from another thread while a gust call runs, unless it passes HostDevice::queue_mutex.
-class Context {
+class Context : public HostObject {
   public:
     /// Creates an instance and picks a device per `desc`. Fails with a message naming what is missing.
     static Result<std::unique_ptr<Context>> create(const ContextDesc& desc);
@@ -135,9 +145,13 @@ class Context {
     /// False for an adopted device: the instance and device belong to the host.
     bool owns_device() const { return owns_device_; }
     const DeviceInfo& info() const { return info_; }
+    /// Host memory of this Context and everything created on it (ContextDesc::memory).
+    std::pmr::memory_resource* memory() const { return host_memory_; }
+    /// What every vkCreate*, vkAllocate* and matching destroy call passes as pAllocator.
+    const VkAllocationCallbacks* allocator() const { return allocator_.callbacks(); }
     /// Names and types of every device the instance sees, in enumeration order (for errors and `gust info`);
     /// empty for an adopted device.
-    const std::vector<std::string>& device_names() const { return device_names_; }
+    const std::pmr::vector<std::pmr::string>& device_names() const { return device_names_; }
 
     /// Validation-layer messages of warning or error severity seen so far (tests fail when > 0).
     std::uint32_t validation_messages() const { return validation_messages_.load(); }
@@ -147,7 +161,12 @@ class Context {
     /// Records commands with `record` into a one-time command buffer, submits and waits (holding
     /// HostDevice::queue_mutex, if given, while submitting). On an adopted device the commands start with
     /// a full barrier, so they run after whatever the host submitted to the queue before.
-    Status submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
+    template <class Record> Status submit_and_wait(Record&& record) {
+        VkCommandBuffer cmd = VK_NULL_HANDLE;
+        if (Status s = begin_one_time(cmd); !s) return s;
+        record(cmd);
+        return end_one_time(cmd);
+    }
 
     /// Frames in flight (work recorded into the host's command buffers, which run later): from the first
     /// call on, buffers released are kept until retire() says the frames that may use them completed,
@@ -174,13 +193,19 @@ class Context {
     void report(Severity severity, bool validation, const std::string& message);
 
   private:
-    Context() = default;
+    explicit Context(std::pmr::memory_resource* memory);
+    /// submit_and_wait(): a one-time command buffer begun (after the adopted device's barrier), then
+    /// ended, submitted, waited for and freed.
+    Status begin_one_time(VkCommandBuffer& cmd);
+    Status end_one_time(VkCommandBuffer cmd);
     Status init(const ContextDesc& desc);
     Status init_adopted(const HostDevice& host);
-    Status pick_device(const std::string& override_spec);
+    Status pick_device(std::string_view override_spec);
     Status create_device();
     Status finish_device(std::uint32_t queue_index);
 
+    std::pmr::memory_resource* host_memory_;
+    VulkanAllocator allocator_;
     Dispatch vk_;
     void* loader_ = nullptr;
     VkInstance instance_ = VK_NULL_HANDLE;
@@ -195,7 +220,7 @@ class Context {
     VkFence fence_ = VK_NULL_HANDLE;
     VkPhysicalDeviceMemoryProperties memory_{};
     DeviceInfo info_;
-    std::vector<std::string> device_names_;
+    std::pmr::vector<std::pmr::string> device_names_;
     MessageCallback on_message_;
     struct Released {
         std::uint64_t frame;
@@ -204,10 +229,10 @@ class Context {
     };
     bool deferred_ = false;
     std::uint64_t recording_frame_ = 0;
-    std::vector<Released> released_;
+    std::pmr::vector<Released> released_;
     std::atomic<std::uint32_t> validation_messages_{0};
     mutable std::mutex message_mutex_;
-    std::string last_message_;
+    std::pmr::string last_message_;
 };
 
 } // namespace gust::gpu

@@ -4,9 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <gust/gpu/context.hpp>
-#include <string>
-#include <utility>
-#include <vector>
+#include <gust/gpu/host_memory.hpp>
 
 namespace gust::gpu {
 
@@ -20,7 +18,10 @@ class Profiler {
 
     /// Up to `max_passes` passes per recording. A device without timestamps yields empty results.
     static Result<Profiler> create(Context& ctx, std::uint32_t max_passes = 32);
-    Profiler() { frames_.fill(kNoFrame); }
+    Profiler() {
+        frames_.fill(kNoFrame);
+        counts_.fill(0);
+    }
     ~Profiler();
     Profiler(Profiler&& other) noexcept;
     Profiler& operator=(Profiler&& other) noexcept;
@@ -30,25 +31,28 @@ class Profiler {
     /// Resets the queries of this recording (the frame being recorded, when frames are in flight);
     /// record before the first begin().
     void reset(VkCommandBuffer cmd);
-    /// Starts the pass `name` (passes do not nest).
-    void begin(VkCommandBuffer cmd, std::string name);
+    /// Starts the pass `name`, a string that outlives the Profiler (a literal); passes do not nest.
+    void begin(VkCommandBuffer cmd, const char* name);
     /// Ends the current pass.
     void end(VkCommandBuffer cmd);
-    /// Milliseconds per pass of the last recording, in recording order, once its commands completed.
-    std::vector<std::pair<std::string, double>> read() const;
+    /// Milliseconds per pass of the last recording, in recording order, once its commands completed
+    /// (in the Context's host memory).
+    Timings read() const;
     /// The same for the recording made while Context::begin_frame(`frame`) was current; empty when
     /// nothing was recorded in that frame, or its slot was recorded again since.
-    std::vector<std::pair<std::string, double>> read_frame(std::uint64_t frame) const;
+    Timings read_frame(std::uint64_t frame) const;
 
   private:
     Context* ctx_ = nullptr;
     VkQueryPool pool_ = VK_NULL_HANDLE;
     std::uint32_t capacity_ = 0;
     std::uint32_t slot_ = 0;
-    std::array<std::vector<std::string>, kFrameSlots> names_;
+    /// Pass names, capacity_ per slot, in the Context's host memory.
+    const char** names_ = nullptr;
+    std::array<std::uint32_t, kFrameSlots> counts_; ///< passes begun per slot
     static constexpr std::uint64_t kNoFrame = ~std::uint64_t(0);
     std::array<std::uint64_t, kFrameSlots> frames_; ///< the frame each slot was recorded in, or kNoFrame
-    std::vector<std::pair<std::string, double>> read_slot(std::uint32_t slot) const;
+    Timings read_slot(std::uint32_t slot) const;
     void release();
 };
 

@@ -3,14 +3,15 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <glm/glm.hpp>
 #include <gust/gpu/buffer.hpp>
+#include <gust/gpu/host_memory.hpp>
 #include <gust/gpu/pipeline.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/sparse_tree.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <memory>
+#include <memory_resource>
 #include <span>
 #include <string>
 #include <utility>
@@ -82,6 +83,8 @@ struct SolidSource {
 
 /// What one step did.
 struct WindStats {
+    /// `memory` holds the pass timings.
+    explicit WindStats(std::pmr::memory_resource* memory = std::pmr::get_default_resource()) : ms(memory) {}
     double divergence_before = 0.0;    ///< max |divergence| before projection, 1/s
     double divergence_after = 0.0;     ///< the same after, 1/s
     double residual = 0.0;             ///< max |residual| at the last check, 1/s
@@ -91,7 +94,7 @@ struct WindStats {
     std::uint32_t cut_cells = 0;       ///< cells holding solid voxels
     std::uint32_t fluid_cells = 0;     ///< cells with an open face
     std::uint32_t moving_fragments = 0;
-    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (when timed)
+    gpu::Timings ms; ///< GPU milliseconds per pass (when timed)
 };
 
 /// The voxel grid of the tree that bounds a wind grid: min corner at the wind grid's, voxels
@@ -109,7 +112,7 @@ Status validate(const SolverDesc& desc);
 Status validate(std::span<const Emitter> emitters);
 
 /// The solver. Thread-compatible; the Context must outlive it.
-class WindSolver {
+class WindSolver : public gpu::HostObject {
   public:
     /// Starts with the air at rest (see set_ambient).
     static Result<std::unique_ptr<WindSolver>> create(gpu::Context& ctx, const SolverDesc& desc);
@@ -142,11 +145,17 @@ class WindSolver {
 
     /// Velocity (m/s, world) at each world point: trilinear on the faces, the ambient wind outside the
     /// grid. Points must be finite. Blocks.
-    Result<std::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
+    Result<std::pmr::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
     /// Writes each cell's texel into `texels` (8 bytes per cell, index x + X·(y + Y·z)): the velocity at
     /// the cell's centre (m/s) and 1 − its solid fraction, as four half floats; then records `then`
-    /// (may be empty) into the same submission, after a barrier. Blocks.
-    Status write_texels(const gpu::Buffer& texels, const std::function<void(VkCommandBuffer)>& then);
+    /// into the same submission, after a barrier. Blocks.
+    template <class Then> Status write_texels(const gpu::Buffer& texels, Then&& then) {
+        if (Status s = check_texels(texels); !s) return s;
+        return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+            record_texels(cmd, texels);
+            then(cmd);
+        });
+    }
 
     // Frames in flight (gpu::Context::begin_frame): the same work recorded into the caller's command
     // buffer, which runs later. Each starts and ends with a barrier of its own.
@@ -161,7 +170,7 @@ class WindSolver {
     WindStats stats_from(const void* readback);
     /// GPU milliseconds per pass of the step recorded while gpu::Context::begin_frame(`frame`) was
     /// current, once that frame completed; empty if none was recorded then.
-    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
+    gpu::Timings timings(std::uint64_t frame) const;
     /// scroll() recorded (the origin moves now).
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
     /// Fails when `texels` is too small for write_texels() or record_texels().

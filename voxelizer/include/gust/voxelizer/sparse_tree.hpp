@@ -4,10 +4,12 @@
 
 #include <cstdint>
 #include <gust/gpu/buffer.hpp>
+#include <gust/gpu/host_memory.hpp>
 #include <gust/gpu/pipeline.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/grid.hpp>
 #include <memory>
+#include <memory_resource>
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,12 +37,16 @@ struct FragmentSource {
 
 /// What one update did, and what the tree holds after it.
 struct TreeStats {
+    /// `memory` holds the lists.
+    explicit TreeStats(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+        : nodes_per_level(memory), ms(memory) {}
     std::uint32_t frame = 0;
-    std::vector<std::uint64_t> nodes_per_level; ///< allocated nodes at levels 1..depth-1, then leaf bricks
-    std::uint64_t nodes = 0;                    ///< sum of nodes_per_level plus the root
-    std::uint64_t voxels = 0;                   ///< voxels set in leaves (static or dynamic)
-    std::uint32_t refined = 0;                  ///< blocks handed out this update
-    std::uint32_t coarsened = 0;                ///< blocks taken back this update
+    std::pmr::vector<std::uint64_t>
+        nodes_per_level;                ///< allocated nodes at levels 1..depth-1, then leaf bricks
+    std::uint64_t nodes = 0;            ///< sum of nodes_per_level plus the root
+    std::uint64_t voxels = 0;           ///< voxels set in leaves (static or dynamic)
+    std::uint32_t refined = 0;          ///< blocks handed out this update
+    std::uint32_t coarsened = 0;        ///< blocks taken back this update
     std::uint32_t exhausted = 0;        ///< refinements refused because a pool was full (tree is partial)
     std::uint32_t free_node_blocks = 0; ///< node blocks on the free list
     std::uint32_t free_mask_blocks = 0; ///< mask blocks on the free list
@@ -49,11 +55,11 @@ struct TreeStats {
         0;                            ///< high-water mark of the mask pool (live + free blocks, + 1 reserved)
     std::uint64_t pool_bytes = 0;     ///< bytes of live node and mask blocks
     std::uint64_t capacity_bytes = 0; ///< bytes the pools hold
-    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
+    gpu::Timings ms;                  ///< GPU milliseconds per pass (empty without timestamps)
 };
 
 /// The tree. Thread-compatible; the Context must outlive it.
-class SparseTree {
+class SparseTree : public gpu::HostObject {
   public:
     /// Fails on a branching other than 2, 4, 8, a res that is not a power of it in [branching, 1024], or
     /// a fragment grid finer than 1024.
@@ -75,17 +81,17 @@ class SparseTree {
     TreeStats stats_from(const void* readback) const;
     /// GPU milliseconds per pass of the update recorded while gpu::Context::begin_frame(`frame`) was
     /// current, once that frame completed; empty if none was recorded then.
-    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
+    gpu::Timings timings(std::uint64_t frame) const;
 
     /// Grows the pools (never shrinks); contents are kept. Takes effect from the next update.
     Status reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks);
 
     /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree).
-    Result<std::vector<std::uint32_t>> leaf_voxels() const;
+    Result<std::pmr::vector<std::uint32_t>> leaf_voxels() const;
 
     /// The node pool's blocks in use (uvec2 per node: child block, touched; layout in
     /// shaders/tree/tree_io.h), downloaded for debug views and tests. Blocks until the GPU is done.
-    Result<std::vector<glm::uvec2>> node_pool() const;
+    Result<std::pmr::vector<glm::uvec2>> node_pool() const;
     /// The frame number the last update stamped on the nodes it reached (`touched`); 0 before the first.
     std::uint32_t frame() const { return frame_; }
 

@@ -21,6 +21,9 @@ struct WorldDesc {
 
 /// What one step did.
 struct WorldFrame {
+    /// `memory` holds the lists.
+    explicit WorldFrame(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+        : static_voxelize(memory), dynamic_voxelize(memory), tree(memory), ms(memory) {}
     std::uint64_t frame = 0;        ///< 0 for the first step
     bool static_rebuilt = false;    ///< the static set changed and was voxelized again
     VoxelizeStats static_voxelize;  ///< of the static set (the last rebuild's when not rebuilt now)
@@ -28,11 +31,11 @@ struct WorldFrame {
     TreeStats tree;                 ///< after the update
     std::uint32_t pool_growths = 0; ///< times the pools were grown (and the update redone) this step
     bool truncated = false;         ///< recorded frame: a list or pool ran out, so its solids are partial
-    std::vector<std::pair<std::string, double>> ms; ///< milliseconds per pass (GPU where timed)
+    gpu::Timings ms;                ///< milliseconds per pass (GPU where timed)
 };
 
 /// Static and dynamic voxelization feeding one tree. Thread-compatible; the Context must outlive it.
-class VoxelWorld {
+class VoxelWorld : public gpu::HostObject {
   public:
     static Result<std::unique_ptr<VoxelWorld>> create(gpu::Context& ctx, const WorldDesc& desc);
 
@@ -49,7 +52,7 @@ class VoxelWorld {
 
     /// Sets the static instances; the next step voxelizes them again only if they differ from the last
     /// set (meshes or matrices). Meshes must stay alive and unchanged while in the set.
-    void set_static(std::vector<GpuInstance> instances);
+    void set_static(std::span<const GpuInstance> instances);
 
     /// Moves the grid's min corner to `origin` (world, m, finite); the next step voxelizes the static set
     /// again and rebuilds the tree, whose voxels then index the moved grid.
@@ -78,13 +81,14 @@ class VoxelWorld {
     const GridDesc& grid() const { return desc_.grid; }
 
   private:
-    explicit VoxelWorld(const WorldDesc& desc) : desc_(desc) {}
+    VoxelWorld(gpu::Context& ctx, const WorldDesc& desc)
+        : ctx_(&ctx), desc_(desc), static_set_(ctx.memory()), last_static_(ctx.memory()) {}
 
     gpu::Context* ctx_ = nullptr;
     WorldDesc desc_;
     std::unique_ptr<Voxelizer> static_, dynamic_;
     std::unique_ptr<SparseTree> tree_;
-    std::vector<GpuInstance> static_set_;
+    std::pmr::vector<GpuInstance> static_set_;
     bool static_dirty_ = true;
     VoxelizeStats last_static_;
     std::uint64_t frame_ = 0;

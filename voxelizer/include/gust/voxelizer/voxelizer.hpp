@@ -3,11 +3,13 @@
 
 #include <cstdint>
 #include <gust/gpu/buffer.hpp>
+#include <gust/gpu/host_memory.hpp>
 #include <gust/gpu/pipeline.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/grid.hpp>
 #include <map>
 #include <memory>
+#include <memory_resource>
 #include <optional>
 #include <span>
 #include <string>
@@ -35,21 +37,23 @@ bool parse_method(const std::string& text, VoxelizeMethod& out);
 /// A mesh uploaded to the device, validated once. Owned by the caller; outlives its use in calls.
 class GpuMesh {
   public:
+    GpuMesh() = default;
     std::uint32_t triangle_count() const { return triangles_; }
     std::uint32_t vertex_count() const { return vertices_; }
 
   private:
     friend class Voxelizer;
+    explicit GpuMesh(std::pmr::memory_resource* memory) : measured_(memory), staged_(memory) {}
     gpu::Buffer positions_;      ///< float[3 * vertices], this frame
     gpu::Buffer prev_positions_; ///< float[3 * vertices], last frame (only once positions were updated)
     gpu::Buffer indices_;        ///< uint[3 * triangles]
     std::uint32_t triangles_ = 0;
     std::uint32_t vertices_ = 0;
-    std::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
+    std::pmr::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
     // Frames in flight: positions set since the last recorded frame, written into positions_ by the next
     // frame's commands (a write now could race the frames still running). Mutable: the positions are
     // already set; the staging only says when they reach the GPU.
-    mutable std::vector<glm::vec3> staged_;
+    mutable std::pmr::vector<glm::vec3> staged_;
     mutable VkBuffer staged_source_ = VK_NULL_HANDLE; ///< or copied from this buffer at staged_offset_
     mutable VkDeviceSize staged_offset_ = 0;
     bool staged() const { return !staged_.empty() || staged_source_ != VK_NULL_HANDLE; }
@@ -70,6 +74,9 @@ struct VoxelizerDesc {
 
 /// What one voxelize() call did.
 struct VoxelizeStats {
+    /// `memory` holds the pass timings.
+    explicit VoxelizeStats(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+        : ms(memory) {}
     std::uint64_t triangles = 0; ///< triangles submitted
     std::uint64_t rejected = 0;  ///< triangles with a non-finite vertex after the model transform
     std::uint64_t fragments =
@@ -77,12 +84,12 @@ struct VoxelizeStats {
     std::uint32_t retries = 0;                      ///< passes redone because the fragment list was too small
     std::uint64_t capacity = 0;                     ///< fragment slots after the call
     VoxelizeMethod method = VoxelizeMethod::Raster; ///< path used (Auto reports the last mesh's choice)
-    std::vector<std::pair<std::string, double>> ms; ///< GPU milliseconds per pass (empty without timestamps)
+    gpu::Timings ms;                                ///< GPU milliseconds per pass (empty without timestamps)
     bool truncated = false; ///< recorded pass (frames in flight) overflowed: fragments were cut, list grown
 };
 
 /// Owns the pipelines and the fragment list. One call at a time (thread-compatible).
-class Voxelizer {
+class Voxelizer : public gpu::HostObject {
   public:
     /// Builds the pipelines on `ctx` (which must outlive the Voxelizer).
     static Result<std::unique_ptr<Voxelizer>> create(gpu::Context& ctx, const VoxelizerDesc& desc = {});
@@ -120,7 +127,7 @@ class Voxelizer {
     Result<VoxelizeStats> collect(const void* readback);
     /// GPU milliseconds per pass of the pass recorded while gpu::Context::begin_frame(`frame`) was
     /// current, once that frame completed; empty if none was recorded then.
-    std::vector<std::pair<std::string, double>> timings(std::uint64_t frame) const;
+    gpu::Timings timings(std::uint64_t frame) const;
 
     /// Copies the fragment list of the last call to the host (packed keys, unsorted, duplicates kept).
     Result<std::vector<std::uint32_t>> read_fragments() const;
@@ -150,16 +157,16 @@ class Voxelizer {
                               const GridDesc& grid);
     Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
     /// Validates a call and picks each instance's path.
-    Result<std::vector<VoxelizeMethod>> prepare(std::span<const GpuInstance> instances, const GridDesc& grid,
-                                                VoxelizeMethod method, float dt);
+    Result<std::pmr::vector<VoxelizeMethod>> prepare(std::span<const GpuInstance> instances,
+                                                     const GridDesc& grid, VoxelizeMethod method, float dt);
     /// Sizes the fragment list (first guess), the instance and the velocity buffers for a pass.
     Status ensure_pass(std::span<const GpuInstance> instances);
     /// Records one pass (instance records, staged positions, the passes) into `cmd`.
     void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
                      std::span<const VoxelizeMethod> methods, const GridDesc& grid);
-    /// Counters into stats; grows what overflowed. `capacity` and `large_capacity` are the pass's.
-    Result<VoxelizeStats> take_counters(const shaderio::VoxelizeCounters& counters, std::uint64_t capacity,
-                                        std::uint64_t large_capacity, VoxelizeStats stats);
+    /// Counters into `stats`; grows what overflowed. `capacity` and `large_capacity` are the pass's.
+    Status take_counters(const shaderio::VoxelizeCounters& counters, std::uint64_t capacity,
+                         std::uint64_t large_capacity, VoxelizeStats& stats);
 
     gpu::Context& ctx_;
     gpu::Pipeline raster_[2]; ///< [0]: without velocities, [1]: with

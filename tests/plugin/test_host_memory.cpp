@@ -1,0 +1,246 @@
+// With an allocation hook, gust allocates no host memory of its own anywhere else. This binary replaces
+// the global operator new and counts the calls gust's code makes while a System call runs (calls from the
+// Vulkan driver and the loader, which are not gust's, are told apart by their return address). Vulkan's
+// own host allocations reach the hook through VkAllocationCallbacks, so they show up in its count too.
+#include "host_vulkan.hpp"
+#include "system_test_support.hpp"
+
+#include <array>
+#include <atomic>
+#include <cstdlib>
+#include <dlfcn.h>
+#include <execinfo.h>
+#include <gtest/gtest.h>
+#include <gust/gust.hpp>
+#include <new>
+#include <string_view>
+#include <vector>
+
+// The main program's code, as GNU ld names its bounds: gust is linked statically into this binary.
+extern "C" char __executable_start[];
+extern "C" char etext[];
+
+namespace {
+
+std::atomic<bool> g_armed{false};
+std::atomic<long> g_gust_news{0};
+
+/// True when every frame of the calling stack is this program's code (gust's and the test's) or the C
+/// and C++ runtimes: an allocation with a Vulkan loader, driver or layer frame on its stack is theirs,
+/// even where it reaches operator new through a std::string member this program also instantiates.
+bool only_gust_on_stack() {
+    std::array<void*, 96> frames{};
+    const int n = backtrace(frames.data(), int(frames.size()));
+    for (int i = 0; i < n; ++i) {
+        const auto* pc = static_cast<const char*>(frames[std::size_t(i)]);
+        if (pc >= __executable_start && pc < etext) continue;
+        Dl_info info{};
+        if (!dladdr(pc, &info) || !info.dli_fname) return false;
+        const std::string_view file = info.dli_fname;
+        const std::string_view name = file.substr(file.rfind('/') + 1);
+        const bool runtime = name.starts_with("libstdc++") || name.starts_with("libc.") ||
+                             name.starts_with("libgcc_s") || name.starts_with("ld-linux");
+        if (!runtime) return false;
+    }
+    return true;
+}
+
+void count() {
+    if (g_armed.load(std::memory_order_relaxed) && only_gust_on_stack())
+        g_gust_news.fetch_add(1, std::memory_order_relaxed);
+}
+
+void* allocate(std::size_t bytes, std::size_t alignment) {
+    const std::size_t size = (bytes + alignment - 1) / alignment * alignment;
+    return std::aligned_alloc(alignment, size ? size : alignment);
+}
+
+} // namespace
+
+void* operator new(std::size_t bytes) {
+    count();
+    if (void* p = allocate(bytes, alignof(std::max_align_t))) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t bytes) {
+    count();
+    if (void* p = allocate(bytes, alignof(std::max_align_t))) return p;
+    throw std::bad_alloc();
+}
+void* operator new(std::size_t bytes, std::align_val_t alignment) {
+    count();
+    if (void* p = allocate(bytes, std::size_t(alignment))) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t bytes, std::align_val_t alignment) {
+    count();
+    if (void* p = allocate(bytes, std::size_t(alignment))) return p;
+    throw std::bad_alloc();
+}
+void* operator new(std::size_t bytes, const std::nothrow_t&) noexcept {
+    count();
+    return allocate(bytes, alignof(std::max_align_t));
+}
+void* operator new[](std::size_t bytes, const std::nothrow_t&) noexcept {
+    count();
+    return allocate(bytes, alignof(std::max_align_t));
+}
+void operator delete(void* p) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+    std::free(p);
+}
+
+namespace gust::test {
+namespace {
+
+/// Runs one gust call with the counter armed; the test's own code runs disarmed.
+template <class F> Outcome counted(F&& call) {
+    g_armed = true;
+    Outcome o = call();
+    g_armed = false;
+    return o;
+}
+
+TEST(HostMemory, aSystemWithAnAllocationHookAllocatesNothingElseInItsWholeLife) {
+    g_gust_news = 0;
+    Watch watch;
+    SystemDesc desc = small_desc(watch);
+    desc.voxelize = VoxelizePath::Auto; // measures both paths, so both run
+    std::unique_ptr<System> system;
+    const Box box(1.0f);
+    MeshId rigid = 0, skinned = 0;
+    InstanceId fixed = 0, moving = 0, pose = 0;
+    ASSERT_TRUE(counted([&] { return System::create(desc, system); }));
+    ASSERT_TRUE(counted([&] { return system->create_mesh(box.desc(), rigid); }));
+    ASSERT_TRUE(counted([&] { return system->create_mesh(box.desc(true), skinned); }));
+    ASSERT_TRUE(counted([&] { return system->create_instance(rigid, translation(-3, 2, 0), false, fixed); }));
+    ASSERT_TRUE(counted([&] { return system->create_instance(rigid, translation(3, 2, 0), true, moving); }));
+    ASSERT_TRUE(counted([&] { return system->create_instance(skinned, translation(0, 2, 3), true, pose); }));
+    ASSERT_TRUE(counted([&] { return system->set_ambient({3.0f, 0.0f, 0.0f}); }));
+    const std::array<WindEmitter, 2> emitters = {
+        WindEmitter{.type = WindEmitterType::Omni, .position = {0, 2, -3}, .strength = 2.0f},
+        WindEmitter{.type = WindEmitterType::Vortex,
+                    .position = {2, 2, 2},
+                    .direction = {0, 1, 0},
+                    .strength = 1.0f}};
+    ASSERT_TRUE(counted([&] { return system->set_emitters(emitters); }));
+
+    std::array<Vec3, 3> points = {Vec3{0, 2, 0}, Vec3{4, 3, 1}, Vec3{100, 0, 0}};
+    std::array<Vec3, 3> wind{};
+    std::vector<float> positions = box.positions;
+    for (int frame = 0; frame < 6; ++frame) {
+        for (float& p : positions)
+            p *= 1.01f;
+        ASSERT_TRUE(counted([&] { return system->set_vertices(skinned, positions.data(), 8); }));
+        ASSERT_TRUE(
+            counted([&] { return system->set_transform(moving, translation(3, 2, 0.5f * float(frame))); }));
+        if (frame == 3) {
+            ASSERT_TRUE(counted([&] { return system->set_transform(fixed, translation(-3, 2, 1)); }));
+        }
+        ASSERT_TRUE(counted([&] { return system->set_focus({0.0f, 4.0f, 1.0f * float(frame)}); }));
+        QueryId ticket = 0;
+        ASSERT_TRUE(counted([&] { return system->query_async(points, ticket); }));
+        const Outcome stepped = counted([&] { return system->step(1.0f / 30.0f); });
+        ASSERT_TRUE(stepped) << stepped.message();
+        ASSERT_TRUE(counted([&] { return system->fetch(ticket, wind); }));
+        ASSERT_TRUE(counted([&] { return system->query(points, wind); }));
+        WindSample sample;
+        ASSERT_TRUE(counted([&] { return system->wind_at(points[0], sample); }));
+    }
+    std::size_t count = 0;
+    std::array<VoxelCoord, 16> voxels{};
+    std::array<TreeNode, 16> nodes{};
+    ASSERT_TRUE(counted([&] { return system->debug_voxels(voxels, count); }));
+    ASSERT_TRUE(counted([&] { return system->debug_tree_nodes(nodes, count); }));
+    ASSERT_TRUE(counted([&] { return system->destroy_instance(pose); }));
+    ASSERT_TRUE(counted([&] { return system->destroy_mesh(skinned); }));
+    const FrameStats& stats = system->stats();
+    EXPECT_FALSE(stats.ms.empty()) << "no pass timings: the steps above did not run as assumed";
+    EXPECT_GT(stats.fragments, 0u);
+    counted([&] {
+        system.reset();
+        return Outcome();
+    });
+
+    EXPECT_EQ(g_gust_news.load(), 0) << "operator new calls from gust's code while a hook was given";
+    EXPECT_GT(watch.allocations, 0);
+    EXPECT_EQ(watch.live, 0) << "host allocations not freed";
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+
+TEST(HostMemory, recordingFramesIntoTheHostsCommandBuffersAllocatesNothingElse) {
+    g_gust_news = 0;
+    HostVulkan host;
+    ASSERT_TRUE(host.ok()) << host.error();
+    constexpr std::uint32_t kFrames = 2;
+    ASSERT_TRUE(host.start_frames(kFrames));
+    Watch watch;
+    SystemDesc desc = small_desc(watch);
+    desc.host = &host.device();
+    desc.submission = Submission::HostCommands;
+    desc.frames_in_flight = kFrames;
+    std::unique_ptr<System> system;
+    const Box box(1.0f);
+    MeshId mesh = 0;
+    InstanceId moving = 0;
+    ASSERT_TRUE(counted([&] { return System::create(desc, system); }));
+    ASSERT_TRUE(counted([&] { return system->create_mesh(box.desc(true), mesh); }));
+    ASSERT_TRUE(counted([&] { return system->create_instance(mesh, translation(0, 2, 0), true, moving); }));
+    ASSERT_TRUE(counted([&] { return system->set_ambient({2.0f, 0.0f, 1.0f}); }));
+    const std::array<Vec3, 2> points = {Vec3{0, 2, 0}, Vec3{500, 0, 0}};
+    std::vector<float> positions = box.positions;
+    QueryId first = 0;
+    for (std::uint32_t frame = 0; frame < kFrames + 4; ++frame) {
+        for (float& p : positions)
+            p *= 1.01f;
+        ASSERT_TRUE(counted([&] { return system->set_vertices(mesh, positions.data(), 8); }));
+        ASSERT_TRUE(
+            counted([&] { return system->set_transform(moving, translation(0, 2, 0.5f * float(frame))); }));
+        QueryId ticket = 0;
+        ASSERT_TRUE(counted([&] { return system->query_async(points, ticket); }));
+        if (frame == 0) first = ticket;
+        VkCommandBuffer commands = host.begin_frame();
+        ASSERT_NE(commands, VK_NULL_HANDLE);
+        const Outcome stepped = counted([&] { return system->step(1.0f / 30.0f, commands); });
+        ASSERT_TRUE(host.submit_frame());
+        ASSERT_TRUE(stepped) << stepped.message();
+    }
+    std::array<Vec3, 2> wind{};
+    ASSERT_TRUE(counted([&] { return system->fetch(first, wind); }));
+    EXPECT_FALSE(system->stats().ms.empty())
+        << "no frame's timings came back: the frames did not run as assumed";
+    ASSERT_TRUE(host.finish_frames());
+    counted([&] {
+        system.reset();
+        return Outcome();
+    });
+
+    EXPECT_EQ(g_gust_news.load(), 0) << "operator new calls from gust's code while a hook was given";
+    EXPECT_GT(watch.allocations, 0);
+    EXPECT_EQ(watch.live, 0) << "host allocations not freed";
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+    EXPECT_EQ(host.messages(), 0);
+}
+
+} // namespace
+} // namespace gust::test
