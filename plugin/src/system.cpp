@@ -23,6 +23,9 @@
 
 namespace gust {
 
+static_assert(kVersionMajor == GUST_PACKAGE_VERSION_MAJOR && kVersionMinor == GUST_PACKAGE_VERSION_MINOR,
+              "gust.hpp's version and project(gust VERSION ...) differ");
+
 std::uint32_t library_version() {
     return kHeaderVersion;
 }
