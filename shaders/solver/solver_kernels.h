@@ -214,7 +214,12 @@ GUST_INLINE float face_coupling(GridLevel level, uint open, ivec3 c, uint a, uin
         neighbour = cell_index(level.dims, nb);
         return w;
     }
-    return (open >> (2u * a + s) & 1u) != 0u ? w : 0.0f;
+    if ((open >> (2u * a + s) & 1u) == 0u) return 0.0f;
+    // Level 0 holds φ = 0 in a ghost cell one cell out, i.e. h_0/2 beyond the side. A coarser level
+    // (cells h_l along this axis) keeps φ = 0 at that same place, (h_l + h_0)/2 from its cell centre
+    // rather than h_l, or its correction would treat the boundary as farther out than level 0 does.
+    float h_level = inversesqrt(level.inv_h2[a]);
+    return h_level > 1.5f * grid_h() ? w * (2.0f * h_level / (h_level + grid_h())) : w;
 }
 
 /// The weighted Laplacian at cell c of level l: diag = Σ w over the open faces, off = Σ w·(φ_nb − centre)
@@ -309,31 +314,38 @@ GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
     return sum / float(span.x * span.y * span.z);
 }
 
-/// Correction for fine cell c of level l from level l + 1 (cell-centred trilinear interpolation).
+/// Correction for fine cell c of level l from level l + 1: cell-centred trilinear interpolation (3/4 of
+/// the parent, 1/4 of its neighbour, per halved axis). Past a domain side the neighbour is replaced by
+/// the boundary: a closed side's zero gradient gives the parent all the weight, an open side's φ = 0
+/// (half a level-0 cell out, as face_coupling puts it) the parent's value interpolated to it.
 GUST_INLINE float prolong_cell(uint l, ivec3 c) {
     GridLevel fine = load_level(l);
     GridLevel coarse = load_level(l + 1u);
     ivec3 k = fine.factor;
     ivec3 parent = c / k;
     ivec3 toward = ivec3(0);
-    for (uint a = 0u; a < 3u; ++a)
-        if (k[a] == 2) toward[a] = (c[a] & 1) != 0 ? 1 : -1;
+    vec3 own = vec3(1.0f), across = vec3(0.0f);
+    for (uint a = 0u; a < 3u; ++a) {
+        if (k[a] != 2) continue;
+        toward[a] = (c[a] & 1) != 0 ? 1 : -1;
+        int q = parent[a] + toward[a];
+        if (q >= 0 && q < coarse.dims[a]) {
+            own[a] = 0.75f;
+            across[a] = 0.25f;
+        } else if ((grid_open_sides() >> (2u * a + (toward[a] > 0 ? 1u : 0u)) & 1u) != 0u) {
+            float h_coarse = inversesqrt(coarse.inv_h2[a]);
+            own[a] = 1.0f - 0.5f * h_coarse / (h_coarse + grid_h());
+        }
+    }
     float sum = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
         ivec3 pick = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
         float w = 1.0f;
-        bool used = true;
-        for (uint a = 0u; a < 3u; ++a) {
-            if (toward[a] == 0) {
-                used = used && pick[a] == 0;
-            } else {
-                w *= pick[a] == 0 ? 0.75f : 0.25f;
-            }
-        }
-        if (!used) continue;
-        ivec3 q = parent + pick * toward;
-        if (inside_cells(coarse.dims, q))
-            sum += w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, q));
+        for (uint a = 0u; a < 3u; ++a)
+            w *= pick[a] == 0 ? own[a] : across[a];
+        if (w == 0.0f) continue;
+        sum +=
+            w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, parent + pick * toward));
     }
     return sum;
 }
