@@ -201,6 +201,8 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
         auto done = (*world)->collect(readbacks[n % kFrames].mapped());
         ASSERT_TRUE(done) << done.message();
         EXPECT_EQ(done->frame, n - kFrames);
+        // The tree stamps its first update frame 1 and each recorded frame updates it once.
+        EXPECT_EQ(done->tree.frame, std::uint32_t(n - kFrames + 1));
         if (done->truncated) {
             ++truncated;
             whole_from = n;

@@ -229,7 +229,9 @@ Result<TreeStats> SparseTree::update(const FragmentSource* rebuild_static, const
     Status done =
         ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_passes(cmd, rebuild_static, dynamic); });
     if (!done) return done;
-    TreeStats stats = stats_from(state_.mapped());
+    TreeState state{};
+    std::memcpy(&state, state_.mapped(), sizeof(state));
+    TreeStats stats = stats_of(state, frame_);
     stats.ms = profiler_.read();
     return stats;
 }
@@ -241,13 +243,24 @@ Status SparseTree::record_update(VkCommandBuffer cmd, const FragmentSource* rebu
     return {};
 }
 
+namespace {
+/// What record_readback() writes: the counters, then the frame number the update stamped.
+struct Readback {
+    TreeState state;
+    std::uint32_t frame;
+    std::uint32_t unused;
+};
+} // namespace
+
 std::size_t SparseTree::readback_bytes() {
-    return sizeof(TreeState);
+    return sizeof(Readback);
 }
 
 void SparseTree::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
     const VkBufferCopy region{0, offset, sizeof(TreeState)};
     ctx_.vk().vkCmdCopyBuffer(cmd, state_.handle(), dst, 1, &region);
+    const std::uint32_t frame[2] = {frame_, 0};
+    ctx_.vk().vkCmdUpdateBuffer(cmd, dst, offset + offsetof(Readback, frame), sizeof(frame), frame);
 }
 
 void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
@@ -297,10 +310,14 @@ gpu::Timings SparseTree::timings(std::uint64_t frame) const {
 }
 
 TreeStats SparseTree::stats_from(const void* readback) const {
-    TreeState st{};
-    std::memcpy(&st, readback, sizeof(st));
+    Readback r{};
+    std::memcpy(&r, readback, sizeof(r));
+    return stats_of(r.state, r.frame);
+}
+
+TreeStats SparseTree::stats_of(const TreeState& st, std::uint32_t frame) const {
     TreeStats out(ctx_.memory());
-    out.frame = frame_;
+    out.frame = frame;
     const std::uint64_t children = 1ull << (3 * log2_b_);
     const std::uint64_t stride = shaderio::mask_stride(log2_b_);
     out.nodes = 1;

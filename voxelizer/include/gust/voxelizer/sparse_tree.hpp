@@ -16,6 +16,10 @@
 
 namespace gust {
 
+namespace shaderio {
+struct TreeState;
+}
+
 /// Shape and initial capacity of a tree.
 struct TreeDesc {
     std::uint32_t branching = 4;      ///< children per axis: 2 (octree), 4 or 8
@@ -40,7 +44,7 @@ struct TreeStats {
     /// `memory` holds the lists.
     explicit TreeStats(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
         : nodes_per_level(memory), ms(memory) {}
-    std::uint32_t frame = 0;
+    std::uint32_t frame = 0; ///< the number the update stamped on the nodes it reached (1 for the first)
     std::pmr::vector<std::uint64_t>
         nodes_per_level;                ///< allocated nodes at levels 1..depth-1, then leaf bricks
     std::uint64_t nodes = 0;            ///< sum of nodes_per_level plus the root
@@ -107,6 +111,8 @@ class SparseTree : public gpu::HostObject {
   private:
     explicit SparseTree(gpu::Context& ctx) : ctx_(ctx) {}
     Status allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep);
+    /// Stats from the tree's counters after the update that stamped `frame`.
+    TreeStats stats_of(const shaderio::TreeState& state, std::uint32_t frame) const;
     Status ensure_scratch(std::uint64_t fragments);
     void write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings, const FragmentSource& source);
     void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned);
