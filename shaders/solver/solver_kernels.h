@@ -315,9 +315,10 @@ GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
 }
 
 /// Correction for fine cell c of level l from level l + 1: cell-centred trilinear interpolation (3/4 of
-/// the parent, 1/4 of its neighbour, per halved axis). Past a domain side the neighbour is replaced by
-/// the boundary: a closed side's zero gradient gives the parent all the weight, an open side's φ = 0
-/// (half a level-0 cell out, as face_coupling puts it) the parent's value interpolated to it.
+/// the parent, 1/4 of its neighbour along each halved axis) through the coarse face between them, in
+/// proportion to its open fraction θ; the closed part acts as a wall (zero gradient: the parent's value).
+/// Past a domain side the neighbour is the boundary: a closed side is a wall, an open side's φ = 0 (half
+/// a level-0 cell out, as face_coupling puts it) is interpolated toward through the side's open part.
 GUST_INLINE float prolong_cell(uint l, ivec3 c) {
     GridLevel fine = load_level(l);
     GridLevel coarse = load_level(l + 1u);
@@ -328,13 +329,15 @@ GUST_INLINE float prolong_cell(uint l, ivec3 c) {
     for (uint a = 0u; a < 3u; ++a) {
         if (k[a] != 2) continue;
         toward[a] = (c[a] & 1) != 0 ? 1 : -1;
+        ivec3 f = toward[a] > 0 ? parent + axis_unit(a) : parent;
+        float theta = load_weight(int(coarse.faces) + face_index(coarse.dims, a, f));
         int q = parent[a] + toward[a];
         if (q >= 0 && q < coarse.dims[a]) {
-            own[a] = 0.75f;
-            across[a] = 0.25f;
+            across[a] = 0.25f * theta;
+            own[a] = 1.0f - across[a];
         } else if ((grid_open_sides() >> (2u * a + (toward[a] > 0 ? 1u : 0u)) & 1u) != 0u) {
             float h_coarse = inversesqrt(coarse.inv_h2[a]);
-            own[a] = 1.0f - 0.5f * h_coarse / (h_coarse + grid_h());
+            own[a] = 1.0f - theta * 0.5f * h_coarse / (h_coarse + grid_h());
         }
     }
     float sum = 0.0f;
