@@ -121,6 +121,19 @@ template <class F> Outcome counted(F&& call) {
     return o;
 }
 
+/// Destroys the System (counted too), then expects no operator new from gust's code in the test, every
+/// hook allocation freed and no error logged.
+void destroy_and_expect_nothing_else(std::unique_ptr<System>& system, const Watch& watch) {
+    counted([&] {
+        system.reset();
+        return Outcome();
+    });
+    EXPECT_EQ(g_gust_news.load(), 0) << "operator new calls from gust's code while a hook was given";
+    EXPECT_GT(watch.allocations, 0);
+    EXPECT_EQ(watch.live, 0) << "host allocations not freed";
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+
 TEST(HostMemory, aSystemWithAnAllocationHookAllocatesNothingElseInItsWholeLife) {
     g_gust_news = 0;
     Watch watch;
@@ -177,15 +190,7 @@ TEST(HostMemory, aSystemWithAnAllocationHookAllocatesNothingElseInItsWholeLife) 
     const FrameStats& stats = system->stats();
     EXPECT_FALSE(stats.ms.empty()) << "no pass timings: the steps above did not run as assumed";
     EXPECT_GT(stats.fragments, 0u);
-    counted([&] {
-        system.reset();
-        return Outcome();
-    });
-
-    EXPECT_EQ(g_gust_news.load(), 0) << "operator new calls from gust's code while a hook was given";
-    EXPECT_GT(watch.allocations, 0);
-    EXPECT_EQ(watch.live, 0) << "host allocations not freed";
-    EXPECT_EQ(watch.errors, 0) << watch.last;
+    destroy_and_expect_nothing_else(system, watch);
 }
 
 TEST(HostMemory, recordingFramesIntoTheHostsCommandBuffersAllocatesNothingElse) {
@@ -230,15 +235,7 @@ TEST(HostMemory, recordingFramesIntoTheHostsCommandBuffersAllocatesNothingElse) 
     EXPECT_FALSE(system->stats().ms.empty())
         << "no frame's timings came back: the frames did not run as assumed";
     ASSERT_TRUE(host.finish_frames());
-    counted([&] {
-        system.reset();
-        return Outcome();
-    });
-
-    EXPECT_EQ(g_gust_news.load(), 0) << "operator new calls from gust's code while a hook was given";
-    EXPECT_GT(watch.allocations, 0);
-    EXPECT_EQ(watch.live, 0) << "host allocations not freed";
-    EXPECT_EQ(watch.errors, 0) << watch.last;
+    destroy_and_expect_nothing_else(system, watch);
     EXPECT_EQ(host.messages(), 0);
 }
 
