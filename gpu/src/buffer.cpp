@@ -144,6 +144,14 @@ void update(const Context& ctx, VkCommandBuffer cmd, const Buffer& dst, const vo
     }
 }
 
+void record_readback(const Context& ctx, VkCommandBuffer cmd, const Buffer& src, std::size_t bytes,
+                     VkBuffer dst, VkDeviceSize offset, std::span<const std::uint32_t> after) {
+    const VkBufferCopy region{0, offset, bytes};
+    ctx.vk().vkCmdCopyBuffer(cmd, src.handle(), dst, 1, &region);
+    if (!after.empty())
+        ctx.vk().vkCmdUpdateBuffer(cmd, dst, offset + bytes, after.size_bytes(), after.data());
+}
+
 void barrier(const Context& ctx, VkCommandBuffer cmd) {
     VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
     mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;

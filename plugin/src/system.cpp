@@ -171,10 +171,9 @@ struct System::Impl {
     /// The texture's transform and frame as of the last step.
     void publish_texture();
 
-    /// scroll_cells() when the focus moved too far to follow.
-    static constexpr int kTooFar = 1 << 30;
-    /// Whole cells the domain moves this step to follow the focus.
-    glm::ivec3 scroll_cells() const;
+    /// Whole cells the domain moves this step to follow the focus into `cells`; fails when the focus
+    /// moved too far in one step to follow.
+    Outcome scroll_cells(glm::ivec3& cells) const;
     /// This step's dynamic instances (their last transforms become the previous ones); hands a changed
     /// static set to the world.
     std::pmr::vector<GpuInstance> frame_instances();
@@ -571,13 +570,15 @@ Outcome check_dt(float dt) {
 }
 } // namespace
 
-glm::ivec3 System::Impl::scroll_cells() const {
+Outcome System::Impl::scroll_cells(glm::ivec3& cells) const {
     // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
     const float h = solver_desc.cell_size;
     const glm::vec3 wanted = focus - 0.5f * glm::vec3(solver_desc.cells) * h;
     const glm::vec3 shift = glm::round((wanted - solver->origin()) / h);
-    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f)))) return glm::ivec3(kTooFar);
-    return glm::ivec3(shift);
+    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f))))
+        return invalid("the focus moved more than a million cells in one step");
+    cells = glm::ivec3(shift);
+    return {};
 }
 
 std::pmr::vector<GpuInstance> System::Impl::frame_instances() {
@@ -641,9 +642,8 @@ Outcome System::step(float dt) {
     if (Outcome o = check_dt(dt); !o) return o;
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
-        const glm::ivec3 shift = m.scroll_cells();
-        if (shift == glm::ivec3(Impl::kTooFar))
-            return invalid("the focus moved more than a million cells in one step");
+        glm::ivec3 shift;
+        if (Outcome o = m.scroll_cells(shift); !o) return o;
         if (shift != glm::ivec3(0)) {
             if (Status s = m.solver->scroll(shift); !s) return device_failure(s);
             if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
@@ -711,9 +711,8 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
     if (Outcome o = check_dt(dt); !o) return o;
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
-        const glm::ivec3 shift = m.scroll_cells();
-        if (shift == glm::ivec3(Impl::kTooFar))
-            return invalid("the focus moved more than a million cells in one step");
+        glm::ivec3 shift;
+        if (Outcome o = m.scroll_cells(shift); !o) return o;
         // The frame contract: the frame that last used this slot has completed, and so have those before.
         const std::uint64_t n = m.frame;
         Impl::Slot& slot = m.slots[n % m.slots.size()];

@@ -401,8 +401,7 @@ std::size_t WindSolver::readback_bytes() {
 }
 
 void WindSolver::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
-    const VkBufferCopy region{0, offset, sizeof(SolverState)};
-    ctx_.vk().vkCmdCopyBuffer(cmd, impl_->state.handle(), dst, 1, &region);
+    gpu::record_readback(ctx_, cmd, impl_->state, sizeof(SolverState), dst, offset);
 }
 
 void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource* solid) {

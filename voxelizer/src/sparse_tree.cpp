@@ -257,10 +257,9 @@ std::size_t SparseTree::readback_bytes() {
 }
 
 void SparseTree::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
-    const VkBufferCopy region{0, offset, sizeof(TreeState)};
-    ctx_.vk().vkCmdCopyBuffer(cmd, state_.handle(), dst, 1, &region);
+    static_assert(offsetof(Readback, frame) == sizeof(TreeState));
     const std::uint32_t frame[2] = {frame_, 0};
-    ctx_.vk().vkCmdUpdateBuffer(cmd, dst, offset + offsetof(Readback, frame), sizeof(frame), frame);
+    gpu::record_readback(ctx_, cmd, state_, sizeof(TreeState), dst, offset, frame);
 }
 
 void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,

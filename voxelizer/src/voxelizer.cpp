@@ -326,11 +326,9 @@ std::size_t Voxelizer::readback_bytes() {
 }
 
 void Voxelizer::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
-    const VkBufferCopy region{0, offset, sizeof(VoxelizeCounters)};
-    ctx_.vk().vkCmdCopyBuffer(cmd, counters_.handle(), dst, 1, &region);
+    static_assert(offsetof(Readback, capacity) == sizeof(VoxelizeCounters));
     const std::uint32_t capacities[2] = {std::uint32_t(capacity_), std::uint32_t(large_capacity_)};
-    ctx_.vk().vkCmdUpdateBuffer(cmd, dst, offset + offsetof(Readback, capacity), sizeof(capacities),
-                                capacities);
+    gpu::record_readback(ctx_, cmd, counters_, sizeof(VoxelizeCounters), dst, offset, capacities);
 }
 
 gpu::Timings Voxelizer::timings(std::uint64_t frame) const {

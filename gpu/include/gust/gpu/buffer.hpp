@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <gust/gpu/context.hpp>
+#include <span>
 
 namespace gust::gpu {
 
@@ -60,6 +61,12 @@ constexpr std::size_t kMaxUpdateBytes = 65536;
 /// passes read `dst`.
 void update(const Context& ctx, VkCommandBuffer cmd, const Buffer& dst, const void* data, std::size_t bytes,
             std::size_t offset = 0);
+
+/// Records what a frame's readback holds for one module: the first `bytes` of `src` (its counters)
+/// copied into `dst` at `offset`, then `after` (host words known when recording, a multiple of 4 bytes
+/// of them) right behind them. Needs a barrier after the passes that wrote `src`.
+void record_readback(const Context& ctx, VkCommandBuffer cmd, const Buffer& src, std::size_t bytes,
+                     VkBuffer dst, VkDeviceSize offset, std::span<const std::uint32_t> after = {});
 
 /// Full memory barrier between two recorded passes (compute/graphics/transfer/indirect).
 void barrier(const Context& ctx, VkCommandBuffer cmd);
