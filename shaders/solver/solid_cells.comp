@@ -37,17 +37,26 @@ void main() {
     uint levels = sb().b.tree_levels;
     WordsRef flags = WordsRef(sb().b.cell_flags);
     FloatsRef solid = FloatsRef(sb().b.cell_solid);
+    // The last step's moving fragments summed into this cell (kCellMoving): clear them here, so only
+    // the cells that held motion are written, not the whole motion array.
+    if ((flags.v[i] & kCellMoving) != 0u) IVec4Ref(sb().b.cell_motion).v[i] = ivec4(0);
     flags.v[i] = 0u;
     solid.v[i] = 0.0;
     if (levels == 0u) return;
     ivec3 lo = sb().b.voxel_offset + c * int(v);
-    // Cheap exit: the shallowest level whose nodes are at least a cell wide; the cell's corners lie
-    // in at most eight such nodes, and when none exists the cell is empty.
+    // Cheap exit: the shallowest level whose nodes are at least a cell wide; the cell lies in at most
+    // two such nodes along each axis (one where its first and last voxels share a node), and when none
+    // exists the cell is empty. Only the corners in distinct nodes are looked up.
     uint coarse = levels - 1u;
     while (coarse > 0u && (1u << ((levels - coarse) * b_log2())) < v) --coarse;
+    int node_shift = int((levels - coarse) * b_log2());
+    ivec3 hi = lo + int(v - 1u);
+    ivec3 spans = ivec3(notEqual(lo >> node_shift, hi >> node_shift));
     bool any_node = false;
     for (int k = 0; k < 8 && !any_node; ++k) {
-        ivec3 corner = lo + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1) * int(v - 1u);
+        ivec3 side = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+        if (any(greaterThan(side, spans))) continue;
+        ivec3 corner = lo + side * int(v - 1u);
         uint node = in_tree(corner) ? node_at(corner, coarse) : kNone;
         any_node = node != kNone && NodesRef(sb().b.tree_nodes).v[node].x != 0u;
     }
@@ -85,7 +94,7 @@ void main() {
     CellBits fluid = cell_fluid(occupied, v, faces);
     uint cw = sb().b.cell_words;
     for (uint k = 0u; k < cw; ++k) WordsRef(sb().b.cell_fluid).v[uint(i) * cw + k] = fluid.w[k];
-    flags.v[i] = 1u;
+    flags.v[i] = kCellCut;
     solid.v[i] = float(count) / float(v * v * v);
     atomicAdd(state().s.cut_cells, 1u);
 }

@@ -6,19 +6,23 @@
 
 layout(local_size_x = kSolverGroupSize) in;
 
-CellBits fluid_of(ivec3 c, uint v) {
+/// The cell's kCellCut / kCellMoving flags, none beyond the domain.
+uint flags_of(ivec3 c) {
     ivec3 n = sb().b.dims;
-    if (!inside_cells(n, c)) return bits_all(v);
-    int i = cell_index(n, c);
-    if (WordsRef(sb().b.cell_flags).v[i] == 0u) return bits_all(v);
+    return inside_cells(n, c) ? WordsRef(sb().b.cell_flags).v[cell_index(n, c)] : 0u;
+}
+
+CellBits fluid_of(ivec3 c, uint flags, uint v) {
+    if ((flags & kCellCut) == 0u) return bits_all(v);
     CellBits b = bits_none();
     uint cw = sb().b.cell_words;
+    int i = cell_index(sb().b.dims, c);
     for (uint k = 0u; k < cw; ++k) b.w[k] = WordsRef(sb().b.cell_fluid).v[uint(i) * cw + k];
     return b;
 }
 
-ivec4 motion_of(ivec3 c) {
-    if (!inside_cells(sb().b.dims, c)) return ivec4(0);
+ivec4 motion_of(ivec3 c, uint flags) {
+    if ((flags & kCellMoving) == 0u) return ivec4(0);
     return IVec4Ref(sb().b.cell_motion).v[cell_index(sb().b.dims, c)];
 }
 
@@ -30,15 +34,14 @@ void main() {
     ivec3 f = face_from_index(n, i, axis);
     ivec3 lo = f - axis_unit(axis);
     uint v = sb().b.voxels_per_cell;
-    bool cut = (inside_cells(n, lo) && WordsRef(sb().b.cell_flags).v[cell_index(n, lo)] != 0u) ||
-               (inside_cells(n, f) && WordsRef(sb().b.cell_flags).v[cell_index(n, f)] != 0u);
+    uint flags_lo = flags_of(lo), flags_hi = flags_of(f);
     float open = 1.0;
-    if (cut) {
+    if (((flags_lo | flags_hi) & kCellCut) != 0u) {
         CellBits faces[6];
         load_face_masks(faces);
-        open = face_open_fraction(fluid_of(lo, v), fluid_of(f, v), axis, v, faces);
+        open = face_open_fraction(fluid_of(lo, flags_lo, v), fluid_of(f, flags_hi, v), axis, v, faces);
     }
     FloatsRef(sb().b.weights).v[i] = open;
-    ivec4 m = motion_of(lo) + motion_of(f);
+    ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
     FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
 }

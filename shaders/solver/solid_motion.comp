@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per moving fragment: adds its surface velocity to its wind cell's fixed-point sum.
+// Per moving fragment: adds its surface velocity to its wind cell's fixed-point sum and marks the cell
+// kCellMoving (solid_faces reads the sums of marked cells only; solid_cells clears them next step).
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -21,5 +22,5 @@ void main() {
     atomicAdd(motion.v[cell].x, fixed_point.x);
     atomicAdd(motion.v[cell].y, fixed_point.y);
     atomicAdd(motion.v[cell].z, fixed_point.z);
-    atomicAdd(motion.v[cell].w, 1);
+    if (atomicAdd(motion.v[cell].w, 1) == 0) atomicOr(WordsRef(sb().b.cell_flags).v[cell], kCellMoving);
 }

@@ -82,6 +82,9 @@ struct SolverState {
 GUST_CONST uint kCoarseSlot = kMaxGridLevels;
 GUST_CONST uint kDispatchSlots = kMaxGridLevels + 1u;
 
+GUST_CONST uint kCellCut = 1u;    ///< cell_flags: the cell holds solid voxels (cell_fluid is written)
+GUST_CONST uint kCellMoving = 2u; ///< cell_flags: moving fragments were summed into cell_motion
+
 GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face()
 GUST_CONST uint kFieldTmp = 1u;
 GUST_CONST uint kFieldBack = 2u;
@@ -108,7 +111,7 @@ struct SolverBindings {
     GUST_ADDRESS residual;        ///< float[]: residual per cell, all levels (1/s)
     GUST_ADDRESS cell_solid;      ///< float[cells]: fraction of the cell's voxels that are occupied
     GUST_ADDRESS cell_fluid;      ///< uint[cells * kCellWords]: the cell's open voxels (see cell_fluid)
-    GUST_ADDRESS cell_flags;      ///< uint[cells]: 1 when the cell holds solid voxels
+    GUST_ADDRESS cell_flags;      ///< uint[cells]: kCellCut, kCellMoving
     GUST_ADDRESS cell_motion;     ///< ivec4[cells]: fixed-point fragment velocity sums and count
     GUST_ADDRESS vorticity;       ///< vec4[cells]: curl (1/s) and its length
     GUST_ADDRESS emitters;        ///< GpuEmitter[emitter_count]

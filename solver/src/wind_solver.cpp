@@ -224,7 +224,10 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     detail::face_masks(desc.voxels_per_cell, b.face_mask);
 
     Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-        for (gpu::Buffer* buffer : {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid})
+        // cell_flags and cell_motion start clear: each step's solid_cells clears only the cells the last
+        // step marked moving.
+        for (gpu::Buffer* buffer :
+             {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid, &m.cell_flags, &m.cell_motion})
             ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
         ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE,
                                  std::bit_cast<std::uint32_t>(1.0f));
@@ -490,7 +493,6 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         gpu::update(ctx_, cmd, m.emitters, m.emitter_data.data(),
                     m.emitter_count * sizeof(shaderio::GpuEmitter));
     vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
-    vk.vkCmdFillBuffer(cmd, m.cell_motion.handle(), 0, VK_WHOLE_SIZE, 0);
     const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0,
                              kDispatchSlots * sizeof(LevelDispatch)};
     vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);

@@ -111,6 +111,7 @@ struct PassCase {
     float viscosity;
     PressureSolver pressure;
     bool emitters;
+    std::uint32_t voxels_per_cell = 4; ///< 3: cells straddle the tree's 4-voxel bricks
 };
 
 class CpuMatchesGpu : public GpuTestWithParam<PassCase> {};
@@ -123,6 +124,7 @@ TEST_P(CpuMatchesGpu, onA16CubedGridWithSolids) {
     desc.vorticity = pass.vorticity;
     desc.viscosity = pass.viscosity;
     desc.pressure = pass.pressure;
+    desc.voxels_per_cell = pass.voxels_per_cell;
     desc.tolerance = pass.pressure == PressureSolver::Jacobi ? 1e-3f : 1e-5f;
     auto gpu_created = WindSolver::create(ctx(), desc);
     ASSERT_TRUE(gpu_created) << gpu_created.message();
@@ -216,6 +218,7 @@ INSTANTIATE_TEST_SUITE_P(
         PassCase{"vorticity", Advection::None, 0.5f, 0.0f, PressureSolver::Multigrid, false},
         PassCase{"viscosity", Advection::None, 0.0f, 0.2f, PressureSolver::Multigrid, false},
         PassCase{"jacobi", Advection::None, 0.0f, 0.0f, PressureSolver::Jacobi, false},
+        PassCase{"cellsAcrossBricks", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, false, 3},
         PassCase{"everything", Advection::MacCormack, 0.3f, 0.05f, PressureSolver::MultigridPCG, true}),
     [](const ::testing::TestParamInfo<PassCase>& param) { return std::string(param.param.name); });
 
