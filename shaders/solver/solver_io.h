@@ -77,10 +77,12 @@ struct SolverState {
     uint recorded;                    ///< V-cycles (Jacobi: blocks) this step recorded, from check's push
 };
 
-/// Slots of the dispatch buffer: one per multigrid level, the coarsest solve, then a full copy that
-/// live slots are reset from (converged solves zero the live ones).
-GUST_CONST uint kCoarseSlot = kMaxGridLevels;
-GUST_CONST uint kDispatchSlots = kMaxGridLevels + 1u;
+/// Slots of the dispatch buffer: one per multigrid level, one per level over one colour of its cells (a
+/// red-black sweep, colour_cell), the coarsest solve, then a full copy that live slots are reset from
+/// (converged solves zero the live ones).
+GUST_CONST uint kColourSlot = kMaxGridLevels; ///< kColourSlot + level
+GUST_CONST uint kCoarseSlot = 2u * kMaxGridLevels;
+GUST_CONST uint kDispatchSlots = 2u * kMaxGridLevels + 1u;
 
 GUST_CONST uint kCellCut = 1u;    ///< cell_flags: the cell holds solid voxels (cell_fluid is written)
 GUST_CONST uint kCellMoving = 2u; ///< cell_flags: moving fragments were summed into cell_motion
@@ -212,6 +214,20 @@ GUST_INLINE ivec3 face_from_index(ivec3 n, int index, GUST_OUT(uint) axis) {
 
 GUST_INLINE ivec3 cell_from_index(ivec3 n, int index) {
     return ivec3(index % n.x, (index / n.x) % n.y, index / (n.x * n.y));
+}
+
+/// Threads of a red-black sweep over one colour: ceil(n.x / 2) per row of cells.
+GUST_INLINE int colour_threads(ivec3 n) {
+    return (n.x + 1) / 2 * n.y * n.z;
+}
+
+/// Cell of thread `index` of a sweep over `colour` ((x + y + z) % 2); x = n.x where the row has one
+/// cell of that colour fewer.
+GUST_INLINE ivec3 colour_cell(ivec3 n, uint colour, int index) {
+    int half_row = (n.x + 1) / 2;
+    int row = index / half_row;
+    int y = row % n.y, z = row / n.y;
+    return ivec3(2 * (index % half_row) + int((uint(y + z) + colour) & 1u), y, z);
 }
 
 /// Side bit (−x,+x,−y,+y,−z,+z) of boundary face f, or 6 for an interior face.

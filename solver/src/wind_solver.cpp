@@ -188,6 +188,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     for (std::size_t l = 0; l < m.levels.size(); ++l) {
         const glm::ivec3 d = m.levels[l].dims;
         dispatch[kDispatchSlots + l] = groups_for(std::uint64_t(d.x) * d.y * d.z);
+        dispatch[kDispatchSlots + shaderio::kColourSlot + l] =
+            groups_for(std::uint64_t(shaderio::colour_threads(d)));
     }
     dispatch[kDispatchSlots + shaderio::kCoarseSlot] = {1, 1, 1};
     std::memcpy(m.dispatch.mapped(), dispatch.data(), dispatch.size() * sizeof(LevelDispatch));
@@ -464,7 +466,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         for (std::uint32_t s = 0; s < desc_.smoothing; ++s)
             for (std::uint32_t colour = 0; colour < 2; ++colour) {
                 push.parity = colour;
-                run_slot(m.relax, l);
+                run_slot(m.relax, shaderio::kColourSlot + l);
             }
     };
     // One V-cycle on rhs at level 0, improving φ there (levels below start from 0).
