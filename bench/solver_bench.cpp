@@ -578,13 +578,15 @@ struct Workload {
 Traffic solid_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), fluid = 4.0 * w.cut_cells * w.cell_words;
-    // solid_cells: flag and fraction per cell, the voxel set of a cut cell, the tree once.
-    t.add(8 * C + fluid + w.tree_bytes, 8 * C + fluid + w.tree_bytes);
+    // solid_cells: the last flags read, flag and fraction stored per cell, the voxel set of a cut cell,
+    // the tree once. Clearing the last step's moving cells' motion is left out (at most one per fragment).
+    t.add(12 * C + fluid + w.tree_bytes, 12 * C + fluid + w.tree_bytes);
     // solid_motion: key and half-float velocity, four 4-byte atomics, per fragment.
     t.add(44 * w.fragments, 44 * w.fragments);
-    // solid_faces: two flags, two motion sums (16 B), weight and solid velocity stored; a face of a cut
-    // cell (six per cut cell) also reads both voxel sets.
-    t.add(48 * F + 6 * 2 * fluid, (4 + 16) * C + 8 * F + fluid);
+    // solid_faces: two flags, weight and solid velocity stored; a face of a cut cell (six per cut cell)
+    // also reads both voxel sets. The motion sums of moving cells are left out (at most 6 x 16 B per
+    // fragment).
+    t.add(16 * F + 6 * 2 * fluid, 4 * C + 8 * F + fluid);
     // coarse_weights: the fine faces a coarse face covers (each read by one coarse face) and the store.
     for (std::size_t l = 1; l < w.levels.size(); ++l) {
         double bytes = 0.0;
@@ -633,14 +635,9 @@ void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint32_t half_
     t.add(n * w.cells(l) / 2 * (12 * 4 + 4 + 4), n * (4 * w.faces(l) + 6 * w.cells(l)), dispatches);
 }
 
-/// Residual at level l: the operator, the right-hand side and the cell's φ, one store.
-void add_residual(Traffic& t, const Workload& w, std::size_t l) {
-    t.add(w.cells(l) * (12 * 4 + 4 + 4 + 4), 4 * w.faces(l) + 12 * w.cells(l));
-}
-
-/// The "pressure" pass with the default MGPCG: divergence, then per iteration one V-cycle (smoothing,
-/// residual and restriction down, the coarsest solve, prolongation and smoothing up) and conjugate
-/// gradients' five level-0 passes (cg.comp), and at the end the copy of x into φ.
+/// The "pressure" pass with the default MGPCG: divergence, then per iteration one V-cycle (smoothing and
+/// restriction (which computes the residual) down, the coarsest solve, prolongation and smoothing up) and
+/// conjugate gradients' five level-0 passes (cg.comp), and at the end the copy of x into φ.
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
@@ -655,12 +652,12 @@ Traffic pressure_traffic(const Workload& w) {
     Traffic cycle;
     for (std::size_t l = 0; l < last; ++l) {
         add_relax(cycle, w, l, 2 * 2 * w.smoothing, 2 * 2 * w.smoothing);
-        add_residual(cycle, w, l);
         const glm::ivec3 k = w.levels[l].factor;
-        const double children = k.x * k.y * k.z;
         const double parents = std::uint32_t(1) << ((k.x == 2) + (k.y == 2) + (k.z == 2));
-        cycle.add(w.cells(l + 1) * (children * 4 + 8), 4 * w.cells(l) + 8 * w.cells(l + 1)); // restrict
-        cycle.add(w.cells(l) * (4 + parents * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1));  // prolong
+        // restrict: a coarse cell computes its children's residuals (operator, b and φ each), two stores.
+        cycle.add(w.cells(l) * (12 * 4 + 4 + 4) + 8 * w.cells(l + 1),
+                  4 * w.faces(l) + 8 * w.cells(l) + 8 * w.cells(l + 1));
+        cycle.add(w.cells(l) * (4 + parents * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1)); // prolong
     }
     add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps, 1);
     cycle.add(C * 3 * 4, 12 * C);                        // z·r and z·r_old
@@ -930,7 +927,7 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "once; the three `vkCmdCopyBuffer` of a step count as read plus write. The pressure pass (MGPCG) "
            "is counted per iteration (one V-cycle, at every level but the coarsest: "
         << 2 * desc.smoothing << " half-sweeps down and " << 2 * desc.smoothing
-        << " up, residual, restriction, prolongation; the coarsest level's "
+        << " up, restriction (which computes the finer level's residual), prolongation; the coarsest level's "
         << 2 * gust::detail::kCoarseSweeps
         << " half-sweeps; then conjugate gradients' five level-0 passes: the sums of z*r and z*r_old, "
            "p = z + beta*p, the sum of p*Lp, the update of x, r_old and z, and r = b - Lx with the check's "

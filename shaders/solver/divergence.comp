@@ -25,7 +25,7 @@ void main() {
         vec2 sums = vec2(0.0);
         if (inside) {
             float q = laplacian_cell(0u, c, kCellPressure);
-            store_cell(kCellResidual, i, q);
+            store_cell(kCellScratch, i, q);
             sums = q * vec2(load_cell(kCellTarget, i), q);
         }
         group_sum_store(sums);
@@ -39,7 +39,7 @@ void main() {
         float b = load_cell(kCellTarget, i);
         // Written so that s = 0 ignores φ and q entirely (q is not computed on a cold start).
         float x0 = s != 0.0 ? s * load_cell(kCellPressure, i) : 0.0;
-        float r0 = s != 0.0 ? b - s * load_cell(kCellResidual, i) : b;
+        float r0 = s != 0.0 ? b - s * load_cell(kCellScratch, i) : b;
         if (pc.iterations != 0u) {
             store_cell(kCellSolution, i, x0);
             store_cell(kCellRhs, i, r0);

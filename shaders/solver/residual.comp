@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per cell of level pc.level: residual b − Lφ; with pc.parity 1 its maximum joins the convergence check.
+// Per level-0 cell: the residual b − Lφ, whose maximum joins the convergence check (plain multigrid
+// and Jacobi; restriction computes the V-cycle's residuals itself, restrict_cell).
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -8,13 +9,8 @@ layout(local_size_x = kSolverGroupSize) in;
 void main() {
     group_max_begin();
     int i = thread_index();
-    GridLevel level = load_level(pc.level);
-    if (i < level.dims.x * level.dims.y * level.dims.z) {
-        float r = residual_cell(pc.level, cell_from_index(level.dims, i));
-        store_cell(kCellResidual, int(level.cells) + i, r);
-        group_max_add(r);
-    }
+    ivec3 n = grid_dims();
+    if (i < n.x * n.y * n.z) group_max_add(residual_cell(0u, cell_from_index(n, i)));
     uint bits;
-    if (group_max_end(bits) && pc.parity == 1u && bits > state().s.residual_scratch)
-        atomicMax(state().s.residual_scratch, bits);
+    if (group_max_end(bits) && bits > state().s.residual_scratch) atomicMax(state().s.residual_scratch, bits);
 }

@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per cell of level pc.level (> 0): right-hand side from the finer level's residual; φ starts at 0.
+// Per cell of level pc.level (> 0): right-hand side from the finer level's residual (restrict_cell
+// computes it); φ starts at 0.
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;

@@ -42,7 +42,7 @@ uint64_t face_field(uint field) {
 uint64_t cell_field(uint field) {
     if (field == kCellPressure) return sb().b.pressure;
     if (field == kCellRhs) return sb().b.rhs;
-    if (field == kCellResidual) return sb().b.residual;
+    if (field == kCellScratch) return sb().b.scratch;
     if (field == kCellPressureTmp) return sb().b.pressure_tmp;
     ivec3 n = sb().b.dims;
     return sb().b.cg_cells + uint64_t(field - kCellSolution) * uint64_t(n.x * n.y * n.z) * 4ul;

@@ -93,7 +93,7 @@ GUST_CONST uint kFieldBack = 2u;
 GUST_CONST uint kFieldSolid = 3u;
 GUST_CONST uint kCellPressure = 0u; ///< cell fields for load_cell()
 GUST_CONST uint kCellRhs = 1u;
-GUST_CONST uint kCellResidual = 2u;
+GUST_CONST uint kCellScratch = 2u; ///< level 0 only: the warm start's q = Lφ
 GUST_CONST uint kCellPressureTmp = 3u;
 GUST_CONST uint kCellSolution = 4u;    ///< conjugate gradients: the iterate x
 GUST_CONST uint kCellDirection = 5u;   ///< the search direction p
@@ -110,7 +110,7 @@ struct SolverBindings {
     GUST_ADDRESS pressure;        ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
     GUST_ADDRESS pressure_tmp;    ///< float[cells]: Jacobi's second buffer
     GUST_ADDRESS rhs;             ///< float[]: right-hand side per cell, all levels (1/s)
-    GUST_ADDRESS residual;        ///< float[]: residual per cell, all levels (1/s)
+    GUST_ADDRESS scratch;         ///< float[cells]: kCellScratch
     GUST_ADDRESS cell_solid;      ///< float[cells]: fraction of the cell's voxels that are occupied
     GUST_ADDRESS cell_fluid;      ///< uint[cells * kCellWords]: the cell's open voxels (see cell_fluid)
     GUST_ADDRESS cell_flags;      ///< uint[cells]: kCellCut, kCellMoving

@@ -280,7 +280,9 @@ GUST_INLINE float residual_cell(uint l, ivec3 c) {
     return diag > 0.0f ? load_cell(kCellRhs, i) - lap : 0.0f;
 }
 
-/// Right-hand side of coarse cell C of level l (> 0): the mean residual of its children.
+/// Right-hand side of coarse cell C of level l (> 0): the mean residual of its children, computed here
+/// from the finer level's φ, so no residual pass (and no residual array) lies between smoothing and
+/// restriction.
 GUST_INLINE float restrict_cell(uint l, ivec3 C) {
     GridLevel fine = load_level(l - 1u);
     ivec3 k = fine.factor;
@@ -289,8 +291,7 @@ GUST_INLINE float restrict_cell(uint l, ivec3 C) {
         for (int y = 0; y < k.y; ++y)
             for (int x = 0; x < k.x; ++x) {
                 ivec3 c = C * k + ivec3(x, y, z);
-                if (inside_cells(fine.dims, c))
-                    sum += load_cell(kCellResidual, int(fine.cells) + cell_index(fine.dims, c));
+                if (inside_cells(fine.dims, c)) sum += residual_cell(l - 1u, c);
             }
     return sum / float(k.x * k.y * k.z);
 }

@@ -271,10 +271,6 @@ void CpuWind::Impl::v_cycle() {
     const std::uint32_t levels = std::uint32_t(k.levels.size());
     for (std::uint32_t l = 0; l + 1 < levels; ++l) {
         smooth(l);
-        const GridLevel& level = k.levels[l];
-        each_cell(level, [&](int i, glm::ivec3 c) {
-            k.cell[shaderio::kCellResidual][level.cells + std::size_t(i)] = k.residual_cell(l, c);
-        });
         const GridLevel& coarse = k.levels[l + 1];
         each_cell(coarse, [&](int i, glm::ivec3 c) {
             rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(l + 1, c);
@@ -303,7 +299,7 @@ void CpuWind::Impl::v_cycle() {
 float CpuWind::Impl::start_solve(bool warm) {
     using namespace shaderio;
     std::vector<float>& phi = k.cell[kCellPressure];
-    std::vector<float>& q = k.cell[kCellResidual];
+    std::vector<float>& q = k.cell[kCellScratch];
     const std::vector<float>& b = k.cell[kCellTarget];
     float s = 0.0f;
     if (warm) {
@@ -382,11 +378,8 @@ float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32
 
 float CpuWind::Impl::max_residual() {
     float worst = 0.0f;
-    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-        const float r = k.residual_cell(0, c);
-        k.cell[shaderio::kCellResidual][std::size_t(i)] = r;
-        worst = std::max(worst, std::abs(r));
-    });
+    each_cell(k.levels[0],
+              [&](int, glm::ivec3 c) { worst = std::max(worst, std::abs(k.residual_cell(0, c))); });
     return worst;
 }
 

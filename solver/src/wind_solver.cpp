@@ -63,8 +63,8 @@ struct WindSolver::Impl : gpu::HostObject {
         vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
         cg_scalars, project, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, weights, solid_velocity, pressure, pressure_tmp, rhs,
-        residual_buf, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf,
-        emitters, state, dispatch, bindings, points, samples;
+        scratch, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf, emitters,
+        state, dispatch, bindings, points, samples;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -162,7 +162,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.pressure, all_cells * 4, gpu::MemoryUse::Device, 0},
         {&m.pressure_tmp, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.rhs, all_cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.residual_buf, all_cells * 4, gpu::MemoryUse::Device, 0},
+        {&m.scratch, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cg_cells, 4 * cells * 4, gpu::MemoryUse::Device, 0},
         {&m.partials, std::uint64_t(level0_groups.x) * level0_groups.y * 8, gpu::MemoryUse::Device, 0},
         {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
@@ -203,7 +203,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.pressure = m.pressure.address();
     b.pressure_tmp = m.pressure_tmp.address();
     b.rhs = m.rhs.address();
-    b.residual = m.residual_buf.address();
+    b.scratch = m.scratch.address();
     b.cg_cells = m.cg_cells.address();
     b.partials = m.partials.address();
     b.partial_count = level0_groups.x * level0_groups.y;
@@ -473,9 +473,6 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     auto v_cycle = [&]() {
         for (std::uint32_t l = 0; l + 1 < levels; ++l) {
             smooth(l);
-            push.level = l;
-            push.parity = 0;
-            run_slot(m.residual, l);
             push.level = l + 1;
             run_slot(m.restrict_, l + 1);
         }
@@ -580,8 +577,6 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     if (desc_.pressure == PressureSolver::Multigrid) {
         for (std::uint32_t cycle = 0; cycle < recorded; ++cycle) {
             v_cycle();
-            push.level = 0;
-            push.parity = 1;
             run_slot(m.residual, 0);
             check();
         }
@@ -609,7 +604,6 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
                 push.parity = 2 + (i & 1);
                 run_slot(m.relax, 0);
             }
-            push.parity = 1;
             run_slot(m.residual, 0);
             check();
         }
