@@ -82,6 +82,19 @@ constexpr float kTolerances[] = {1e-4f, 1e-5f};
 constexpr VkDeviceSize kCopyBytes = 256ull << 20;
 
 /// What the command line asked for.
+/// The scene format's name of an advection scheme (docs/scene-format.md).
+std::string advection_name(gust::Advection advection) {
+    switch (advection) {
+    case gust::Advection::None:
+        return "none";
+    case gust::Advection::SemiLagrangian:
+        return "semi_lagrangian";
+    case gust::Advection::MacCormack:
+        return "maccormack";
+    }
+    return "none";
+}
+
 struct Options {
     std::vector<std::string> sizes = {"32x16x32", "64", "128"};
     int repeat = 3;
@@ -93,6 +106,10 @@ struct Options {
     bool cold_start = false;
     /// Step-time table: V-cycles per step at most (SolverDesc::max_cycles).
     std::uint32_t max_cycles = gust::SolverDesc{}.max_cycles;
+    /// Every table: "semi_lagrangian" or "maccormack" (SolverDesc::advection; the default: its default).
+    std::string advection = advection_name(gust::SolverDesc{}.advection);
+    /// Red-black sweeps before and after each coarse correction (SolverDesc::smoothing), every table.
+    std::uint32_t smoothing = gust::SolverDesc{}.smoothing;
     /// Frame-budget table: V-cycles per step (0: no such table).
     std::uint32_t frame_cycles = 2;
     std::string write;
@@ -560,6 +577,7 @@ struct Traffic {
 /// What the byte counts depend on: the grid hierarchy and what one step found.
 struct Workload {
     std::pmr::vector<gust::shaderio::GridLevel> levels;
+    gust::Advection advection = gust::Advection::SemiLagrangian;
     std::uint32_t smoothing = 0;  ///< SolverDesc::smoothing
     std::uint32_t cell_words = 0; ///< words of a cell's voxel set
     double cycles = 0.0;          ///< V-cycles per step (median)
@@ -601,16 +619,17 @@ Traffic solid_traffic(const Workload& w) {
     return t;
 }
 
-/// The "advect" pass, MacCormack: forward, backward, clamped correction, then the copy back.
+/// The "advect" pass: semi-Lagrangian, or MacCormack's forward, backward and clamped correction. The
+/// forces pass reads its output, so no copy follows.
 Traffic advect_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0);
     // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
     const double trace = 2 * 3 * 8 * 4;
-    t.add(F * (trace + 8 * 4 + 4), 8 * F);          // velocity -> tmp
+    t.add(F * (trace + 8 * 4 + 4), 8 * F); // velocity -> tmp
+    if (w.advection != gust::Advection::MacCormack) return t;
     t.add(F * (trace + 8 * 4 + 4), 12 * F);         // tmp -> back, tracing with the velocity
     t.add(F * (3 * 4 + trace + 8 * 4 + 4), 16 * F); // tmp, velocity, back -> tmp, clamped to 8 values
-    t.add(8 * F, 8 * F);                            // vkCmdCopyBuffer tmp -> velocity
     return t;
 }
 
@@ -618,7 +637,7 @@ Traffic advect_traffic(const Workload& w) {
 Traffic forces_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    t.add(8 * F, 8 * F); // forces: in place
+    t.add(8 * F, 8 * F); // forces: advection's output -> velocity
     t.add(C * (3 * 2 * 6 * 4 + 16),
           4 * F + 16 * C); // vorticity: six cell velocities (6 faces each), vec4 out
     // confine: the face, two cell velocities, two forces of seven vec4 vorticities each, the store.
@@ -693,6 +712,7 @@ std::vector<std::pair<std::string, Traffic>> step_traffic(const Workload& w) {
 Workload workload_of(const StepRow& row, const gust::SolverDesc& desc) {
     Workload w;
     w.levels = gust::detail::build_levels(row.cells, desc.cell_size);
+    w.advection = desc.advection;
     w.smoothing = desc.smoothing;
     w.cell_words = gust::detail::cell_words(desc.voxels_per_cell);
     w.cycles = row.cycles();
@@ -729,7 +749,9 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
         << desc.voxels_per_cell
         << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind ("
         << kAmbient.x << ", " << kAmbient.y << ", " << kAmbient.z
-        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: MacCormack advection, the default pressure "
+        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: "
+        << (desc.advection == gust::Advection::MacCormack ? "MacCormack" : "semi-Lagrangian")
+        << " advection, the default pressure "
            "solver MGPCG (`PressureSolver::MultigridPCG`: conjugate gradients preconditioned by one "
            "multigrid V-cycle per iteration, "
         << desc.smoothing << " + " << desc.smoothing << " red-black sweeps), tolerance "
@@ -1023,6 +1045,11 @@ int main(int argc, char** argv) {
                  "step-time table: start every pressure solve from zero (SolverDesc::warm_start = false)");
     app.add_option("--max-cycles", options.max_cycles, "step-time table: V-cycles per step at most")
         ->check(CLI::Range(1, 1000));
+    app.add_option("--advection", options.advection, "semi_lagrangian or maccormack (SolverDesc::advection)")
+        ->check(CLI::IsMember({"semi_lagrangian", "maccormack"}));
+    app.add_option("--smoothing", options.smoothing,
+                   "red-black sweeps before and after each coarse correction (SolverDesc::smoothing)")
+        ->check(CLI::Range(1, 16));
     app.add_option("--frame-cycles", options.frame_cycles,
                    "frame-budget table: V-cycles per step, converged or not (0: leave the table out)")
         ->check(CLI::Range(0, 1000));
@@ -1061,6 +1088,9 @@ int main(int argc, char** argv) {
     defaults.cell_size = kCellSize;
     defaults.warm_start = !options.cold_start;
     defaults.max_cycles = options.max_cycles;
+    defaults.smoothing = options.smoothing;
+    defaults.advection =
+        options.advection == "maccormack" ? gust::Advection::MacCormack : gust::Advection::SemiLagrangian;
     std::vector<StepRow> steps;
     std::vector<SolveRow> solves;
     for (glm::uvec3 cells : sizes) {

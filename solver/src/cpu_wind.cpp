@@ -416,10 +416,13 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             });
             tmp = std::move(out);
         }
-        u = tmp;
     }
+    // The forces read advection's output (tmp) and write the velocity, so no copy lies between.
+    const std::uint32_t forced =
+        desc.advection != Advection::None ? shaderio::kFieldTmp : shaderio::kFieldVelocity;
     const float rate = detail::emitter_rate(dt, desc.emitter_response);
-    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) { u[std::size_t(i)] = k.force_face(a, f, rate); });
+    m.each_face(
+        [&](int i, std::uint32_t a, glm::ivec3 f) { u[std::size_t(i)] = k.force_face(forced, a, f, rate); });
     if (desc.vorticity > 0.0f) {
         m.each_cell(k.levels[0],
                     [&](int i, glm::ivec3 c) { k.vorticity[std::size_t(i)] = k.cell_vorticity(c); });

@@ -521,11 +521,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.parity = 2;
             run(m.advect, face_groups);
         }
-        copy(m.velocity_tmp, m.velocity);
         m.profiler.end(cmd);
     }
 
     m.profiler.begin(cmd, "forces");
+    // From advection's output into the velocity: the forces pass is also advection's copy back.
+    push.parity = desc_.advection != Advection::None ? shaderio::kFieldTmp : shaderio::kFieldVelocity;
     push.param = detail::emitter_rate(dt, desc_.emitter_response);
     run(m.forces, face_groups);
     if (desc_.vorticity > 0.0f) {
