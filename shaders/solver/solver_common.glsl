@@ -3,8 +3,10 @@
 #include "solver_io.h"
 
 layout(buffer_reference, scalar) readonly buffer BindingsRef { SolverBindings b; };
-layout(buffer_reference, scalar) coherent buffer FloatsRef { float v[]; };
-layout(buffer_reference, scalar) coherent buffer WordsRef { uint v[]; };
+// Not `coherent`: no pass reads what another invocation of the same dispatch wrote (the barrier between
+// dispatches makes writes visible), and coherent loads skip the first-level cache on some GPUs.
+layout(buffer_reference, scalar) buffer FloatsRef { float v[]; };
+layout(buffer_reference, scalar) buffer WordsRef { uint v[]; };
 layout(buffer_reference, scalar) buffer Vec4Ref { vec4 v[]; };
 layout(buffer_reference, scalar) buffer Vec2Ref { vec2 v[]; };
 layout(buffer_reference, scalar) buffer IVec4Ref { ivec4 v[]; };
