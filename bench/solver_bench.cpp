@@ -586,6 +586,9 @@ struct Workload {
     double fragments = 0.0;       ///< moving fragments
     double tree_bytes = 0.0;      ///< live bytes of the tree's pools
     double faces(std::size_t l) const { return double(gust::shaderio::faces_total(levels[l].dims)); }
+    /// Bytes of one face's weight at level l: level 0 keeps a byte per face (open_counts), coarser levels
+    /// a float. Accessed bytes count each weight load as the 4-byte word it is.
+    static double weight(std::size_t l) { return l == 0 ? 1.0 : 4.0; }
     double cells(std::size_t l) const {
         const glm::ivec3 d = levels[l].dims;
         return double(d.x) * d.y * d.z;
@@ -601,20 +604,22 @@ Traffic solid_traffic(const Workload& w) {
     t.add(12 * C + fluid + w.tree_bytes, 12 * C + fluid + w.tree_bytes);
     // solid_motion: key and half-float velocity, four 4-byte atomics, per fragment.
     t.add(44 * w.fragments, 44 * w.fragments);
-    // solid_faces: two flags, weight and solid velocity stored; a face of a cut cell (six per cut cell)
-    // also reads both voxel sets. The motion sums of moving cells are left out (at most 6 x 16 B per
-    // fragment).
-    t.add(16 * F + 6 * 2 * fluid, 4 * C + 8 * F + fluid);
+    // solid_faces: two flags, the open count (a byte) and solid velocity stored; a face of a cut cell (six
+    // per cut cell) also reads both voxel sets. The motion sums of moving cells are left out (at most
+    // 6 x 16 B per fragment).
+    t.add(13 * F + 6 * 2 * fluid, 4 * C + 5 * F + fluid);
     // coarse_weights: the fine faces a coarse face covers (each read by one coarse face) and the store.
     for (std::size_t l = 1; l < w.levels.size(); ++l) {
-        double bytes = 0.0;
+        double accessed = 0.0, unique = 0.0;
         for (std::uint32_t axis = 0; axis < 3; ++axis) {
             glm::ivec3 span = w.levels[l - 1].factor;
             span[int(axis)] = 1;
-            bytes +=
-                4.0 * gust::shaderio::face_count(w.levels[l].dims, axis) * (span.x * span.y * span.z + 1);
+            const double count = gust::shaderio::face_count(w.levels[l].dims, axis),
+                         span_faces = span.x * span.y * span.z;
+            accessed += count * (4 * span_faces + 4);
+            unique += count * (Workload::weight(l - 1) * span_faces + 4);
         }
-        t.add(bytes, bytes);
+        t.add(accessed, unique);
     }
     return t;
 }
@@ -651,7 +656,7 @@ Traffic forces_traffic(const Workload& w) {
 void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint32_t half_sweeps,
                std::uint64_t dispatches) {
     const double n = half_sweeps;
-    t.add(n * w.cells(l) / 2 * (12 * 4 + 4 + 4), n * (4 * w.faces(l) + 6 * w.cells(l)), dispatches);
+    t.add(n * w.cells(l) / 2 * (12 * 4 + 4 + 4), n * (w.weight(l) * w.faces(l) + 6 * w.cells(l)), dispatches);
 }
 
 /// The "pressure" pass with the default MGPCG: divergence, then per iteration one V-cycle (smoothing and
@@ -659,11 +664,11 @@ void add_relax(Traffic& t, const Workload& w, std::size_t l, std::uint32_t half_
 /// conjugate gradients' five level-0 passes (cg.comp), and at the end the copy of x into φ.
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
-    const double F = w.faces(0), C = w.cells(0);
+    const double F = w.faces(0), C = w.cells(0), W = w.weight(0) * F;
     // divergence: the operator (12 loads), six face fluxes (3 loads each); r, b, x, p and r_old stored.
-    t.add(C * (12 * 4 + 6 * 3 * 4 + 5 * 4), 12 * F + 24 * C);
+    t.add(C * (12 * 4 + 6 * 3 * 4 + 5 * 4), W + 8 * F + 24 * C);
     // warm start: q = Lφ (the operator, φ) with the sums b·q and q·q, q stored.
-    if (w.warm_start) t.add(C * (12 * 4 + 4 + 4 + 4), 4 * F + 12 * C);
+    if (w.warm_start) t.add(C * (12 * 4 + 4 + 4 + 4), W + 12 * C);
     // start: b (and, warm, φ and q) read; x0, r0 and φ = 0 stored.
     const double start_loads = w.warm_start ? 3 : 1;
     t.add(C * (start_loads + 3) * 4, (start_loads + 3) * 4 * C);
@@ -675,15 +680,15 @@ Traffic pressure_traffic(const Workload& w) {
         const double parents = std::uint32_t(1) << ((k.x == 2) + (k.y == 2) + (k.z == 2));
         // restrict: a coarse cell computes its children's residuals (operator, b and φ each), two stores.
         cycle.add(w.cells(l) * (12 * 4 + 4 + 4) + 8 * w.cells(l + 1),
-                  4 * w.faces(l) + 8 * w.cells(l) + 8 * w.cells(l + 1));
+                  w.weight(l) * w.faces(l) + 8 * w.cells(l) + 8 * w.cells(l + 1));
         cycle.add(w.cells(l) * (4 + parents * 4 + 4), 8 * w.cells(l) + 4 * w.cells(l + 1)); // prolong
     }
     add_relax(cycle, w, last, 2 * gust::detail::kCoarseSweeps, 1);
-    cycle.add(C * 3 * 4, 12 * C);                        // z·r and z·r_old
-    cycle.add(C * 3 * 4, 12 * C);                        // p = z + βp
-    cycle.add(C * (4 + 12 * 4 + 4), 4 * F + 4 * C);      // p·Lp
-    cycle.add(C * 6 * 4, 24 * C);                        // x += αp, r_old = r, z = 0
-    cycle.add(C * (4 + 12 * 4 + 4 + 4), 4 * F + 12 * C); // r = b − Lx and its maximum
+    cycle.add(C * 3 * 4, 12 * C);                    // z·r and z·r_old
+    cycle.add(C * 3 * 4, 12 * C);                    // p = z + βp
+    cycle.add(C * (4 + 12 * 4 + 4), W + 4 * C);      // p·Lp
+    cycle.add(C * 6 * 4, 24 * C);                    // x += αp, r_old = r, z = 0
+    cycle.add(C * (4 + 12 * 4 + 4 + 4), W + 12 * C); // r = b − Lx and its maximum
     t.add(w.cycles * cycle.accessed, w.cycles * cycle.unique,
           std::uint64_t(w.cycles * double(cycle.dispatches) + 0.5));
     t.add(8 * C, 8 * C); // vkCmdCopyBuffer x -> φ
@@ -693,9 +698,9 @@ Traffic pressure_traffic(const Workload& w) {
 /// The "project" pass: the gradient subtracted per face, then the divergence measured again.
 Traffic project_traffic(const Workload& w) {
     Traffic t;
-    const double F = w.faces(0), C = w.cells(0);
-    t.add(F * 20, 12 * F + 4 * C);
-    t.add(C * (12 * 4 + 6 * 3 * 4), 12 * F + 4 * C);
+    const double F = w.faces(0), C = w.cells(0), W = w.weight(0) * F;
+    t.add(F * 20, W + 8 * F + 4 * C);
+    t.add(C * (12 * 4 + 6 * 3 * 4), W + 8 * F + 4 * C);
     return t;
 }
 

@@ -11,5 +11,5 @@ void main() {
     if (i >= faces_total(level.dims)) return;
     uint axis;
     ivec3 f = face_from_index(level.dims, i, axis);
-    FloatsRef(sb().b.weights).v[int(level.faces) + i] = coarse_weight(pc.level, axis, f);
+    FloatsRef(sb().b.weights).v[int(level.faces - sb().b.level0_faces) + i] = coarse_weight(pc.level, axis, f);
 }

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face: open fraction from the fluid voxel sets on both sides (beyond the domain: all open), and
-// the solid's normal velocity from the moving fragments of both cells.
+// Per four faces (one word of open_counts): the open voxel pairs from the fluid voxel sets on both
+// sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
+// both cells.
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -27,21 +28,27 @@ ivec4 motion_of(ivec3 c, uint flags) {
 }
 
 void main() {
-    int i = thread_index();
+    int t = thread_index();
     ivec3 n = sb().b.dims;
-    if (i >= faces_total(n)) return;
-    uint axis;
-    ivec3 f = face_from_index(n, i, axis);
-    ivec3 lo = f - axis_unit(axis);
+    int total = faces_total(n);
+    if (4 * t >= total) return;
     uint v = sb().b.voxels_per_cell;
-    uint flags_lo = flags_of(lo), flags_hi = flags_of(f);
-    float open = 1.0;
-    if (((flags_lo | flags_hi) & kCellCut) != 0u) {
-        CellBits faces[6];
-        load_face_masks(faces);
-        open = face_open_fraction(fluid_of(lo, flags_lo, v), fluid_of(f, flags_hi, v), axis, v, faces);
+    uint counts = 0u;
+    for (int k = 0; k < 4 && 4 * t + k < total; ++k) {
+        int i = 4 * t + k;
+        uint axis;
+        ivec3 f = face_from_index(n, i, axis);
+        ivec3 lo = f - axis_unit(axis);
+        uint flags_lo = flags_of(lo), flags_hi = flags_of(f);
+        uint open = v * v;
+        if (((flags_lo | flags_hi) & kCellCut) != 0u) {
+            CellBits faces[6];
+            load_face_masks(faces);
+            open = face_open_count(fluid_of(lo, flags_lo, v), fluid_of(f, flags_hi, v), axis, v, faces);
+        }
+        counts |= open << (8 * k);
+        ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
+        FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
     }
-    FloatsRef(sb().b.weights).v[i] = open;
-    ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
-    FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
+    WordsRef(sb().b.open_counts).v[t] = counts;
 }

@@ -50,7 +50,13 @@ uint64_t cell_field(uint field) {
     return sb().b.cg_cells + uint64_t(field - kCellSolution) * uint64_t(n.x * n.y * n.z) * 4ul;
 }
 float load_face(uint field, int index) { return FloatsRef(face_field(field)).v[index]; }
-float load_weight(int index) { return FloatsRef(sb().b.weights).v[index]; }
+/// Level 0's open fraction from its byte count, coarser levels' weights from their floats.
+float load_weight(int index) {
+    int level0 = int(sb().b.level0_faces);
+    if (index >= level0) return FloatsRef(sb().b.weights).v[index - level0];
+    uint word = WordsRef(sb().b.open_counts).v[index >> 2];
+    return open_fraction_of(bitfieldExtract(word, 8 * (index & 3), 8), sb().b.voxels_per_cell);
+}
 float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
 vec4 load_vorticity(int index) { return Vec4Ref(sb().b.vorticity).v[index]; }
 

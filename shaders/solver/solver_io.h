@@ -105,7 +105,7 @@ struct SolverBindings {
     GUST_ADDRESS velocity;        ///< float[faces]: the air's face-normal velocity, m/s
     GUST_ADDRESS velocity_tmp;    ///< float[faces]: advection output
     GUST_ADDRESS velocity_back;   ///< float[faces]: MacCormack's backward pass
-    GUST_ADDRESS weights;         ///< float[]: open fraction per face (level 0), coarse weights after
+    GUST_ADDRESS weights;         ///< float[]: weights of levels 1 on, from index level0_faces
     GUST_ADDRESS solid_velocity;  ///< float[faces]: solid's normal velocity per face, m/s
     GUST_ADDRESS pressure;        ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
     GUST_ADDRESS pressure_tmp;    ///< float[cells]: Jacobi's second buffer
@@ -129,6 +129,7 @@ struct SolverBindings {
     GUST_ADDRESS points;          ///< vec3[point_count]: world positions to sample (sample.comp)
     GUST_ADDRESS samples;         ///< vec3[point_count]: their velocities, m/s
     GUST_ADDRESS texels;          ///< uvec2[cells]: half-float velocity xyz and open fraction per cell
+    GUST_ADDRESS open_counts;     ///< uint[]: level 0's open voxel pairs, a byte per face
     ivec3 dims;                   ///< wind cells per axis
     float h;                      ///< cell size, m
     vec3 origin;                  ///< world position of the grid's min corner, m
@@ -148,6 +149,7 @@ struct SolverBindings {
     float vorticity_strength; ///< ε of vorticity confinement
     uint partial_count;       ///< workgroups over the level-0 cells (entries in partials)
     uint point_count;         ///< entries in points
+    uint level0_faces;        ///< faces of level 0 (in open_counts); weights holds the levels after
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -468,12 +470,21 @@ GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
 
 /// Open fraction of the face between cells `low` and `high` along `axis` (their fluid voxel sets):
 /// the share of voxel pairs across the face that are both open.
-GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
+GUST_INLINE uint face_open_count(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
     CellBits a = bits_and(low, faces[2u * axis + 1u]);
     CellBits b = bits_and(high, faces[2u * axis]);
     uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
-    uint open = bits_count(bits_and(bits_down(a, shift), b));
-    return float(open) / float(v * v);
+    return bits_count(bits_and(bits_down(a, shift), b));
+}
+
+/// Open fraction of a face with `count` of its v^2 voxel pairs open. Level 0 stores the count, a byte
+/// per face (v <= 8), and every reader turns it into the fraction here.
+GUST_INLINE float open_fraction_of(uint count, uint v) {
+    return float(count) / float(v * v);
+}
+
+GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
+    return open_fraction_of(face_open_count(low, high, axis, v, faces), v);
 }
 
 // ---- Emitters ------------------------------------------------------------------------------------------

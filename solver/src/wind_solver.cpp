@@ -62,9 +62,9 @@ struct WindSolver::Impl : gpu::HostObject {
     gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces,
         vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
         cg_scalars, project, scroll, sample;
-    gpu::Buffer velocity, velocity_tmp, velocity_back, weights, solid_velocity, pressure, pressure_tmp, rhs,
-        scratch, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion, vorticity_buf, emitters,
-        state, dispatch, bindings, points, samples;
+    gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
+        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion,
+        vorticity_buf, emitters, state, dispatch, bindings, points, samples;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -146,6 +146,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t all_faces = last.faces + std::uint64_t(shaderio::faces_total(last.dims));
     const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
+    const std::uint64_t open_words = (faces + 3) / 4; // level 0's open counts, a byte per face
     const LevelDispatch level0_groups = groups_for(cells);
     struct Want {
         gpu::Buffer* buffer;
@@ -157,7 +158,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.velocity, faces * 4, gpu::MemoryUse::Device, 0},
         {&m.velocity_tmp, faces * 4, gpu::MemoryUse::Device, 0},
         {&m.velocity_back, faces * 4, gpu::MemoryUse::Device, 0},
-        {&m.weights, all_faces * 4, gpu::MemoryUse::Device, 0},
+        {&m.open_counts, open_words * 4, gpu::MemoryUse::Device, 0},
+        {&m.weights, std::max<std::uint64_t>(all_faces - faces, 1) * 4, gpu::MemoryUse::Device, 0},
         {&m.solid_velocity, faces * 4, gpu::MemoryUse::Device, 0},
         {&m.pressure, all_cells * 4, gpu::MemoryUse::Device, 0},
         {&m.pressure_tmp, cells * 4, gpu::MemoryUse::Device, 0},
@@ -199,6 +201,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.velocity_tmp = m.velocity_tmp.address();
     b.velocity_back = m.velocity_back.address();
     b.weights = m.weights.address();
+    b.open_counts = m.open_counts.address();
+    b.level0_faces = std::uint32_t(faces);
     b.solid_velocity = m.solid_velocity.address();
     b.pressure = m.pressure.address();
     b.pressure_tmp = m.pressure_tmp.address();
@@ -233,6 +237,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
             ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
         ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE,
                                  std::bit_cast<std::uint32_t>(1.0f));
+        const std::uint32_t all_open = desc.voxels_per_cell * desc.voxels_per_cell;
+        ctx.vk().vkCmdFillBuffer(cmd, m.open_counts.handle(), 0, VK_WHOLE_SIZE, all_open * 0x01010101u);
     });
     if (!cleared) return cleared;
     return solver;
@@ -278,7 +284,12 @@ Result<std::vector<float>> WindSolver::read_velocity() const {
     return read_floats(ctx_, impl_->velocity, face_count());
 }
 Result<std::vector<float>> WindSolver::read_open_fraction() const {
-    return read_floats(ctx_, impl_->weights, face_count());
+    std::vector<std::uint32_t> words((face_count() + 3) / 4);
+    if (Status s = download(ctx_, impl_->open_counts, words.data(), words.size() * 4); !s) return s;
+    std::vector<float> out(face_count());
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = shaderio::open_fraction_of(words[i / 4] >> (8 * (i % 4)) & 0xffu, desc_.voxels_per_cell);
+    return out;
 }
 Result<std::vector<float>> WindSolver::read_solid_velocity() const {
     return read_floats(ctx_, impl_->solid_velocity, face_count());
@@ -503,7 +514,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.solid_motion.bind(cmd, &push, sizeof(push));
     vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
-    run(m.solid_faces, face_groups);
+    run(m.solid_faces, groups_for((face_count() + 3) / 4));
     for (std::uint32_t l = 1; l < levels; ++l) {
         push.level = l;
         const glm::ivec3 d = m.levels[l].dims;
