@@ -150,6 +150,7 @@ struct SolverBindings {
     uint partial_count;       ///< workgroups over the level-0 cells (entries in partials)
     uint point_count;         ///< entries in points
     uint level0_faces;        ///< faces of level 0 (in open_counts); weights holds the levels after
+    float pair_share;         ///< pair_share(voxels_per_cell)
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -477,14 +478,21 @@ GUST_INLINE uint face_open_count(CellBits low, CellBits high, uint axis, uint v,
     return bits_count(bits_and(bits_down(a, shift), b));
 }
 
-/// Open fraction of a face with `count` of its v^2 voxel pairs open. Level 0 stores the count, a byte
-/// per face (v <= 8), and every reader turns it into the fraction here.
-GUST_INLINE float open_fraction_of(uint count, uint v) {
-    return float(count) / float(v * v);
+/// The share of one voxel pair in a face, 1 / v^2. Computed on the host (IEEE division); the shaders
+/// read it from SolverBindings::pair_share, so both sides multiply by the same float.
+GUST_INLINE float pair_share(uint v) {
+    return 1.0f / float(v * v);
 }
 
+/// Open fraction of a face with `count` of its voxel pairs open. Level 0 stores the count, a byte per
+/// face (v <= 8), and every reader turns it into the fraction here.
+GUST_INLINE float open_fraction_of(uint count, float share) {
+    return float(count) * share;
+}
+
+/// Host side: the open fraction of a face between two fluid sets.
 GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
-    return open_fraction_of(face_open_count(low, high, axis, v, faces), v);
+    return open_fraction_of(face_open_count(low, high, axis, v, faces), pair_share(v));
 }
 
 // ---- Emitters ------------------------------------------------------------------------------------------

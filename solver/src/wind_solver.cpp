@@ -203,6 +203,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.weights = m.weights.address();
     b.open_counts = m.open_counts.address();
     b.level0_faces = std::uint32_t(faces);
+    b.pair_share = shaderio::pair_share(desc.voxels_per_cell);
     b.solid_velocity = m.solid_velocity.address();
     b.pressure = m.pressure.address();
     b.pressure_tmp = m.pressure_tmp.address();
@@ -288,7 +289,8 @@ Result<std::vector<float>> WindSolver::read_open_fraction() const {
     if (Status s = download(ctx_, impl_->open_counts, words.data(), words.size() * 4); !s) return s;
     std::vector<float> out(face_count());
     for (std::size_t i = 0; i < out.size(); ++i)
-        out[i] = shaderio::open_fraction_of(words[i / 4] >> (8 * (i % 4)) & 0xffu, desc_.voxels_per_cell);
+        out[i] = shaderio::open_fraction_of(words[i / 4] >> (8 * (i % 4)) & 0xffu,
+                                            shaderio::pair_share(desc_.voxels_per_cell));
     return out;
 }
 Result<std::vector<float>> WindSolver::read_solid_velocity() const {
