@@ -14,9 +14,9 @@ SolverDesc domain_solver_desc(const DomainDesc& domain) {
 SolverDesc solver_desc(const SceneDesc& scene) {
     SolverDesc desc = domain_solver_desc(scene.domain);
     const SolverSettings& s = scene.solver;
-    desc.advection = s.advection == "none"              ? Advection::None
-                     : s.advection == "semi_lagrangian" ? Advection::SemiLagrangian
-                                                        : Advection::MacCormack;
+    desc.advection = s.advection == "none"         ? Advection::None
+                     : s.advection == "maccormack" ? Advection::MacCormack
+                                                   : Advection::SemiLagrangian;
     desc.pressure = s.pressure == "jacobi"      ? PressureSolver::Jacobi
                     : s.pressure == "multigrid" ? PressureSolver::Multigrid
                                                 : PressureSolver::MultigridPCG;

@@ -67,13 +67,13 @@ struct EmitterDesc {
 
 /// Numerics of the wind solver (all optional in the file; defaults as in gust::SolverDesc).
 struct SolverSettings {
-    std::string advection = "maccormack"; ///< "maccormack", "semi_lagrangian" or "none"
-    std::string pressure = "mgpcg";       ///< "mgpcg", "multigrid" or "jacobi"
-    float tolerance = 1e-5f;              ///< relative residual, in (0, 1)
-    std::uint32_t max_cycles = 32;        ///< multigrid V-cycles per step, 1..1000
-    std::uint32_t max_iterations = 4000;  ///< Jacobi iterations per step, 1..1000000
-    float vorticity = 0.2f;               ///< confinement strength, 0..10
-    float viscosity = 0.0f;               ///< m^2/s, >= 0
+    std::string advection = "semi_lagrangian"; ///< "semi_lagrangian", "maccormack" or "none"
+    std::string pressure = "mgpcg";            ///< "mgpcg", "multigrid" or "jacobi"
+    float tolerance = 1e-5f;                   ///< relative residual, in (0, 1)
+    std::uint32_t max_cycles = 32;             ///< multigrid V-cycles per step, 1..1000
+    std::uint32_t max_iterations = 4000;       ///< Jacobi iterations per step, 1..1000000
+    float vorticity = 0.2f;                    ///< confinement strength, 0..10
+    float viscosity = 0.0f;                    ///< m^2/s, >= 0
 };
 
 /// The simulated box and its resolution.
