@@ -17,6 +17,7 @@
 #include <gust/solver/wind_solver.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <span>
 #include <sstream>
@@ -82,19 +83,6 @@ constexpr float kTolerances[] = {1e-4f, 1e-5f};
 constexpr VkDeviceSize kCopyBytes = 256ull << 20;
 
 /// What the command line asked for.
-/// The scene format's name of an advection scheme (docs/scene-format.md).
-std::string advection_name(gust::Advection advection) {
-    switch (advection) {
-    case gust::Advection::None:
-        return "none";
-    case gust::Advection::SemiLagrangian:
-        return "semi_lagrangian";
-    case gust::Advection::MacCormack:
-        return "maccormack";
-    }
-    return "none";
-}
-
 struct Options {
     std::vector<std::string> sizes = {"32x16x32", "64", "128"};
     int repeat = 3;
@@ -106,8 +94,9 @@ struct Options {
     bool cold_start = false;
     /// Step-time table: V-cycles per step at most (SolverDesc::max_cycles).
     std::uint32_t max_cycles = gust::SolverDesc{}.max_cycles;
-    /// Every table: "semi_lagrangian" or "maccormack" (SolverDesc::advection; the default: its default).
-    std::string advection = advection_name(gust::SolverDesc{}.advection);
+    /// Every table: SolverDesc::advection (--advection semi_lagrangian or maccormack, the scene format's
+    /// names).
+    gust::Advection advection = gust::SolverDesc{}.advection;
     /// Red-black sweeps before and after each coarse correction (SolverDesc::smoothing), every table.
     std::uint32_t smoothing = gust::SolverDesc{}.smoothing;
     /// Frame-budget table: V-cycles per step (0: no such table).
@@ -1050,8 +1039,10 @@ int main(int argc, char** argv) {
                  "step-time table: start every pressure solve from zero (SolverDesc::warm_start = false)");
     app.add_option("--max-cycles", options.max_cycles, "step-time table: V-cycles per step at most")
         ->check(CLI::Range(1, 1000));
+    const std::map<std::string, gust::Advection> advections{
+        {"semi_lagrangian", gust::Advection::SemiLagrangian}, {"maccormack", gust::Advection::MacCormack}};
     app.add_option("--advection", options.advection, "semi_lagrangian or maccormack (SolverDesc::advection)")
-        ->check(CLI::IsMember({"semi_lagrangian", "maccormack"}));
+        ->transform(CLI::CheckedTransformer(advections));
     app.add_option("--smoothing", options.smoothing,
                    "red-black sweeps before and after each coarse correction (SolverDesc::smoothing)")
         ->check(CLI::Range(1, 16));
@@ -1094,8 +1085,7 @@ int main(int argc, char** argv) {
     defaults.warm_start = !options.cold_start;
     defaults.max_cycles = options.max_cycles;
     defaults.smoothing = options.smoothing;
-    defaults.advection =
-        options.advection == "maccormack" ? gust::Advection::MacCormack : gust::Advection::SemiLagrangian;
+    defaults.advection = options.advection;
     std::vector<StepRow> steps;
     std::vector<SolveRow> solves;
     for (glm::uvec3 cells : sizes) {

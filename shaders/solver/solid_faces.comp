@@ -31,7 +31,7 @@ void main() {
     int t = thread_index();
     ivec3 n = sb().b.dims;
     int total = faces_total(n);
-    if (4 * t >= total) return;
+    if (uint(t) >= open_count_words(uint(total))) return;
     uint v = sb().b.voxels_per_cell;
     uint counts = 0u;
     for (int k = 0; k < 4 && 4 * t + k < total; ++k) {

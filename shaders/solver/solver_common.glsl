@@ -55,7 +55,7 @@ float load_weight(int index) {
     int level0 = int(sb().b.level0_faces);
     if (index >= level0) return FloatsRef(sb().b.weights).v[index - level0];
     uint word = WordsRef(sb().b.open_counts).v[index >> 2];
-    return open_fraction_of(bitfieldExtract(word, 8 * (index & 3), 8), sb().b.pair_share);
+    return open_fraction_of(open_count_in(word, uint(index)), sb().b.pair_share);
 }
 float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
 vec4 load_vorticity(int index) { return Vec4Ref(sb().b.vorticity).v[index]; }

@@ -484,6 +484,16 @@ GUST_INLINE float pair_share(uint v) {
     return 1.0f / float(v * v);
 }
 
+/// Words of open_counts for `faces` level-0 faces, four to a word.
+GUST_INLINE uint open_count_words(uint faces) {
+    return (faces + 3u) / 4u;
+}
+
+/// Open voxel pairs of level-0 face `face` from its word of open_counts.
+GUST_INLINE uint open_count_in(uint word, uint face) {
+    return (word >> (8u * (face & 3u))) & 0xffu;
+}
+
 /// Open fraction of a face with `count` of its voxel pairs open. Level 0 stores the count, a byte per
 /// face (v <= 8), and every reader turns it into the fraction here.
 GUST_INLINE float open_fraction_of(uint count, float share) {

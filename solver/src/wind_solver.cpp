@@ -146,7 +146,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t all_faces = last.faces + std::uint64_t(shaderio::faces_total(last.dims));
     const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
-    const std::uint64_t open_words = (faces + 3) / 4; // level 0's open counts, a byte per face
+    const std::uint64_t open_words = shaderio::open_count_words(std::uint32_t(faces));
     const LevelDispatch level0_groups = groups_for(cells);
     struct Want {
         gpu::Buffer* buffer;
@@ -285,12 +285,12 @@ Result<std::vector<float>> WindSolver::read_velocity() const {
     return read_floats(ctx_, impl_->velocity, face_count());
 }
 Result<std::vector<float>> WindSolver::read_open_fraction() const {
-    std::vector<std::uint32_t> words((face_count() + 3) / 4);
+    std::vector<std::uint32_t> words(shaderio::open_count_words(std::uint32_t(face_count())));
     if (Status s = download(ctx_, impl_->open_counts, words.data(), words.size() * 4); !s) return s;
+    const float share = shaderio::pair_share(desc_.voxels_per_cell);
     std::vector<float> out(face_count());
-    for (std::size_t i = 0; i < out.size(); ++i)
-        out[i] = shaderio::open_fraction_of(words[i / 4] >> (8 * (i % 4)) & 0xffu,
-                                            shaderio::pair_share(desc_.voxels_per_cell));
+    for (std::uint32_t i = 0; i < out.size(); ++i)
+        out[i] = shaderio::open_fraction_of(shaderio::open_count_in(words[i / 4], i), share);
     return out;
 }
 Result<std::vector<float>> WindSolver::read_solid_velocity() const {
@@ -516,7 +516,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.solid_motion.bind(cmd, &push, sizeof(push));
     vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
-    run(m.solid_faces, groups_for((face_count() + 3) / 4));
+    run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
     for (std::uint32_t l = 1; l < levels; ++l) {
         push.level = l;
         const glm::ivec3 d = m.levels[l].dims;
