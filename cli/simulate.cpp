@@ -175,6 +175,8 @@ int run_simulate(const SimulateArgs& args) {
         line["converged"] = air->converged;
         line["cut_cells"] = air->cut_cells;
         line["fluid_cells"] = air->fluid_cells;
+        line["sealed_cells"] = air->sealed_cells;
+        line["diverged"] = air->diverged;
         line["nodes_per_level"] = tree.nodes_per_level;
         line["exhausted"] = tree.exhausted;
         line["pool_growths"] = step->pool_growths;
@@ -187,18 +189,14 @@ int run_simulate(const SimulateArgs& args) {
         if (frame == 0 || (args.every > 0 && frame % args.every == 0)) {
             auto voxels = (*world)->tree().leaf_voxels();
             if (!voxels) return fail(voxels.message());
-            auto faces = (*wind)->read_velocity();
+            auto velocity = (*wind)->read_cell_velocity();
             auto solid_fraction = (*wind)->read_solid_fraction();
             auto pressure = (*wind)->read_pressure();
-            if (!faces || !solid_fraction || !pressure)
+            if (!velocity || !solid_fraction || !pressure)
                 return fail("frame " + std::to_string(frame) + ": wind readback failed");
-            const std::vector<glm::vec3> velocity = cell_velocities(scene->domain.cells, *faces);
-            vdb::WindGrids grids{scene->domain.cells,
-                                 scene->domain.cell_size,
-                                 (*wind)->origin(),
-                                 *solid_fraction,
-                                 velocity,
-                                 *pressure};
+            vdb::WindGrids grids{scene->domain.cells, scene->domain.cell_size,
+                                 (*wind)->origin(),   *solid_fraction,
+                                 *velocity,           *pressure};
             const fs::path path = fs::path(args.out) / frame_file(frame);
             if (Status s = vdb::write_frame_vdb(path, *voxels, *grid, grids); !s) return fail(s.message());
         }

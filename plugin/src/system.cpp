@@ -880,14 +880,13 @@ Outcome System::export_vdb(const char* path) {
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
         auto voxels = m.world->tree().leaf_voxels();
-        auto faces = m.solver->read_velocity();
+        auto velocity = m.solver->read_cell_velocity();
         auto solid = m.solver->read_solid_fraction();
         auto pressure = m.solver->read_pressure();
-        for (const Status* s : {&voxels.status(), &faces.status(), &solid.status(), &pressure.status()})
+        for (const Status* s : {&voxels.status(), &velocity.status(), &solid.status(), &pressure.status()})
             if (!*s) return device_failure(*s);
-        const std::vector<glm::vec3> velocity = cell_velocities(m.solver_desc.cells, *faces);
         const vdb::WindGrids grids{
-            m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, velocity, *pressure};
+            m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, *velocity, *pressure};
         if (Status s = vdb::write_frame_vdb(path, *voxels, m.world->grid(), grids); !s)
             return Outcome(ErrorCode::IoError, s.message());
         return {};

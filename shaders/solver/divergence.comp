@@ -4,7 +4,8 @@
 //   0 (before projection): writes the divergence as the right-hand side b (rhs, and conjugate gradients'
 //     target), zeroes their x, p and r_old, and gathers its maximum and the fluid cells. φ is kept: it
 //     still holds the last step's solution, the warm start.
-//   1 (after projection): gathers the maximum only.
+//   1 (after projection): gathers the maximum only, and zeroes φ after a diverged solve (which projected
+//     nothing), so that it starts no later solve.
 //   2 (warm start): q = Lφ into residual, and the partial sums of b·q and q·q (cg_scalars turns them into
 //     the scale s of warm_scale()).
 //   3 (start): x0 = s·φ and the first residual r0 = b − s·q (s = 0: from zero, r0 = b), whose maximum is
@@ -49,6 +50,7 @@ void main() {
         }
         group_max_add(r0);
     } else if (inside) {
+        if (pc.parity == 1u && state().s.diverged != 0u) store_cell(kCellPressure, i, 0.0);
         float diag, off;
         cell_operator(0u, c, kCellPressure, 0.0, diag, off);
         float d = diag > 0.0 ? cell_divergence(c) : 0.0;

@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face, in place: subtracts the pressure gradient; closed faces take the solid's velocity.
+// Per face, in place: subtracts the pressure gradient (none after a diverged solve); closed faces take the
+// solid's velocity.
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -11,5 +12,5 @@ void main() {
     if (i >= faces_total(n)) return;
     uint axis;
     ivec3 f = face_from_index(n, i, axis);
-    store_face(kFieldVelocity, i, project_face(axis, f));
+    store_face(kFieldVelocity, i, project_face(axis, f, state().s.diverged == 0u));
 }

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per wind cell: gathers the cell's voxels from the sparse tree's leaves, and stores its solid
-// fraction and its open voxel set (cell_fluid in solver_io.h) for the face pass.
+// Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
+// parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
+// clears what the last step summed here.
 #include "../tree/tree_io.h"
 #include "solver_common.glsl"
 
@@ -36,12 +37,18 @@ void main() {
     uint v = sb().b.voxels_per_cell;
     uint levels = sb().b.tree_levels;
     WordsRef flags = WordsRef(sb().b.cell_flags);
-    FloatsRef solid = FloatsRef(sb().b.cell_solid);
-    // The last step's moving fragments summed into this cell (kCellMoving): clear them here, so only
-    // the cells that held motion are written, not the whole motion array.
-    if ((flags.v[i] & kCellMoving) != 0u) IVec4Ref(sb().b.cell_motion).v[i] = ivec4(0);
+    // The last step's moving fragments and region sums kept here (kCellMoving, kCellRegion): clear them,
+    // so only the cells that held some are written, not the whole arrays.
+    uint old = flags.v[i];
+    if ((old & kCellMoving) != 0u) IVec4Ref(sb().b.cell_motion).v[i] = ivec4(0);
+    LabelsRef labels = LabelsRef(sb().b.labels);
+    for (uint k = 0u; k < kCellParts; ++k) {
+        uint node = part_node(uint(i), k);
+        if ((old & (kCellRegion << k)) != 0u) IVec4Ref(sb().b.region_motion).v[node] = ivec4(0);
+        labels.v[node] = node;
+    }
+    if (i == 0) labels.v[kOutsideNode] = kOutsideNode;
     flags.v[i] = 0u;
-    solid.v[i] = 0.0;
     if (levels == 0u) return;
     ivec3 lo = sb().b.voxel_offset + c * int(v);
     // Cheap exit: the shallowest level whose nodes are at least a cell wide; the cell lies in at most
@@ -87,14 +94,14 @@ void main() {
                     occupied.w[j / 32u] |= 1u << (j % 32u);
                 }
             }
-    uint count = bits_count(occupied);
-    if (count == 0u) return;
+    if (bits_count(occupied) == 0u) return;
     CellBits faces[6];
     load_face_masks(faces);
-    CellBits fluid = cell_fluid(occupied, v, faces);
+    CellBits parts[2];
+    cell_parts(occupied, v, faces, parts[0], parts[1]);
     uint cw = sb().b.cell_words;
-    for (uint k = 0u; k < cw; ++k) WordsRef(sb().b.cell_fluid).v[uint(i) * cw + k] = fluid.w[k];
+    for (uint k = 0u; k < kCellParts; ++k)
+        for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
     flags.v[i] = kCellCut;
-    solid.v[i] = float(count) / float(v * v * v);
     atomicAdd(state().s.cut_cells, 1u);
 }

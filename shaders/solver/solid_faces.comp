@@ -1,30 +1,26 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per four faces (one word of open_counts): the open voxel pairs from the fluid voxel sets on both
+// Per four faces (one word of open_counts): the open voxel pairs between the air of the cells on both
 // sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
-// both cells.
+// both cells (or the sealed region a cell without air lies in).
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
 
-/// The cell's kCellCut / kCellMoving flags, none beyond the domain.
+/// The cell's kCell* flags, none beyond the domain.
 uint flags_of(ivec3 c) {
     ivec3 n = sb().b.dims;
-    return inside_cells(n, c) ? WordsRef(sb().b.cell_flags).v[cell_index(n, c)] : 0u;
-}
-
-CellBits fluid_of(ivec3 c, uint flags, uint v) {
-    if ((flags & kCellCut) == 0u) return bits_all(v);
-    CellBits b = bits_none();
-    uint cw = sb().b.cell_words;
-    int i = cell_index(sb().b.dims, c);
-    for (uint k = 0u; k < cw; ++k) b.w[k] = WordsRef(sb().b.cell_fluid).v[uint(i) * cw + k];
-    return b;
+    return inside_cells(n, c) ? flags_at(cell_index(n, c)) : 0u;
 }
 
 ivec4 motion_of(ivec3 c, uint flags) {
-    if ((flags & kCellMoving) == 0u) return ivec4(0);
-    return IVec4Ref(sb().b.cell_motion).v[cell_index(sb().b.dims, c)];
+    ivec3 n = sb().b.dims;
+    return inside_cells(n, c) ? solid_motion_of(cell_index(n, c), flags) : ivec4(0);
+}
+
+CellBits air_at(ivec3 c, uint flags) {
+    ivec3 n = sb().b.dims;
+    return inside_cells(n, c) ? air_of(cell_index(n, c), flags) : bits_all(sb().b.voxels_per_cell);
 }
 
 void main() {
@@ -41,10 +37,10 @@ void main() {
         ivec3 lo = f - axis_unit(axis);
         uint flags_lo = flags_of(lo), flags_hi = flags_of(f);
         uint open = v * v;
-        if (((flags_lo | flags_hi) & kCellCut) != 0u) {
+        if (((flags_lo | flags_hi) & (kCellCut | kCellNoAir)) != 0u) {
             CellBits faces[6];
             load_face_masks(faces);
-            open = face_open_count(fluid_of(lo, flags_lo, v), fluid_of(f, flags_hi, v), axis, v, faces);
+            open = face_open_count(air_at(lo, flags_lo), air_at(f, flags_hi), axis, v, faces);
         }
         counts |= open << (8 * k);
         ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);

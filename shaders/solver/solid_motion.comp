@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per moving fragment: adds its surface velocity to its wind cell's fixed-point sum and marks the cell
-// kCellMoving (solid_faces reads the sums of marked cells only; solid_cells clears them next step).
+// Per moving fragment: adds its surface velocity, its length clamped to the solid speed limit, to its wind
+// cell's fixed-point sum and marks the cell kCellMoving (later passes read the sums of marked cells only;
+// solid_cells clears them next step).
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -16,7 +17,7 @@ void main() {
     if (!inside_cells(sb().b.dims, c)) return;
     uvec2 packed = UVec2Ref(sb().b.fragment_motion).v[i];
     vec3 velocity = vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x);
-    ivec3 fixed_point = ivec3(round(clamp(velocity, vec3(-kMaxFragmentSpeed), vec3(kMaxFragmentSpeed)) * kVelocityScale));
+    ivec3 fixed_point = ivec3(round(clamp_speed(velocity, sb().b.max_solid_speed) * kVelocityScale));
     int cell = cell_index(sb().b.dims, c);
     IVec4Ref motion = IVec4Ref(sb().b.cell_motion);
     atomicAdd(motion.v[cell].x, fixed_point.x);

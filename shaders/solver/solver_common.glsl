@@ -98,4 +98,75 @@ void load_face_masks(out CellBits faces[6]) {
         for (uint k = 0u; k < kCellWords; ++k) faces[s].w[k] = sb().b.face_mask[s * kCellWords + k];
 }
 
+// ---- Cell parts, the outside-air fill and the solid's motion (solver_io.h, "cell_flags") -----------------
+
+uint flags_at(int i) { return WordsRef(sb().b.cell_flags).v[i]; }
+
+/// Part k of level-0 cell i: from cell_parts for a cut cell; a cell without solid voxels is one whole part.
+CellBits part_of(int i, uint flags, uint k) {
+    uint v = sb().b.voxels_per_cell;
+    if ((flags & kCellCut) == 0u) return k == 0u ? bits_all(v) : bits_none();
+    CellBits b = bits_none();
+    uint cw = sb().b.cell_words;
+    uint base = (kCellParts * uint(i) + k) * cw;
+    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(sb().b.cell_parts).v[base + w];
+    return b;
+}
+
+/// The air of cell i: the part whose air reaches an open side; none in a kCellNoAir cell.
+CellBits air_of(int i, uint flags) {
+    if ((flags & kCellNoAir) != 0u) return bits_none();
+    return part_of(i, flags, (flags & kCellSecondPart) != 0u ? 1u : 0u);
+}
+
+// Union-find over part nodes (Jaiganesh and Burtscher 2018, ECL-CC): a root is hooked under the smaller of
+// two roots by compare-and-swap, so parents only ever decrease and every chain ends; finds halve paths with
+// atomicMin. Other invocations' writes may be read late: a stale read only costs a failed swap, whose
+// returned value is current, so each retry moves to a smaller id.
+layout(buffer_reference, scalar) buffer LabelsRef { uint v[]; };
+
+uint uf_find(uint x) {
+    LabelsRef labels = LabelsRef(sb().b.labels);
+    uint parent = labels.v[x];
+    while (parent != x) {
+        uint grand = labels.v[parent];
+        if (grand < parent) atomicMin(labels.v[x], grand);
+        x = parent;
+        parent = grand;
+    }
+    return x;
+}
+
+void uf_unite(uint a, uint b) {
+    LabelsRef labels = LabelsRef(sb().b.labels);
+    for (;;) {
+        a = uf_find(a);
+        b = uf_find(b);
+        if (a == b) return;
+        if (a > b) {
+            uint t = a;
+            a = b;
+            b = t;
+        }
+        uint seen = atomicCompSwap(labels.v[b], b, a);
+        if (seen == b) return;
+        b = seen;
+    }
+}
+
+/// Fixed-point velocity sums and their count for the solid in cell i: its moving fragments'; in a cell
+/// without air, else, its sealed region's (the summed mean velocities of the region's moving cells); zero
+/// for static solids.
+ivec4 solid_motion_of(int i, uint flags) {
+    if ((flags & kCellMoving) != 0u) return IVec4Ref(sb().b.cell_motion).v[i];
+    if ((flags & kCellNoAir) == 0u) return ivec4(0);
+    uint root = LabelsRef(sb().b.labels).v[part_node(uint(i), 0u)];
+    if (root == kOutsideNode) return ivec4(0);
+    uint part = (root - 1u) % kCellParts;
+    if ((flags_at(int((root - 1u) / kCellParts)) & (kCellRegion << part)) == 0u) return ivec4(0);
+    return IVec4Ref(sb().b.region_motion).v[root];
+}
+
+vec3 motion_velocity(ivec4 m) { return m.w > 0 ? vec3(m.xyz) / (kVelocityScale * float(m.w)) : vec3(0.0); }
+
 #include "solver_kernels.h"

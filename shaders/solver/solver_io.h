@@ -20,6 +20,11 @@ GUST_CONST uint kMaxEmitters = 64;
 /// ±kMaxFragmentSpeed, so 32-bit integer atomics suffice (no float-atomic feature needed).
 GUST_CONST float kVelocityScale = 256.0f;
 GUST_CONST float kMaxFragmentSpeed = 256.0f;
+/// Air components a cell keeps (its two largest; see cell_parts).
+GUST_CONST uint kCellParts = 2u;
+/// A pressure solve whose residual grows past this many times its reference (the larger of max |b| and
+/// its first residual) has diverged: it stops, and the step projects nothing (solve_diverged).
+GUST_CONST float kDivergenceGuard = 100.0f;
 
 /// Damping of the Jacobi baseline: plain Jacobi never damps the checkerboard mode of a closed pocket
 /// (its iteration matrix has eigenvalue −1 there), 6/7 does and is the best smoother for 3D Laplacians.
@@ -75,6 +80,9 @@ struct SolverState {
     float cg_beta;                    ///< weight of the previous search direction
     float warm_scale;                 ///< s of the warm start x0 = s·φ of the last step (0: from zero)
     uint recorded;                    ///< V-cycles (Jacobi: blocks) this step recorded, from check's push
+    uint first_residual;              ///< float bits of max |residual| at the solve's first check
+    uint diverged;                    ///< 1 when the solve was stopped by solve_diverged (nothing projected)
+    uint sealed_cells;                ///< cells with free voxels none of which reach an open side
 };
 
 /// Slots of the dispatch buffer: one per multigrid level, one per level over one colour of its cells (a
@@ -84,8 +92,20 @@ GUST_CONST uint kColourSlot = kMaxGridLevels; ///< kColourSlot + level
 GUST_CONST uint kCoarseSlot = 2u * kMaxGridLevels;
 GUST_CONST uint kDispatchSlots = 2u * kMaxGridLevels + 1u;
 
-GUST_CONST uint kCellCut = 1u;    ///< cell_flags: the cell holds solid voxels (cell_fluid is written)
-GUST_CONST uint kCellMoving = 2u; ///< cell_flags: moving fragments were summed into cell_motion
+// cell_flags. A cell's free voxels fall into 6-connected components; it keeps the two largest as its
+// parts (cell_parts), and the part whose air reaches an open domain side is the air its pressure stands
+// for (solid_faces: the fluid set). Parts that reach none are sealed: solid for the wind.
+GUST_CONST uint kCellCut = 1u;        ///< holds solid voxels: its parts are in SolverBindings::cell_parts
+GUST_CONST uint kCellMoving = 2u;     ///< moving fragments were summed into cell_motion
+GUST_CONST uint kCellNoAir = 4u;      ///< no part reaches an open side: the whole cell is solid for the wind
+GUST_CONST uint kCellSecondPart = 8u; ///< its air is part 1 (part 0 is sealed)
+GUST_CONST uint kCellRegion = 16u;    ///< << k: node k of this cell roots a sealed region with motion sums
+
+/// Union-find node of part k of cell `cell`; node 0 stands for the air beyond the open domain sides.
+GUST_CONST uint kOutsideNode = 0u;
+GUST_INLINE uint part_node(uint cell, uint k) {
+    return 1u + kCellParts * cell + k;
+}
 
 GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face()
 GUST_CONST uint kFieldTmp = 1u;
@@ -102,27 +122,30 @@ GUST_CONST uint kCellOldResidual = 7u; ///< the residual before this iteration's
 
 /// Addresses and parameters of one step, in a buffer of their own (push constants stay small).
 struct SolverBindings {
-    GUST_ADDRESS velocity;        ///< float[faces]: the air's face-normal velocity, m/s
-    GUST_ADDRESS velocity_tmp;    ///< float[faces]: advection output
-    GUST_ADDRESS velocity_back;   ///< float[faces]: MacCormack's backward pass
-    GUST_ADDRESS weights;         ///< float[]: weights of levels 1 on, from index level0_faces
-    GUST_ADDRESS solid_velocity;  ///< float[faces]: solid's normal velocity per face, m/s
-    GUST_ADDRESS pressure;        ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
-    GUST_ADDRESS pressure_tmp;    ///< float[cells]: Jacobi's second buffer
-    GUST_ADDRESS rhs;             ///< float[]: right-hand side per cell, all levels (1/s)
-    GUST_ADDRESS scratch;         ///< float[cells]: kCellScratch
-    GUST_ADDRESS cell_solid;      ///< float[cells]: fraction of the cell's voxels that are occupied
-    GUST_ADDRESS cell_fluid;      ///< uint[cells * kCellWords]: the cell's open voxels (see cell_fluid)
-    GUST_ADDRESS cell_flags;      ///< uint[cells]: kCellCut, kCellMoving
-    GUST_ADDRESS cell_motion;     ///< ivec4[cells]: fixed-point fragment velocity sums and count
-    GUST_ADDRESS vorticity;       ///< vec4[cells]: curl (1/s) and its length
-    GUST_ADDRESS emitters;        ///< GpuEmitter[emitter_count]
-    GUST_ADDRESS state;           ///< SolverState
-    GUST_ADDRESS dispatch;        ///< LevelDispatch[2 * kDispatchSlots]: live, then full
-    GUST_ADDRESS tree_nodes;      ///< the sparse tree's node pool (uvec2 per node), 0 without solids
-    GUST_ADDRESS tree_masks;      ///< the sparse tree's leaf masks
-    GUST_ADDRESS fragments;       ///< packed voxel keys of moving surfaces, 0 without
-    GUST_ADDRESS fragment_count;  ///< uint
+    GUST_ADDRESS velocity;       ///< float[faces]: the air's face-normal velocity (extend_face), m/s
+    GUST_ADDRESS velocity_tmp;   ///< float[faces]: advection output
+    GUST_ADDRESS velocity_back;  ///< float[faces]: MacCormack's backward pass
+    GUST_ADDRESS weights;        ///< float[]: weights of levels 1 on, from index level0_faces
+    GUST_ADDRESS solid_velocity; ///< float[faces]: solid's normal velocity per face, m/s
+    GUST_ADDRESS pressure;       ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
+    GUST_ADDRESS pressure_tmp;   ///< float[cells]: Jacobi's second buffer
+    GUST_ADDRESS rhs;            ///< float[]: right-hand side per cell, all levels (1/s)
+    GUST_ADDRESS scratch;        ///< float[cells]: kCellScratch
+    GUST_ADDRESS cell_solid;     ///< float[cells]: share of the cell's voxels that are not its air
+    GUST_ADDRESS cell_parts;     ///< uint[cells * kCellParts * cell_words]: cut cells' parts (cell_parts)
+    GUST_ADDRESS cell_flags;     ///< uint[cells]: kCell* flags
+    GUST_ADDRESS cell_motion;    ///< ivec4[cells]: fixed-point fragment velocity sums and count
+    GUST_ADDRESS labels;         ///< uint[1 + kCellParts * cells]: union-find parents (part_node ids)
+    GUST_ADDRESS region_motion;  ///< ivec4[1 + kCellParts * cells]: per sealed region's root node, the
+                                 ///< fixed-point mean velocities of its moving cells, summed, and their count
+    GUST_ADDRESS vorticity;      ///< vec4[cells]: curl (1/s) and its length
+    GUST_ADDRESS emitters;       ///< GpuEmitter[emitter_count]
+    GUST_ADDRESS state;          ///< SolverState
+    GUST_ADDRESS dispatch;       ///< LevelDispatch[2 * kDispatchSlots]: live, then full
+    GUST_ADDRESS tree_nodes;     ///< the sparse tree's node pool (uvec2 per node), 0 without solids
+    GUST_ADDRESS tree_masks;     ///< the sparse tree's leaf masks
+    GUST_ADDRESS fragments;      ///< packed voxel keys of moving surfaces, 0 without
+    GUST_ADDRESS fragment_count; ///< uint
     GUST_ADDRESS fragment_motion; ///< uvec2 half-float velocities per fragment
     GUST_ADDRESS cg_cells;        ///< float[4 * cells]: conjugate gradients' x, p, b, old r
     GUST_ADDRESS partials;        ///< vec2[partial_count]: per-workgroup sums of a dot product
@@ -144,13 +167,15 @@ struct SolverBindings {
     uint levels;              ///< multigrid levels in use
     uint mask_words;          ///< words of a leaf layer in the tree's mask blocks
     uint mask_stride;         ///< words per tree mask block
-    uint cell_words;          ///< words per cell in cell_fluid
+    uint cell_words;          ///< words per part in cell_parts
     float tolerance;          ///< relative residual the solve stops at
     float vorticity_strength; ///< ε of vorticity confinement
     uint partial_count;       ///< workgroups over the level-0 cells (entries in partials)
     uint point_count;         ///< entries in points
     uint level0_faces;        ///< faces of level 0 (in open_counts); weights holds the levels after
     float pair_share;         ///< pair_share(voxels_per_cell)
+    float max_solid_speed;    ///< m/s: fragment velocities are clamped to this length
+    uint pad_bindings[3];
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -366,33 +391,46 @@ GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
     return r;
 }
 
-/// cell_fluid for any v: the flood fill on whole CellBits.
-GUST_INLINE CellBits cell_fluid_general(CellBits occupied, uint v, CellBits faces[6]) {
+/// Keeps `component` (of `count` voxels) if it is among the two largest seen: `first` the largest, `second`
+/// the next (the earlier one wins a tie).
+GUST_INLINE void keep_largest(CellBits component, uint count, GUST_OUT(CellBits) first,
+                              GUST_OUT(uint) first_count, GUST_OUT(CellBits) second,
+                              GUST_OUT(uint) second_count) {
+    if (count > first_count) {
+        second = first;
+        second_count = first_count;
+        first = component;
+        first_count = count;
+    } else if (count > second_count) {
+        second = component;
+        second_count = count;
+    }
+}
+
+/// cell_parts for any v: the flood fill on whole CellBits.
+GUST_INLINE void cell_parts_general(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
+                                    GUST_OUT(CellBits) second) {
     CellBits free_voxels = bits_and_not(bits_all(v), occupied);
     CellBits remaining = free_voxels;
-    CellBits best = bits_none();
-    uint best_count = 0u;
+    first = bits_none();
+    second = bits_none();
+    uint first_count = 0u, second_count = 0u;
     uint n = v * v * v;
     for (uint seeds = 0u; seeds < n; ++seeds) {
-        uint first = n;
-        for (uint i = 0u; i < kCellWords && first == n; ++i)
-            if (remaining.w[i] != 0u) first = i * 32u + uint(findLSB(remaining.w[i]));
-        if (first == n) break;
+        uint start = n;
+        for (uint i = 0u; i < kCellWords && start == n; ++i)
+            if (remaining.w[i] != 0u) start = i * 32u + uint(findLSB(remaining.w[i]));
+        if (start == n) break;
         CellBits component = bits_none();
-        component.w[first / 32u] = 1u << (first % 32u);
+        component.w[start / 32u] = 1u << (start % 32u);
         for (uint step = 0u; step < n; ++step) {
             CellBits grown = bits_and(bits_dilate(component, v, faces), free_voxels);
             if (bits_equal(grown, component)) break;
             component = grown;
         }
-        uint count = bits_count(component);
-        if (count > best_count) {
-            best = component;
-            best_count = count;
-        }
+        keep_largest(component, bits_count(component), first, first_count, second, second_count);
         remaining = bits_and_not(remaining, component);
     }
-    return best;
 }
 
 /// A cell of at most 64 voxels (v <= 4) as two words, low bits first.
@@ -418,15 +456,16 @@ GUST_INLINE Bits64 b64_down(Bits64 a, uint s) {
     return b64((a.lo >> s) | (a.hi << (32u - s)), a.hi >> s);
 }
 
-/// cell_fluid_general for v <= 4, with the same fill on two words: a shader keeps them in registers,
+/// cell_parts_general for v <= 4, with the same fill on two words: a shader keeps them in registers,
 /// where the general form's 16-word arrays, indexed by run-time shifts, go to memory (on an H100 that
 /// made the fill most of the solid pass).
-GUST_INLINE CellBits cell_fluid_small(CellBits occupied, uint v, CellBits faces[6]) {
+GUST_INLINE void cell_parts_small(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
+                                  GUST_OUT(CellBits) second) {
     CellBits all = bits_all(v);
     Bits64 free_voxels = b64(all.w[0] & ~occupied.w[0], all.w[1] & ~occupied.w[1]);
     Bits64 remaining = free_voxels;
-    Bits64 best = b64(0u, 0u);
-    uint best_count = 0u;
+    Bits64 best = b64(0u, 0u), next = b64(0u, 0u);
+    uint best_count = 0u, next_count = 0u;
     uint n = v * v * v;
     for (uint seeds = 0u; seeds < n; ++seeds) {
         if (remaining.lo == 0u && remaining.hi == 0u) break;
@@ -450,27 +489,46 @@ GUST_INLINE CellBits cell_fluid_small(CellBits occupied, uint v, CellBits faces[
         }
         uint count = uint(bitCount(component.lo)) + uint(bitCount(component.hi));
         if (count > best_count) {
+            next = best;
+            next_count = best_count;
             best = component;
             best_count = count;
+        } else if (count > next_count) {
+            next = component;
+            next_count = count;
         }
         remaining = b64(remaining.lo & ~component.lo, remaining.hi & ~component.hi);
     }
-    CellBits r = bits_none();
-    r.w[0] = best.lo;
-    r.w[1] = best.hi;
-    return r;
+    first = bits_none();
+    first.w[0] = best.lo;
+    first.w[1] = best.hi;
+    second = bits_none();
+    second.w[0] = next.lo;
+    second.w[1] = next.hi;
 }
 
-/// The open voxels of a cell that its pressure stands for: the largest 6-connected component of its
-/// free voxels (the first found on a tie). One pressure per cell cannot stand for two sides of a wall,
-/// so faces open only into this component; then any chain of open faces is a chain of free voxels,
-/// and a watertight surface, however thin, lets no air through.
-GUST_INLINE CellBits cell_fluid(CellBits occupied, uint v, CellBits faces[6]) {
-    return v * v * v <= 64u ? cell_fluid_small(occupied, v, faces) : cell_fluid_general(occupied, v, faces);
+/// The parts of a cell: the two largest 6-connected components of its free voxels (the first found on a
+/// tie), largest first; empty where there are fewer. One pressure per cell cannot stand for two sides of
+/// a wall, so a cell's air is one part, and faces open only into it (face_open_count): then any chain of
+/// open faces is a chain of free voxels, and a watertight surface, however thin, lets no air through.
+/// Which part is the air is decided by whether it reaches an open domain side (the outside-air fill,
+/// docs/solver.md "Solid interiors"); a cell keeps two so that the air beside a wall can be the smaller
+/// part when the larger lies inside a closed mesh.
+GUST_INLINE void cell_parts(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
+                            GUST_OUT(CellBits) second) {
+    if (v * v * v <= 64u)
+        cell_parts_small(occupied, v, faces, first, second);
+    else
+        cell_parts_general(occupied, v, faces, first, second);
 }
 
-/// Open fraction of the face between cells `low` and `high` along `axis` (their fluid voxel sets):
-/// the share of voxel pairs across the face that are both open.
+/// Whether a set holds a voxel on cell side s (−x,+x,−y,+y,−z,+z).
+GUST_INLINE bool bits_touch(CellBits set, CellBits faces[6], uint s) {
+    return bits_count(bits_and(set, faces[s])) != 0u;
+}
+
+/// Voxel pairs across the face between cells `low` and `high` along `axis` that are both in the given
+/// sets (the two cells' air, or two parts when linking them).
 GUST_INLINE uint face_open_count(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
     CellBits a = bits_and(low, faces[2u * axis + 1u]);
     CellBits b = bits_and(high, faces[2u * axis]);
@@ -500,7 +558,7 @@ GUST_INLINE float open_fraction_of(uint count, float share) {
     return float(count) * share;
 }
 
-/// Host side: the open fraction of a face between two fluid sets.
+/// Host side: the open fraction of a face between the air of two cells.
 GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
     return open_fraction_of(face_open_count(low, high, axis, v, faces), pair_share(v));
 }
@@ -582,13 +640,27 @@ GUST_INLINE float warm_scale(float b_dot_q, float q_dot_q) {
     return abs(s) < 1e30f ? s : 0.0f;
 }
 
+/// Whether a solve has diverged: its max residual (NaN included) past kDivergenceGuard times the larger of
+/// max |b| and its first residual. Conjugate gradients on a consistent system do not grow that much (their
+/// max-norm residual wanders within a few times its start); a singular or inconsistent one can without
+/// bound, and projecting such a φ would set the air moving at any speed.
+GUST_INLINE bool solve_diverged(float residual, float first, float b_max) {
+    return !(residual <= kDivergenceGuard * max(first, b_max));
+}
+
+/// A fragment velocity (m/s) with its length clamped to `limit` (m/s, > 0): no solid pushes air faster.
+GUST_INLINE vec3 clamp_speed(vec3 velocity, float limit) {
+    float speed = length(velocity);
+    return speed > limit ? velocity * (limit / speed) : velocity;
+}
+
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
-static_assert(sizeof(gust::shaderio::SolverState) == 68);
+static_assert(sizeof(gust::shaderio::SolverState) == 80);
 #endif
 
 #endif

@@ -354,18 +354,62 @@ GUST_INLINE float prolong_cell(uint l, ivec3 c) {
     return sum;
 }
 
-/// Face f after the pressure gradient: closed faces move with the solid; inflow sides keep the
-/// ambient wind; φ is 0 beyond open sides.
-GUST_INLINE float project_face(uint axis, ivec3 f) {
+/// Face f after the pressure gradient (`gradient` false: a diverged solve, solve_diverged, projects
+/// nothing): closed faces move with the solid; inflow sides keep the ambient wind; φ is 0 beyond open sides.
+GUST_INLINE float project_face(uint axis, ivec3 f, bool gradient) {
     ivec3 n = grid_dims();
     int i = face_index(n, axis, f);
     float open = load_weight(i);
     if (open == 0.0f) return load_face(kFieldSolid, i);
     float u = load_face(kFieldVelocity, i);
     uint side = boundary_side(n, axis, f);
-    if (side != 6u && (grid_open_sides() >> side & 1u) == 0u) return u;
+    if (!gradient || (side != 6u && (grid_open_sides() >> side & 1u) == 0u)) return u;
     ivec3 lo = f - axis_unit(axis);
     float p_lo = inside_cells(n, lo) ? load_cell(kCellPressure, cell_index(n, lo)) : 0.0f;
     float p_hi = inside_cells(n, f) ? load_cell(kCellPressure, cell_index(n, f)) : 0.0f;
     return u - (p_hi - p_lo) / grid_h();
+}
+
+// ---- The air's velocity extended into closed faces -----------------------------------------------------
+
+/// Whether face g of the lattice of component `axis` exists.
+GUST_INLINE bool face_in_lattice(uint axis, ivec3 g) {
+    ivec3 m = grid_dims() + axis_unit(axis);
+    return g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
+}
+
+/// Whether face g holds the air's velocity after `layer` extension passes: open (0), or closed next to an
+/// open face of its lattice (1).
+GUST_INLINE bool face_has_air(uint axis, ivec3 g, uint layer) {
+    ivec3 n = grid_dims();
+    if (load_weight(face_index(n, axis, g)) > 0.0f) return true;
+    if (layer == 0u) return false;
+    for (uint b = 0u; b < 3u; ++b)
+        for (int s = -1; s <= 1; s += 2) {
+            ivec3 nb = g + s * axis_unit(b);
+            if (face_in_lattice(axis, nb) && load_weight(face_index(n, axis, nb)) > 0.0f) return true;
+        }
+    return false;
+}
+
+/// Face f of `field` after extension pass `layer` (1, then 2): a face that holds the air's velocity after
+/// layer − 1 passes keeps it; a closed face next to such faces of its lattice takes their mean; any other
+/// keeps its value (the solid's velocity, from the projection). Two passes reach two faces into a solid,
+/// so advection, vorticity, texels and queries next to a wall read the air's velocity, never the solid's
+/// zeros: without it free-slip air beside a wall slowed a little every step (Bridson, Fluid Simulation
+/// for Computer Graphics, 2015, extrapolates velocity into the solid for the same reason). Closed faces
+/// carry no flux (face_flux), so the projection does not see these values.
+GUST_INLINE float extend_face(uint field, uint axis, ivec3 f, uint layer) {
+    ivec3 n = grid_dims();
+    float u = load_face(field, face_index(n, axis, f));
+    if (face_has_air(axis, f, layer - 1u)) return u;
+    float sum = 0.0f, count = 0.0f;
+    for (uint b = 0u; b < 3u; ++b)
+        for (int s = -1; s <= 1; s += 2) {
+            ivec3 nb = f + s * axis_unit(b);
+            if (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, layer - 1u)) continue;
+            sum += load_face(field, face_index(n, axis, nb));
+            count += 1.0f;
+        }
+    return count > 0.0f ? sum / count : u;
 }

@@ -47,8 +47,11 @@ struct CpuWind::Impl {
     SolverDesc desc;
     shaderio::HostKernels k;
     std::vector<float> solid_fraction;
-    std::vector<std::uint8_t> cut;
-    std::vector<CellBits> fluid;
+    std::vector<std::uint32_t> flags;      ///< shaderio::kCell*
+    std::vector<CellBits> parts;           ///< kCellParts per cell
+    std::vector<glm::ivec4> motion;        ///< per cell, as cell_motion
+    std::vector<std::uint32_t> roots;      ///< per part node: its set's root (the smallest node id)
+    std::vector<glm::ivec4> region_motion; ///< per root node, as region_motion
     std::uint32_t face_mask[6 * kCellWords];
     float last_dt = 0.0f;
     bool has_guess = false; ///< as WindSolver's: φ may start the next solve
@@ -69,13 +72,29 @@ struct CpuWind::Impl {
             f(i, shaderio::cell_from_index(level.dims, i));
     }
 
-    void solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells);
+    void solid_pass(const CpuSolid* solid, WindStats& stats);
+    /// The outside-air fill: roots per part node, and each cell's air (flags, solid fraction).
+    void fill(std::uint32_t& sealed_cells);
+    CellBits part_of(std::size_t cell, std::uint32_t part) const;
+    CellBits air_of(std::size_t cell) const;
+    glm::ivec4 solid_motion_of(std::size_t cell) const;
+    void extend();
     void coarse_weights();
     void smooth(std::uint32_t l);
     void v_cycle();
     float max_residual();
     float start_solve(bool warm);
-    float conjugate_gradients(float goal, float residual, std::uint32_t& checks);
+    /// check.comp's test: within the tolerance, or diverged (solve_diverged); stops the solve either way.
+    struct Check {
+        float goal = 0.0f, first = 0.0f, b_max = 0.0f;
+        bool diverged = false;
+        bool done(float residual) {
+            if (residual <= goal) return true;
+            diverged = shaderio::solve_diverged(residual, first, b_max);
+            return diverged;
+        }
+    };
+    float conjugate_gradients(Check& check, float residual, bool& done, std::uint32_t& checks);
 };
 
 CpuWind::~CpuWind() = default;
@@ -101,8 +120,11 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
         c.assign(all_cells, 0.0f);
     m.k.vorticity.assign(m.cells(), glm::vec4(0.0f));
     m.solid_fraction.assign(m.cells(), 0.0f);
-    m.cut.assign(m.cells(), 0);
-    m.fluid.assign(m.cells(), shaderio::bits_none());
+    m.flags.assign(m.cells(), 0);
+    m.parts.assign(m.cells() * shaderio::kCellParts, shaderio::bits_none());
+    m.motion.assign(m.cells(), glm::ivec4(0));
+    m.roots.assign(1 + shaderio::kCellParts * m.cells(), 0);
+    m.region_motion.assign(m.roots.size(), glm::ivec4(0));
     detail::face_masks(desc.voxels_per_cell, m.face_mask);
     return wind;
 }
@@ -178,19 +200,115 @@ std::vector<float> CpuWind::pressure() const {
     return p;
 }
 
-void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) {
+CellBits CpuWind::Impl::part_of(std::size_t cell, std::uint32_t part) const {
+    if ((flags[cell] & shaderio::kCellCut) == 0)
+        return part == 0 ? shaderio::bits_all(desc.voxels_per_cell) : shaderio::bits_none();
+    return parts[shaderio::kCellParts * cell + part];
+}
+
+CellBits CpuWind::Impl::air_of(std::size_t cell) const {
+    if ((flags[cell] & shaderio::kCellNoAir) != 0) return shaderio::bits_none();
+    return part_of(cell, (flags[cell] & shaderio::kCellSecondPart) != 0 ? 1 : 0);
+}
+
+glm::ivec4 CpuWind::Impl::solid_motion_of(std::size_t cell) const {
+    if ((flags[cell] & shaderio::kCellMoving) != 0) return motion[cell];
+    if ((flags[cell] & shaderio::kCellNoAir) == 0) return glm::ivec4(0);
+    const std::uint32_t root = roots[shaderio::part_node(std::uint32_t(cell), 0)];
+    return root == shaderio::kOutsideNode ? glm::ivec4(0) : region_motion[root];
+}
+
+// fill_link.comp and fill_finish.comp as a flood fill from the outside: the same sets, and the same roots,
+// since the GPU's union-find hooks every root under the smaller one, so a set's root is its smallest node.
+void CpuWind::Impl::fill(std::uint32_t& sealed_cells) {
+    using namespace shaderio;
+    const std::uint32_t v = desc.voxels_per_cell;
+    CellBits layers[6];
+    for (std::uint32_t s = 0; s < 6; ++s)
+        std::copy(face_mask + s * kCellWords, face_mask + (s + 1) * kCellWords, layers[s].w);
+    const std::size_t nodes = roots.size();
+    std::vector<std::vector<std::uint32_t>> links(nodes);
+    auto link = [&](std::uint32_t a, std::uint32_t b) {
+        links[a].push_back(b);
+        links[b].push_back(a);
+    };
+    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        const std::size_t cell = std::size_t(i);
+        for (std::uint32_t part = 0; part < kCellParts; ++part) {
+            const CellBits p = part_of(cell, part);
+            if (bits_count(p) == 0) continue;
+            for (std::uint32_t s = 0; s < 6; ++s) {
+                const int a = int(s / 2);
+                const bool at_side = (s & 1) == 0 ? c[a] == 0 : c[a] == k.dims[a] - 1;
+                if (at_side && (k.open_sides >> s & 1) != 0 && bits_touch(p, layers, s))
+                    link(part_node(std::uint32_t(i), part), kOutsideNode);
+            }
+            for (std::uint32_t a = 0; a < 3; ++a) {
+                const glm::ivec3 nb = c + axis_unit(a);
+                if (!inside_cells(k.dims, nb)) continue;
+                const std::size_t j = std::size_t(cell_index(k.dims, nb));
+                for (std::uint32_t m = 0; m < kCellParts; ++m)
+                    if (face_open_count(p, part_of(j, m), a, v, layers) != 0)
+                        link(part_node(std::uint32_t(i), part), part_node(std::uint32_t(j), m));
+            }
+        }
+    });
+    std::vector<std::uint32_t> set(nodes, UINT32_MAX);
+    for (std::uint32_t start = 0; start < nodes; ++start) {
+        if (set[start] != UINT32_MAX) continue;
+        std::vector<std::uint32_t> members{start};
+        set[start] = start;
+        for (std::size_t at = 0; at < members.size(); ++at)
+            for (std::uint32_t next : links[members[at]])
+                if (set[next] == UINT32_MAX) {
+                    set[next] = start;
+                    members.push_back(next);
+                }
+        for (std::uint32_t m : members)
+            roots[m] = start;
+    }
+    sealed_cells = 0;
+    std::fill(region_motion.begin(), region_motion.end(), glm::ivec4(0));
+    each_cell(k.levels[0], [&](int i, glm::ivec3) {
+        const std::size_t cell = std::size_t(i);
+        std::uint32_t counts[2], r[2];
+        for (std::uint32_t part = 0; part < kCellParts; ++part) {
+            counts[part] = bits_count(part_of(cell, part));
+            r[part] = roots[part_node(std::uint32_t(i), part)];
+        }
+        std::uint32_t air = 0;
+        if (counts[0] != 0 && r[0] == kOutsideNode) {
+            air = counts[0];
+        } else if (counts[1] != 0 && r[1] == kOutsideNode) {
+            air = counts[1];
+            flags[cell] |= kCellSecondPart;
+        } else {
+            flags[cell] |= kCellNoAir;
+            if (counts[0] != 0) ++sealed_cells;
+        }
+        solid_fraction[cell] = 1.0f - float(air) / float(v * v * v);
+        if ((flags[cell] & kCellMoving) == 0) return;
+        const glm::ivec4 m = motion[cell];
+        const glm::ivec4 mean(glm::ivec3(m) / m.w, 1);
+        for (std::uint32_t part = 0; part < kCellParts; ++part)
+            if (counts[part] != 0 && r[part] != kOutsideNode) region_motion[r[part]] += mean;
+    });
+}
+
+void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
+    using namespace shaderio;
     const std::uint32_t v = desc.voxels_per_cell;
     const glm::ivec3 voxels = k.dims * int(v);
     CellBits faces_layers[6];
     for (std::uint32_t s = 0; s < 6; ++s)
         std::copy(face_mask + s * kCellWords, face_mask + (s + 1) * kCellWords, faces_layers[s].w);
-    std::vector<glm::ivec4> motion(cells(), glm::ivec4(0));
-    cut_cells = 0;
+    std::fill(motion.begin(), motion.end(), glm::ivec4(0));
+    stats.cut_cells = 0;
     each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-        cut[std::size_t(i)] = 0;
-        solid_fraction[std::size_t(i)] = 0.0f;
+        const std::size_t cell = std::size_t(i);
+        flags[cell] = 0;
         if (!solid || solid->occupied.empty()) return;
-        CellBits occupied = shaderio::bits_none();
+        CellBits occupied = bits_none();
         for (std::uint32_t z = 0; z < v; ++z)
             for (std::uint32_t y = 0; y < v; ++y)
                 for (std::uint32_t x = 0; x < v; ++x) {
@@ -202,44 +320,53 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, std::uint32_t& cut_cells) 
                     const std::uint32_t j = x + v * (y + v * z);
                     occupied.w[j / 32] |= 1u << (j % 32);
                 }
-        const std::uint32_t count = shaderio::bits_count(occupied);
-        if (count == 0) return;
-        fluid[std::size_t(i)] = shaderio::cell_fluid(occupied, v, faces_layers);
-        cut[std::size_t(i)] = 1;
-        solid_fraction[std::size_t(i)] = float(count) / float(v * v * v);
-        ++cut_cells;
+        if (bits_count(occupied) == 0) return;
+        cell_parts(occupied, v, faces_layers, parts[kCellParts * cell], parts[kCellParts * cell + 1]);
+        flags[cell] = kCellCut;
+        ++stats.cut_cells;
     });
     if (solid)
         for (const auto& [voxel, velocity] : solid->fragments) {
             if (glm::any(glm::lessThan(voxel, glm::ivec3(0)))) continue;
             const glm::ivec3 c = voxel / int(v);
-            if (!shaderio::inside_cells(k.dims, c)) continue;
-            const glm::vec3 clamped = glm::clamp(velocity, glm::vec3(-shaderio::kMaxFragmentSpeed),
-                                                 glm::vec3(shaderio::kMaxFragmentSpeed));
-            const glm::ivec3 fixed_point(glm::round(clamped * shaderio::kVelocityScale));
-            motion[std::size_t(shaderio::cell_index(k.dims, c))] += glm::ivec4(fixed_point, 1);
+            if (!inside_cells(k.dims, c)) continue;
+            const glm::ivec3 fixed_point(
+                glm::round(clamp_speed(velocity, desc.max_solid_speed) * kVelocityScale));
+            const std::size_t cell = std::size_t(cell_index(k.dims, c));
+            motion[cell] += glm::ivec4(fixed_point, 1);
+            flags[cell] |= kCellMoving;
         }
-    auto fluid_of = [&](glm::ivec3 c) {
-        if (!shaderio::inside_cells(k.dims, c)) return shaderio::bits_all(v);
-        const std::size_t i = std::size_t(shaderio::cell_index(k.dims, c));
-        return cut[i] ? fluid[i] : shaderio::bits_all(v);
+    fill(stats.sealed_cells);
+    auto air_at = [&](glm::ivec3 c) {
+        return inside_cells(k.dims, c) ? air_of(std::size_t(cell_index(k.dims, c))) : bits_all(v);
     };
-    auto motion_of = [&](glm::ivec3 c) {
-        return shaderio::inside_cells(k.dims, c) ? motion[std::size_t(shaderio::cell_index(k.dims, c))]
-                                                 : glm::ivec4(0);
+    auto flags_at = [&](glm::ivec3 c) {
+        return inside_cells(k.dims, c) ? flags[std::size_t(cell_index(k.dims, c))] : 0u;
     };
-    auto is_cut = [&](glm::ivec3 c) {
-        return shaderio::inside_cells(k.dims, c) && cut[std::size_t(shaderio::cell_index(k.dims, c))];
+    auto motion_at = [&](glm::ivec3 c) {
+        return inside_cells(k.dims, c) ? solid_motion_of(std::size_t(cell_index(k.dims, c))) : glm::ivec4(0);
     };
     each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
-        const glm::ivec3 lo = f - shaderio::axis_unit(axis);
+        const glm::ivec3 lo = f - axis_unit(axis);
         float open = 1.0f;
-        if (is_cut(lo) || is_cut(f))
-            open = shaderio::face_open_fraction(fluid_of(lo), fluid_of(f), axis, v, faces_layers);
+        if (((flags_at(lo) | flags_at(f)) & (kCellCut | kCellNoAir)) != 0)
+            open = face_open_fraction(air_at(lo), air_at(f), axis, v, faces_layers);
         k.weights[std::size_t(i)] = open;
-        const glm::ivec4 m = motion_of(lo) + motion_of(f);
-        k.face[shaderio::kFieldSolid][std::size_t(i)] =
-            m.w > 0 ? float(m[int(axis)]) / (shaderio::kVelocityScale * float(m.w)) : 0.0f;
+        const glm::ivec4 m = motion_at(lo) + motion_at(f);
+        k.face[kFieldSolid][std::size_t(i)] =
+            m.w > 0 ? float(m[int(axis)]) / (kVelocityScale * float(m.w)) : 0.0f;
+    });
+}
+
+// extend.comp's two passes: velocity -> tmp (layer 1) -> velocity (layer 2).
+void CpuWind::Impl::extend() {
+    std::vector<float>& u = k.face[shaderio::kFieldVelocity];
+    std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
+    each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+        tmp[std::size_t(i)] = k.extend_face(shaderio::kFieldVelocity, a, f, 1);
+    });
+    each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+        u[std::size_t(i)] = k.extend_face(shaderio::kFieldTmp, a, f, 2);
     });
 }
 
@@ -332,7 +459,7 @@ float CpuWind::Impl::start_solve(bool warm) {
 // The GPU's passes in the GPU's order (wind_solver.cpp), with the dot products summed in double, from
 // x, r, b as start_solve left them. The residual is recomputed from x each iteration rather than updated:
 // the update drifts from b − Lx in float by more than the tolerance.
-float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32_t& checks) {
+float CpuWind::Impl::conjugate_gradients(Check& check, float residual, bool& done, std::uint32_t& checks) {
     using namespace shaderio;
     std::vector<float>& z = k.cell[kCellPressure];
     std::vector<float>& r = k.cell[kCellRhs];
@@ -344,7 +471,7 @@ float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32
     std::fill_n(p.begin(), n, 0.0f);
     std::fill_n(old_r.begin(), n, 0.0f);
     float old_rz = 0.0f;
-    for (std::uint32_t it = 0; it < desc.max_cycles && residual > goal; ++it) {
+    for (std::uint32_t it = 0; it < desc.max_cycles && !done; ++it) {
         v_cycle();
         double rz = 0.0, z_old_r = 0.0;
         for (std::size_t i = 0; i < n; ++i) {
@@ -370,7 +497,8 @@ float CpuWind::Impl::conjugate_gradients(float goal, float residual, std::uint32
             r[std::size_t(i)] = b[std::size_t(i)] - k.laplacian_cell(0, c, kCellSolution);
             residual = std::max(residual, std::abs(r[std::size_t(i)]));
         });
-        if (residual > goal) ++checks;
+        done = check.done(residual);
+        if (!done) ++checks;
     }
     std::copy_n(x.begin(), n, z.begin());
     return residual;
@@ -395,7 +523,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             return Status::failure("CpuSolid::occupied must hold one byte per voxel of the grid");
     }
     WindStats stats;
-    m.solid_pass(solid, stats.cut_cells);
+    m.solid_pass(solid, stats);
     if (solid) stats.moving_fragments = std::uint32_t(solid->fragments.size());
     m.coarse_weights();
 
@@ -459,22 +587,21 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     });
     // The goal is relative to b, not to the first residual: a warm start that begins near the solution
     // must still reach tolerance · max |b|.
-    const float goal = desc.tolerance * before;
     float residual = m.start_solve(desc.warm_start && m.has_guess);
+    Impl::Check check{desc.tolerance * before, residual, before};
     std::uint32_t checks = 0;
-    bool done = residual <= goal;
+    bool done = check.done(residual);
     if (!done) ++checks;
     if (desc.pressure == PressureSolver::Multigrid) {
         for (std::uint32_t cycle = 0; cycle < desc.max_cycles && !done; ++cycle) {
             m.v_cycle();
             residual = m.max_residual();
-            done = residual <= goal;
+            done = check.done(residual);
             if (!done) ++checks;
         }
         stats.cycles = std::min(checks, desc.max_cycles);
     } else if (desc.pressure == PressureSolver::MultigridPCG) {
-        residual = m.conjugate_gradients(goal, residual, checks);
-        done = residual <= goal;
+        residual = m.conjugate_gradients(check, residual, done, checks);
         stats.cycles = std::min(checks, desc.max_cycles);
     } else {
         std::vector<float>& other = k.cell[shaderio::kCellPressureTmp];
@@ -489,18 +616,22 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
                 std::copy(next.begin(), next.end(), to.begin());
             }
             residual = m.max_residual();
-            done = residual <= goal;
+            done = check.done(residual);
             if (!done) ++checks;
         }
         stats.cycles = std::min(checks, blocks) * detail::kJacobiBlock;
     }
     stats.residual = residual;
-    stats.converged = done;
+    stats.converged = done && !check.diverged;
+    stats.diverged = check.diverged;
     stats.divergence_before = before;
     std::vector<float> projected(m.faces());
-    m.each_face(
-        [&](int i, std::uint32_t a, glm::ivec3 f) { projected[std::size_t(i)] = k.project_face(a, f); });
+    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+        projected[std::size_t(i)] = k.project_face(a, f, !check.diverged);
+    });
     u = std::move(projected);
+    m.extend();
+    if (check.diverged) std::fill_n(phi.begin(), m.cells(), 0.0f);
     float after = 0.0f;
     m.each_cell(k.levels[0], [&](int, glm::ivec3 c) {
         float diag, off;

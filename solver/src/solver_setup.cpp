@@ -186,6 +186,9 @@ Status validate(const SolverDesc& desc) {
         return Status::failure("viscosity must be a non-negative number of m^2/s");
     if (!std::isfinite(desc.emitter_response) || !(desc.emitter_response > 0.0f))
         return Status::failure("emitter_response must be a positive number of seconds");
+    if (!std::isfinite(desc.max_solid_speed) || !(desc.max_solid_speed > 0.0f) ||
+        desc.max_solid_speed > shaderio::kMaxFragmentSpeed)
+        return Status::failure("max_solid_speed must be in (0, 256] m/s");
     return Status{};
 }
 
@@ -213,23 +216,6 @@ Status validate(std::span<const Emitter> emitters) {
         if (!motor && e.length != 0.0f) return Status::failure(at + "only motors have a length");
     }
     return Status{};
-}
-
-std::vector<glm::vec3> cell_velocities(glm::uvec3 cells, std::span<const float> faces) {
-    const glm::ivec3 n(cells);
-    std::vector<glm::vec3> out(std::size_t(n.x) * n.y * n.z);
-    if (faces.size() != std::size_t(shaderio::faces_total(n))) return {};
-    for (int z = 0; z < n.z; ++z)
-        for (int y = 0; y < n.y; ++y)
-            for (int x = 0; x < n.x; ++x) {
-                const glm::ivec3 c(x, y, z);
-                glm::vec3 v;
-                for (std::uint32_t a = 0; a < 3; ++a)
-                    v[a] = 0.5f * (faces[shaderio::face_index(n, a, c)] +
-                                   faces[shaderio::face_index(n, a, c + shaderio::axis_unit(a))]);
-                out[shaderio::cell_index(n, c)] = v;
-            }
-    return out;
 }
 
 } // namespace gust

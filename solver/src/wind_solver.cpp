@@ -19,6 +19,9 @@ namespace {
 #include "gust_shaders/confine_comp.h"
 #include "gust_shaders/diffuse_comp.h"
 #include "gust_shaders/divergence_comp.h"
+#include "gust_shaders/extend_comp.h"
+#include "gust_shaders/fill_finish_comp.h"
+#include "gust_shaders/fill_link_comp.h"
 #include "gust_shaders/forces_comp.h"
 #include "gust_shaders/fragment_args_comp.h"
 #include "gust_shaders/project_comp.h"
@@ -59,12 +62,12 @@ float from_bits(std::uint32_t bits) {
 
 struct WindSolver::Impl : gpu::HostObject {
     explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
-    gpu::Pipeline solid_cells, fragment_args, solid_motion, solid_faces, coarse_weights, advect, forces,
-        vorticity, confine, diffuse, divergence, relax, residual, restrict_, prolong, coarse_solve, check, cg,
-        cg_scalars, project, scroll, sample;
+    gpu::Pipeline solid_cells, fragment_args, solid_motion, fill_link, fill_finish, solid_faces,
+        coarse_weights, advect, forces, vorticity, confine, diffuse, divergence, relax, residual, restrict_,
+        prolong, coarse_solve, check, cg, cg_scalars, project, extend, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
-        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_fluid, cell_flags, cell_motion,
-        vorticity_buf, emitters, state, dispatch, bindings, points, samples;
+        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_flags, cell_motion,
+        labels, region_motion, vorticity_buf, emitters, state, dispatch, bindings, points, samples;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -110,6 +113,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp)},
                             {&m.fragment_args, words(fragment_args_comp)},
                             {&m.solid_motion, words(solid_motion_comp)},
+                            {&m.fill_link, words(fill_link_comp)},
+                            {&m.fill_finish, words(fill_finish_comp)},
                             {&m.solid_faces, words(solid_faces_comp)},
                             {&m.coarse_weights, words(coarse_weights_comp)},
                             {&m.advect, words(advect_comp)},
@@ -127,6 +132,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                             {&m.cg, words(cg_comp)},
                             {&m.cg_scalars, words(cg_scalars_comp)},
                             {&m.project, words(project_comp)},
+                            {&m.extend, words(extend_comp)},
                             {&m.scroll, words(scroll_comp)},
                             {&m.sample, words(sample_comp)}};
     // cg_scalars.comp sums every level-0 workgroup's partial in one workgroup: as wide as the device
@@ -147,6 +153,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
     const std::uint64_t open_words = shaderio::open_count_words(std::uint32_t(faces));
+    const std::uint64_t nodes = 1 + shaderio::kCellParts * cells;
     const LevelDispatch level0_groups = groups_for(cells);
     struct Want {
         gpu::Buffer* buffer;
@@ -168,9 +175,11 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.cg_cells, 4 * cells * 4, gpu::MemoryUse::Device, 0},
         {&m.partials, std::uint64_t(level0_groups.x) * level0_groups.y * 8, gpu::MemoryUse::Device, 0},
         {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.cell_fluid, cells * words_per_cell * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_parts, cells * shaderio::kCellParts * words_per_cell * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_motion, cells * 16, gpu::MemoryUse::Device, 0},
+        {&m.labels, nodes * 4, gpu::MemoryUse::Device, 0},
+        {&m.region_motion, nodes * 16, gpu::MemoryUse::Device, 0},
         {&m.vorticity_buf, cells * 16, gpu::MemoryUse::Device, 0},
         {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), gpu::MemoryUse::Device, 0},
         {&m.state, sizeof(SolverState), gpu::MemoryUse::Readback, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
@@ -213,9 +222,12 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.partials = m.partials.address();
     b.partial_count = level0_groups.x * level0_groups.y;
     b.cell_solid = m.cell_solid.address();
-    b.cell_fluid = m.cell_fluid.address();
+    b.cell_parts = m.cell_parts.address();
     b.cell_flags = m.cell_flags.address();
     b.cell_motion = m.cell_motion.address();
+    b.labels = m.labels.address();
+    b.region_motion = m.region_motion.address();
+    b.max_solid_speed = desc.max_solid_speed;
     b.vorticity = m.vorticity_buf.address();
     b.emitters = m.emitters.address();
     b.state = m.state.address();
@@ -231,10 +243,10 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     detail::face_masks(desc.voxels_per_cell, b.face_mask);
 
     Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-        // cell_flags and cell_motion start clear: each step's solid_cells clears only the cells the last
-        // step marked moving.
-        for (gpu::Buffer* buffer :
-             {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid, &m.cell_flags, &m.cell_motion})
+        // cell_flags, cell_motion and region_motion start clear: each step's solid_cells clears only what
+        // the last step marked.
+        for (gpu::Buffer* buffer : {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid, &m.cell_flags,
+                                    &m.cell_motion, &m.region_motion})
             ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
         ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE,
                                  std::bit_cast<std::uint32_t>(1.0f));
@@ -306,6 +318,29 @@ Result<std::vector<float>> WindSolver::read_pressure() const {
     for (float& p : *phi)
         p *= scale;
     return phi;
+}
+
+Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
+    Impl& m = *impl_;
+    const std::size_t bytes = cell_count() * sizeof(glm::vec3);
+    auto out_buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Readback);
+    if (!out_buffer) return out_buffer.status();
+    Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        m.b.origin = origin_;
+        m.b.samples = out_buffer->address();
+        m.put_bindings(ctx_, cmd);
+        SolverPush push{};
+        push.bindings = m.bindings.address();
+        push.parity = 2;
+        const LevelDispatch g = groups_for(cell_count());
+        m.sample.bind(cmd, &push, sizeof(push));
+        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx_, cmd);
+    });
+    if (!s) return s;
+    std::vector<glm::vec3> out(cell_count());
+    std::memcpy(out.data(), out_buffer->mapped(), bytes);
+    return out;
 }
 
 Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points) {
@@ -516,6 +551,8 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.solid_motion.bind(cmd, &push, sizeof(push));
     vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
+    run(m.fill_link, cell_groups);
+    run(m.fill_finish, cell_groups);
     run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
     for (std::uint32_t l = 1; l < levels; ++l) {
         push.level = l;
@@ -626,6 +663,16 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
 
     m.profiler.begin(cmd, "project");
     run(m.project, face_groups);
+    // Two passes extend the air's velocity into closed faces (extend_face): velocity -> tmp -> velocity.
+    push.level = shaderio::kFieldTmp;
+    push.parity = shaderio::kFieldVelocity;
+    push.iterations = 1;
+    run(m.extend, face_groups);
+    push.level = shaderio::kFieldVelocity;
+    push.parity = shaderio::kFieldTmp;
+    push.iterations = 2;
+    run(m.extend, face_groups);
+    push.level = 0;
     push.parity = 1;
     run(m.divergence, cell_groups);
     m.profiler.end(cmd);
@@ -644,7 +691,7 @@ WindStats WindSolver::stats_from(const void* readback) {
     stats.divergence_before = from_bits(st.divergence_before);
     stats.divergence_after = from_bits(st.divergence_after);
     stats.residual = from_bits(st.residual);
-    stats.converged = st.done != 0;
+    stats.converged = st.done != 0 && st.diverged == 0;
     const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
     const std::uint32_t per_check = jacobi ? detail::kJacobiBlock : 1;
     // The check after the start counts too, so an unfinished solve has one check more than cycles.
@@ -653,6 +700,8 @@ WindStats WindSolver::stats_from(const void* readback) {
     if (!jacobi) cycles_to_record_ = detail::cycles_to_record(stats, desc_.max_cycles);
     stats.cut_cells = st.cut_cells;
     stats.fluid_cells = st.fluid_cells;
+    stats.sealed_cells = st.sealed_cells;
+    stats.diverged = st.diverged != 0;
     stats.moving_fragments = st.fragments;
     return stats;
 }

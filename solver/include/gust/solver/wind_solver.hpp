@@ -66,6 +66,8 @@ struct SolverDesc {
     float vorticity = 0.2f;              ///< confinement strength ε (0: off)
     float viscosity = 0.0f;              ///< kinematic viscosity, m^2/s (0: off)
     float emitter_response = 0.1f;       ///< seconds for an emitter to close 63% of the gap, > 0
+    /// m/s, in (0, 256]: a moving surface pushes the air at most this fast (docs/solver.md "Motion").
+    float max_solid_speed = 50.0f;
     /// Start each pressure solve from the last step's pressure, scaled to fit (docs/solver.md); false:
     /// from zero every step.
     bool warm_start = true;
@@ -94,6 +96,9 @@ struct WindStats {
     bool converged = false;            ///< the tolerance was met
     std::uint32_t cut_cells = 0;       ///< cells holding solid voxels
     std::uint32_t fluid_cells = 0;     ///< cells with an open face
+    std::uint32_t sealed_cells = 0;    ///< cells whose free voxels reach no open side (solid for the wind)
+    /// The pressure solve diverged (docs/solver.md "Stability") and was stopped: nothing was projected.
+    bool diverged = false;
     std::uint32_t moving_fragments = 0;
     gpu::Timings ms; ///< GPU milliseconds per pass (when timed)
 };
@@ -131,7 +136,9 @@ class WindSolver : public gpu::HostObject {
     /// confinement, viscosity, projection. Blocks until the GPU is done.
     Result<WindStats> step(float dt, const SolidSource* solid = nullptr);
 
-    /// Face velocities (m/s) in the layout of shaders/solver/solver_io.h: x faces, then y, then z.
+    /// Face velocities (m/s) in the layout of shaders/solver/solver_io.h: x faces, then y, then z. Closed
+    /// faces within two faces of the air hold the air's velocity extended into the solid (extend_face),
+    /// deeper ones the solid's; read_solid_velocity() has what the solid imposes on closed faces.
     /// The field is replaced, so the next pressure solve starts from zero rather than warm.
     Status set_velocity(std::span<const float> faces);
     Result<std::vector<float>> read_velocity() const;
@@ -141,11 +148,15 @@ class WindSolver : public gpu::HostObject {
     Result<std::vector<float>> read_solid_velocity() const;
     /// Pressure per cell, Pa (air density 1.2 kg/m^3), of the last step.
     Result<std::vector<float>> read_pressure() const;
-    /// Fraction of each cell's voxels that are solid, of the last step.
+    /// Fraction of each cell's voxels that are solid for the wind (occupied or sealed), of the last step:
+    /// 1 inside closed meshes.
     Result<std::vector<float>> read_solid_fraction() const;
+    /// Velocity (m/s, world) at each cell's centre, index x + X·(y + Y·z): the air's (the mean of its
+    /// faces) where the cell has air, the solid's own where it has none. Blocks.
+    Result<std::vector<glm::vec3>> read_cell_velocity();
 
-    /// Velocity (m/s, world) at each world point: trilinear on the faces, the ambient wind outside the
-    /// grid. Points must be finite. Blocks.
+    /// Velocity (m/s, world) at each world point: inside a solid the solid's own, in the air trilinear on
+    /// the faces, the ambient wind outside the grid. Points must be finite. Blocks.
     Result<std::pmr::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
     /// Writes each cell's texel into `texels` (8 bytes per cell, index x + X·(y + Y·z)): the velocity at
     /// the cell's centre (m/s) and 1 − its solid fraction, as four half floats; then records `then`
@@ -204,8 +215,5 @@ class WindSolver : public gpu::HostObject {
     std::uint32_t cycles_to_record_ = 0; ///< V-cycles the next step records (MGPCG and multigrid)
     std::unique_ptr<Impl> impl_;
 };
-
-/// Cell-centred velocity (m/s) from face velocities: the mean of each cell's two faces per axis.
-std::vector<glm::vec3> cell_velocities(glm::uvec3 cells, std::span<const float> faces);
 
 } // namespace gust

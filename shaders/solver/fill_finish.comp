@@ -1,0 +1,59 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The outside-air fill's end, per wind cell: a part is air when its set holds node 0 (it reaches an open
+// domain side), else sealed. The cell's air is its first part that is air (kCellSecondPart when that is
+// part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
+// and adds a moving cell's mean fragment velocity to each sealed region it borders, so the air sealed
+// inside a moving solid moves with it (solid_motion_of).
+#include "solver_common.glsl"
+
+layout(local_size_x = kSolverGroupSize) in;
+
+shared uint group_sealed;
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    if (gl_LocalInvocationIndex == 0u) group_sealed = 0u;
+    barrier();
+    if (i < n.x * n.y * n.z) {
+        uint v = sb().b.voxels_per_cell;
+        uint flags = flags_at(i);
+        uint counts[2];
+        uint roots[2];
+        for (uint k = 0u; k < kCellParts; ++k) {
+            counts[k] = bits_count(part_of(i, flags, k));
+            uint node = part_node(uint(i), k);
+            roots[k] = counts[k] != 0u ? uf_find(node) : node;
+            atomicMin(LabelsRef(sb().b.labels).v[node], roots[k]);
+        }
+        uint add = 0u, air = 0u;
+        if (counts[0] != 0u && roots[0] == kOutsideNode) {
+            air = counts[0];
+        } else if (counts[1] != 0u && roots[1] == kOutsideNode) {
+            air = counts[1];
+            add = kCellSecondPart;
+        } else {
+            add = kCellNoAir;
+            if (counts[0] != 0u) atomicAdd(group_sealed, 1u);
+        }
+        FloatsRef(sb().b.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
+        if ((flags & kCellMoving) != 0u) {
+            ivec4 m = IVec4Ref(sb().b.cell_motion).v[i];
+            ivec4 mean = ivec4(m.xyz / m.w, 1);
+            for (uint k = 0u; k < kCellParts; ++k) {
+                if (counts[k] == 0u || roots[k] == kOutsideNode) continue;
+                IVec4Ref region = IVec4Ref(sb().b.region_motion);
+                atomicAdd(region.v[roots[k]].x, mean.x);
+                atomicAdd(region.v[roots[k]].y, mean.y);
+                atomicAdd(region.v[roots[k]].z, mean.z);
+                atomicAdd(region.v[roots[k]].w, mean.w);
+                uint root_cell = (roots[k] - 1u) / kCellParts, root_part = (roots[k] - 1u) % kCellParts;
+                atomicOr(WordsRef(sb().b.cell_flags).v[root_cell], kCellRegion << root_part);
+            }
+        }
+        if (add != 0u) atomicOr(WordsRef(sb().b.cell_flags).v[i], add);
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u && group_sealed > 0u) atomicAdd(state().s.sealed_cells, group_sealed);
+}
