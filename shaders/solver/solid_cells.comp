@@ -71,7 +71,7 @@ void main() {
 
     uint words = sb().b.mask_words;
     uint stride = sb().b.mask_stride;
-    CellBits occupied = bits_none();
+    CellBits occupied = bits_none(), held = bits_none();
     ivec3 cached_brick = ivec3(-1);
     uint block = 0u;
     for (uint z = 0u; z < v; ++z)
@@ -88,11 +88,11 @@ void main() {
                 if (block == 0u) continue;
                 uint bit = child_slot(uvec3(voxel), levels - 1u, levels, b_log2());
                 uint base = block * stride + bit / 32u;
-                uint word = WordsRef(sb().b.tree_masks).v[base] | WordsRef(sb().b.tree_masks).v[base + words];
-                if ((word >> (bit % 32u) & 1u) != 0u) {
-                    uint j = x + v * (y + v * z);
-                    occupied.w[j / 32u] |= 1u << (j % 32u);
-                }
+                uint static_word = WordsRef(sb().b.tree_masks).v[base];
+                uint word = static_word | WordsRef(sb().b.tree_masks).v[base + words];
+                uint j = x + v * (y + v * z);
+                if ((word >> (bit % 32u) & 1u) != 0u) occupied.w[j / 32u] |= 1u << (j % 32u);
+                if ((static_word >> (bit % 32u) & 1u) != 0u) held.w[j / 32u] |= 1u << (j % 32u);
             }
     if (bits_count(occupied) == 0u) return;
     CellBits faces[6];
@@ -102,6 +102,11 @@ void main() {
     uint cw = sb().b.cell_words;
     for (uint k = 0u; k < kCellParts; ++k)
         for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
-    flags.v[i] = kCellCut;
+    uint cut = kCellCut;
+    if (bits_count(held) != 0u) {
+        for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_static).v[uint(i) * cw + w] = held.w[w];
+        cut |= kCellStatic;
+    }
+    flags.v[i] = cut;
     atomicAdd(state().s.cut_cells, 1u);
 }

@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Per four faces (one word of open_counts): the open voxel pairs between the air of the cells on both
 // sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
-// both cells (or the sealed region a cell without air lies in).
+// both cells (or the sealed region a cell without air lies in), over the share of the face's closed pairs
+// that touch no static solid (moving_share).
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -16,6 +17,16 @@ uint flags_of(ivec3 c) {
 ivec4 motion_of(ivec3 c, uint flags) {
     ivec3 n = sb().b.dims;
     return inside_cells(n, c) ? solid_motion_of(cell_index(n, c), flags) : ivec4(0);
+}
+
+CellBits static_at(ivec3 c, uint flags) {
+    ivec3 n = sb().b.dims;
+    if (!inside_cells(n, c) || (flags & kCellStatic) == 0u) return bits_none();
+    CellBits b = bits_none();
+    uint cw = sb().b.cell_words;
+    int i = cell_index(n, c);
+    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(sb().b.cell_static).v[uint(i) * cw + w];
+    return b;
 }
 
 CellBits air_at(ivec3 c, uint flags) {
@@ -44,7 +55,13 @@ void main() {
         }
         counts |= open << (8 * k);
         ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
-        FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
+        float share = 1.0;
+        if (m.w > 0 && ((flags_lo | flags_hi) & kCellStatic) != 0u) {
+            CellBits faces[6];
+            load_face_masks(faces);
+            share = moving_share(v * v - open, face_any_count(static_at(lo, flags_lo), static_at(f, flags_hi), axis, v, faces));
+        }
+        FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
     }
     WordsRef(sb().b.open_counts).v[t] = counts;
 }

@@ -100,6 +100,7 @@ GUST_CONST uint kCellMoving = 2u;     ///< moving fragments were summed into cel
 GUST_CONST uint kCellNoAir = 4u;      ///< no part reaches an open side: the whole cell is solid for the wind
 GUST_CONST uint kCellSecondPart = 8u; ///< its air is part 1 (part 0 is sealed)
 GUST_CONST uint kCellRegion = 16u;    ///< << k: node k of this cell roots a sealed region with motion sums
+GUST_CONST uint kCellStatic = 64u;    ///< holds static solid voxels: they are in SolverBindings::cell_static
 
 /// Union-find node of part k of cell `cell`; node 0 stands for the air beyond the open domain sides.
 GUST_CONST uint kOutsideNode = 0u;
@@ -133,6 +134,7 @@ struct SolverBindings {
     GUST_ADDRESS scratch;        ///< float[cells]: kCellScratch
     GUST_ADDRESS cell_solid;     ///< float[cells]: share of the cell's voxels that are not its air
     GUST_ADDRESS cell_parts;     ///< uint[cells * kCellParts * cell_words]: cut cells' parts (cell_parts)
+    GUST_ADDRESS cell_static;    ///< uint[cells * cell_words]: kCellStatic cells' static solid voxels
     GUST_ADDRESS cell_flags;     ///< uint[cells]: kCell* flags
     GUST_ADDRESS cell_motion;    ///< ivec4[cells]: fixed-point fragment velocity sums and count
     GUST_ADDRESS labels;         ///< uint[1 + kCellParts * cells]: union-find parents (part_node ids)
@@ -534,6 +536,24 @@ GUST_INLINE uint face_open_count(CellBits low, CellBits high, uint axis, uint v,
     CellBits b = bits_and(high, faces[2u * axis]);
     uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
     return bits_count(bits_and(bits_down(a, shift), b));
+}
+
+/// Voxel pairs across the face between cells `low` and `high` along `axis` with a voxel of the given sets on
+/// either side (the static solid's, where a moving surface's push does not count: moving_share).
+GUST_INLINE uint face_any_count(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
+    CellBits a = bits_and(low, faces[2u * axis + 1u]);
+    CellBits b = bits_and(high, faces[2u * axis]);
+    uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
+    return bits_count(bits_or(bits_down(a, shift), b));
+}
+
+/// The share of a face's closed voxel pairs a moving solid pushes with: those with no static solid voxel.
+/// Where a moving surface touches a static one (a foot on the ground, a piston along its duct's wall) their
+/// voxels overlap, and a pair against the static solid carries no motion (it slides, the wall stays put).
+/// Without it the cells a moving and a static surface share pushed with their whole closed part: a piston
+/// filling a duct drove the air 30% faster than itself.
+GUST_INLINE float moving_share(uint closed, uint static_pairs) {
+    return closed > 0u ? float(closed - min(static_pairs, closed)) / float(closed) : 1.0f;
 }
 
 /// The share of one voxel pair in a face, 1 / v^2. Computed on the host (IEEE division); the shaders

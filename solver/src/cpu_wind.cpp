@@ -49,6 +49,7 @@ struct CpuWind::Impl {
     std::vector<float> solid_fraction;
     std::vector<std::uint32_t> flags;      ///< shaderio::kCell*
     std::vector<CellBits> parts;           ///< kCellParts per cell
+    std::vector<CellBits> fixed;           ///< per cell, its static solid voxels
     std::vector<glm::ivec4> motion;        ///< per cell, as cell_motion
     std::vector<std::uint32_t> roots;      ///< per part node: its set's root (the smallest node id)
     std::vector<glm::ivec4> region_motion; ///< per root node, as region_motion
@@ -122,6 +123,7 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
     m.solid_fraction.assign(m.cells(), 0.0f);
     m.flags.assign(m.cells(), 0);
     m.parts.assign(m.cells() * shaderio::kCellParts, shaderio::bits_none());
+    m.fixed.assign(m.cells(), shaderio::bits_none());
     m.motion.assign(m.cells(), glm::ivec4(0));
     m.roots.assign(1 + shaderio::kCellParts * m.cells(), 0);
     m.region_motion.assign(m.roots.size(), glm::ivec4(0));
@@ -309,20 +311,23 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         flags[cell] = 0;
         if (!solid || solid->occupied.empty()) return;
         CellBits occupied = bits_none();
+        fixed[cell] = bits_none();
         for (std::uint32_t z = 0; z < v; ++z)
             for (std::uint32_t y = 0; y < v; ++y)
                 for (std::uint32_t x = 0; x < v; ++x) {
                     const glm::ivec3 p = c * int(v) + glm::ivec3(x, y, z);
-                    if (!solid->occupied[std::size_t(p.x) +
-                                         std::size_t(voxels.x) *
-                                             (std::size_t(p.y) + std::size_t(voxels.y) * p.z)])
-                        continue;
+                    const std::uint8_t here =
+                        solid->occupied[std::size_t(p.x) +
+                                        std::size_t(voxels.x) *
+                                            (std::size_t(p.y) + std::size_t(voxels.y) * p.z)];
+                    if (here == 0) continue;
                     const std::uint32_t j = x + v * (y + v * z);
                     occupied.w[j / 32] |= 1u << (j % 32);
+                    if (here == CpuSolid::kStatic) fixed[cell].w[j / 32] |= 1u << (j % 32);
                 }
         if (bits_count(occupied) == 0) return;
         cell_parts(occupied, v, faces_layers, parts[kCellParts * cell], parts[kCellParts * cell + 1]);
-        flags[cell] = kCellCut;
+        flags[cell] = kCellCut | (bits_count(fixed[cell]) != 0 ? kCellStatic : 0u);
         ++stats.cut_cells;
     });
     if (solid)
@@ -346,6 +351,11 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
     auto motion_at = [&](glm::ivec3 c) {
         return inside_cells(k.dims, c) ? solid_motion_of(std::size_t(cell_index(k.dims, c))) : glm::ivec4(0);
     };
+    auto static_at = [&](glm::ivec3 c) {
+        if (!inside_cells(k.dims, c)) return bits_none();
+        const std::size_t i = std::size_t(cell_index(k.dims, c));
+        return (flags[i] & kCellStatic) != 0 ? fixed[i] : bits_none();
+    };
     each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
         const glm::ivec3 lo = f - axis_unit(axis);
         float open = 1.0f;
@@ -353,8 +363,14 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
             open = face_open_fraction(air_at(lo), air_at(f), axis, v, faces_layers);
         k.weights[std::size_t(i)] = open;
         const glm::ivec4 m = motion_at(lo) + motion_at(f);
+        float share = 1.0f;
+        if (m.w > 0 && ((flags_at(lo) | flags_at(f)) & kCellStatic) != 0) {
+            const std::uint32_t closed =
+                v * v - face_open_count(air_at(lo), air_at(f), axis, v, faces_layers);
+            share = moving_share(closed, face_any_count(static_at(lo), static_at(f), axis, v, faces_layers));
+        }
         k.face[kFieldSolid][std::size_t(i)] =
-            m.w > 0 ? float(m[int(axis)]) / (kVelocityScale * float(m.w)) : 0.0f;
+            m.w > 0 ? share * float(m[int(axis)]) / (kVelocityScale * float(m.w)) : 0.0f;
     });
 }
 

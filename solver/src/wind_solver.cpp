@@ -66,8 +66,9 @@ struct WindSolver::Impl : gpu::HostObject {
         coarse_weights, advect, forces, vorticity, confine, diffuse, divergence, relax, residual, restrict_,
         prolong, coarse_solve, check, cg, cg_scalars, project, extend, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
-        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_flags, cell_motion,
-        labels, region_motion, vorticity_buf, emitters, state, dispatch, bindings, points, samples;
+        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
+        cell_motion, labels, region_motion, vorticity_buf, emitters, state, dispatch, bindings, points,
+        samples;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
     std::uint32_t emitter_count = 0;
@@ -176,6 +177,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.partials, std::uint64_t(level0_groups.x) * level0_groups.y * 8, gpu::MemoryUse::Device, 0},
         {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_parts, cells * shaderio::kCellParts * words_per_cell * 4, gpu::MemoryUse::Device, 0},
+        {&m.cell_static, cells * words_per_cell * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
         {&m.cell_motion, cells * 16, gpu::MemoryUse::Device, 0},
         {&m.labels, nodes * 4, gpu::MemoryUse::Device, 0},
@@ -223,6 +225,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.partial_count = level0_groups.x * level0_groups.y;
     b.cell_solid = m.cell_solid.address();
     b.cell_parts = m.cell_parts.address();
+    b.cell_static = m.cell_static.address();
     b.cell_flags = m.cell_flags.address();
     b.cell_motion = m.cell_motion.address();
     b.labels = m.labels.address();

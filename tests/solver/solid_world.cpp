@@ -53,7 +53,18 @@ CpuSolid SolidWorld::cpu() const {
     for (std::uint32_t key : *keys) {
         const glm::uvec3 v(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u);
         if (v.x < voxels.x && v.y < voxels.y && v.z < voxels.z)
-            solid.occupied[v.x + std::size_t(voxels.x) * (v.y + std::size_t(voxels.y) * v.z)] = 1;
+            solid.occupied[v.x + std::size_t(voxels.x) * (v.y + std::size_t(voxels.y) * v.z)] =
+                CpuSolid::kMoving;
+    }
+    // The static voxelizer's fragments (one per voxel and triangle) mark the static solid.
+    auto fixed = world_->static_voxelizer().read_fragments();
+    EXPECT_TRUE(fixed) << fixed.message();
+    if (!fixed) return solid;
+    for (std::uint32_t key : *fixed) {
+        const glm::uvec3 v(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u);
+        if (v.x < voxels.x && v.y < voxels.y && v.z < voxels.z)
+            solid.occupied[v.x + std::size_t(voxels.x) * (v.y + std::size_t(voxels.y) * v.z)] =
+                CpuSolid::kStatic;
     }
     const Voxelizer& moving = world_->dynamic_voxelizer();
     auto fragments = moving.read_fragments();
@@ -66,18 +77,6 @@ CpuSolid SolidWorld::cpu() const {
                                      (*velocities)[i]);
     }
     return solid;
-}
-
-TestMesh box(glm::vec3 lo, glm::vec3 hi) {
-    TestMesh mesh;
-    for (int i = 0; i < 8; ++i)
-        mesh.positions.push_back(
-            glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
-    const std::uint32_t faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-    for (const auto& q : faces)
-        mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
-    return mesh;
 }
 
 } // namespace gust::test

@@ -38,7 +38,4 @@ class SolidWorld {
     std::vector<GpuMesh> meshes_;
 };
 
-/// A box mesh (12 triangles) from lo to hi, world space.
-TestMesh box(glm::vec3 lo, glm::vec3 hi);
-
 } // namespace gust::test

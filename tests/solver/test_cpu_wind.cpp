@@ -192,7 +192,10 @@ TEST_P(CpuMatchesGpu, onASmallGridWithSolids) {
 
     SolidWorld solids(ctx(), desc);
     const float dt = 0.1f;
+    // The moving box's foot sinks into a static slab: cells where both lie push only with the pairs that
+    // touch no static voxel (moving_share).
     solids.update({{icosphere(2, {5.2f, 7.9f, 8.3f}, 2.6f), glm::mat4(1.0f), std::nullopt},
+                   {box({0.6f, 2.2f, 0.7f}, {15.3f, 4.3f, 15.4f}), glm::mat4(1.0f), std::nullopt},
                    {box({9.3f, 4.1f, 4.4f}, {12.6f, 11.2f, 10.7f}),
                     glm::translate(glm::mat4(1.0f), {0.2f, 0.1f, 0.0f}), glm::mat4(1.0f)}},
                   dt);

@@ -276,4 +276,16 @@ TestMesh icosphere(int subdivisions, glm::vec3 centre, float radius) {
     return mesh;
 }
 
+TestMesh box(glm::vec3 lo, glm::vec3 hi) {
+    TestMesh mesh;
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.push_back(
+            glm::vec3((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
+    const std::uint32_t faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& q : faces)
+        mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    return mesh;
+}
+
 } // namespace gust::test

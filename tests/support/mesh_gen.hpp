@@ -46,6 +46,9 @@ struct BadTriangles {
 /// Degenerate input for the rejection rules; the good triangles lie in [0.1, 0.9]^3.
 BadTriangles bad_triangles();
 
+/// A closed box (12 triangles) from lo to hi, world space.
+TestMesh box(glm::vec3 lo, glm::vec3 hi);
+
 /// A sphere of `radius` metres around `centre`: an icosahedron subdivided `subdivisions` times (20 * 4^s
 /// triangles, shared vertices), vertices projected onto the sphere.
 TestMesh icosphere(int subdivisions, glm::vec3 centre, float radius);

@@ -15,8 +15,10 @@ namespace gust {
 /// A dense solid boundary for the CPU version, in voxels of cell_size / voxels_per_cell from the
 /// grid's min corner.
 struct CpuSolid {
-    /// Occupancy of voxel (x, y, z), index x + X·(y + Y·z) over cells · voxels_per_cell voxels per axis.
+    /// Occupancy of voxel (x, y, z), index x + X·(y + Y·z) over cells · voxels_per_cell voxels per axis:
+    /// 0 free, kMoving for moving surfaces only, kStatic where a static surface is (moving ones too or not).
     std::vector<std::uint8_t> occupied;
+    static constexpr std::uint8_t kMoving = 1, kStatic = 2;
     /// Moving surfaces: voxel and velocity (m/s) per fragment.
     std::vector<std::pair<glm::ivec3, glm::vec3>> fragments;
 };
