@@ -326,18 +326,26 @@ gust_wind_domain to_c(const gust::WindDomain& d) {
             .focus = to_c(focus)};
 }
 
+// The advection is passed on unchecked: System::create rejects unknown ones.
 gust::WindSettings to_cpp(const gust_wind_settings& c) {
     gust::WindSettings out;
-    auto& [tolerance, max_cycles, vorticity, viscosity] = out;
+    auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed] = out;
     tolerance = c.tolerance;
     max_cycles = c.max_cycles;
     vorticity = c.vorticity;
     viscosity = c.viscosity;
+    advection = to_cpp_enum<gust::WindAdvection>(c.advection);
+    max_solid_speed = c.max_solid_speed;
     return out;
 }
 gust_wind_settings to_c(const gust::WindSettings& w) {
-    const auto& [tolerance, max_cycles, vorticity, viscosity] = w;
-    return {.tolerance = tolerance, .max_cycles = max_cycles, .vorticity = vorticity, .viscosity = viscosity};
+    const auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed] = w;
+    return {.tolerance = tolerance,
+            .max_cycles = max_cycles,
+            .vorticity = vorticity,
+            .viscosity = viscosity,
+            .advection = static_cast<gust_advection>(static_cast<std::int32_t>(advection)),
+            .max_solid_speed = max_solid_speed};
 }
 
 // `host_device` is the converted c.host (or null); the hooks trampoline into `hooks_in_handle`.
@@ -437,8 +445,8 @@ gust_wind_texture to_c(const gust::WindTexture& t) {
 // The per-pass times stay in the C++ stats (gust_system_stats_pass reads them there).
 gust_frame_stats to_c(const gust::FrameStats& f) {
     const auto& [frame, fragments, voxels, nodes, refined, coarsened, pool_bytes, fragment_bytes, dense_bytes,
-                 divergence_before, divergence_after, residual, cycles, converged, rejected_triangles, ms] =
-        f;
+                 divergence_before, divergence_after, residual, cycles, converged, diverged, sealed_cells,
+                 rejected_triangles, ms] = f;
     return {.frame = frame,
             .fragments = fragments,
             .voxels = voxels,
@@ -452,8 +460,10 @@ gust_frame_stats to_c(const gust::FrameStats& f) {
             .divergence_after = divergence_after,
             .residual = residual,
             .cycles = cycles,
+            .sealed_cells = sealed_cells,
             .rejected_triangles = rejected_triangles,
-            .converged = converged};
+            .converged = converged,
+            .diverged = diverged};
 }
 
 std::vector<gust::Vec3> to_cpp(const gust_vec3* points, std::size_t count) {
@@ -636,15 +646,17 @@ gust_result gust_system_destroy_mesh(gust_system system, gust_mesh mesh) {
 }
 
 gust_result gust_system_set_vertices(gust_system system, gust_mesh mesh, const float* positions,
-                                     uint32_t vertex_count, uint32_t stride) {
-    return on_system(system, "gust_system_set_vertices",
-                     [&](gust::System& s) { return s.set_vertices(mesh, positions, vertex_count, stride); });
+                                     uint32_t vertex_count, uint32_t stride, bool teleport) {
+    return on_system(system, "gust_system_set_vertices", [&](gust::System& s) {
+        return s.set_vertices(mesh, positions, vertex_count, stride, teleport);
+    });
 }
 
 gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, VkBuffer buffer,
-                                            VkDeviceSize offset, uint32_t vertex_count) {
-    return on_system(system, "gust_system_set_vertices_buffer",
-                     [&](gust::System& s) { return s.set_vertices(mesh, buffer, offset, vertex_count); });
+                                            VkDeviceSize offset, uint32_t vertex_count, bool teleport) {
+    return on_system(system, "gust_system_set_vertices_buffer", [&](gust::System& s) {
+        return s.set_vertices(mesh, buffer, offset, vertex_count, teleport);
+    });
 }
 
 gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, const float transform[16],
@@ -660,10 +672,11 @@ gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, cons
     });
 }
 
-gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16]) {
+gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16],
+                                      bool teleport) {
     return on_system(system, "gust_system_set_transform", [&](gust::System& s) -> gust::Outcome {
         if (!transform) return invalid("transform is NULL");
-        return s.set_transform(instance, to_cpp_matrix(transform));
+        return s.set_transform(instance, to_cpp_matrix(transform), teleport);
     });
 }
 

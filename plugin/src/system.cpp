@@ -111,12 +111,14 @@ struct System::Impl {
         GpuMesh gpu;
         bool deforming = false;
         std::uint32_t instances = 0;
+        bool teleport = false; ///< the vertices set since the last step jumped (set_vertices)
     };
     struct Instance {
         MeshId mesh = 0;
         glm::mat4 model{1.0f};
         std::optional<glm::mat4> prev;
-        bool dynamic = false; ///< moving, or of a deforming mesh: voxelized every frame
+        bool dynamic = false;  ///< moving, or of a deforming mesh: voxelized every frame
+        bool teleport = false; ///< the transform set since the last step jumped (set_transform)
     };
     struct Pending {
         explicit Pending(std::pmr::memory_resource* memory) : points(memory), answer(memory) {}
@@ -264,6 +266,12 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
     out.max_cycles = desc.wind.max_cycles;
     out.vorticity = desc.wind.vorticity;
     out.viscosity = desc.wind.viscosity;
+    out.max_solid_speed = desc.wind.max_solid_speed;
+    if (desc.wind.advection != WindAdvection::MacCormack &&
+        desc.wind.advection != WindAdvection::SemiLagrangian)
+        return invalid("wind.advection must be MacCormack or SemiLagrangian");
+    out.advection =
+        desc.wind.advection == WindAdvection::MacCormack ? Advection::MacCormack : Advection::SemiLagrangian;
     if (!finite(d.focus)) return invalid("domain.focus must be finite");
     if (!std::isfinite(d.cell_size) || !(d.cell_size > 0.0f)) return invalid("domain.cell_size must be > 0");
     out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
@@ -465,7 +473,7 @@ Outcome System::destroy_mesh(MeshId mesh) {
 }
 
 Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
-                             std::uint32_t stride) {
+                             std::uint32_t stride, bool teleport) {
     Outcome error;
     Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
     if (!m) return error;
@@ -481,11 +489,13 @@ Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t 
                 return invalid("vertex " + std::to_string(v) + " is not finite");
         }
         if (Status s = impl_->world->update_positions(m->gpu, packed); !s) return device_failure(s);
+        m->teleport = m->teleport || teleport;
         return {};
     });
 }
 
-Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count) {
+Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
+                             bool teleport) {
     Outcome error;
     Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
     if (!m) return error;
@@ -494,6 +504,7 @@ Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, 
     if (offset % 4 != 0) return invalid("offset must be a multiple of 4");
     return guarded([&]() -> Outcome {
         if (Status s = impl_->world->copy_positions(m->gpu, buffer, offset); !s) return device_failure(s);
+        m->teleport = m->teleport || teleport;
         return {};
     });
 }
@@ -515,12 +526,13 @@ Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving,
     });
 }
 
-Outcome System::set_transform(InstanceId instance, const Mat4& transform) {
+Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool teleport) {
     auto it = impl_->instances.find(instance);
     if (it == impl_->instances.end())
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
     if (!finite(transform)) return invalid("transform must be finite");
     it->second.model = to_glm(transform);
+    it->second.teleport = it->second.teleport || teleport;
     if (!it->second.dynamic) impl_->static_dirty = true;
     return {};
 }
@@ -596,9 +608,13 @@ std::pmr::vector<GpuInstance> System::Impl::frame_instances() {
     std::pmr::vector<GpuInstance> dynamic(&memory);
     for (auto& [id, instance] : instances)
         if (instance.dynamic) {
-            dynamic.push_back({&meshes.at(instance.mesh).gpu, instance.model, instance.prev});
+            const Mesh& mesh = meshes.at(instance.mesh);
+            dynamic.push_back({&mesh.gpu, instance.model, instance.prev, instance.teleport || mesh.teleport});
             instance.prev = instance.model;
+            instance.teleport = false;
         }
+    for (auto& [id, mesh] : meshes)
+        mesh.teleport = false;
     return dynamic;
 }
 
@@ -620,6 +636,8 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
     st.residual = float(wind.residual);
     st.cycles = wind.cycles;
     st.converged = wind.converged;
+    st.diverged = wind.diverged;
+    st.sealed_cells = wind.sealed_cells;
     st.rejected_triangles =
         std::uint32_t(world_frame.dynamic_voxelize.rejected +
                       (world_frame.static_rebuilt ? world_frame.static_voxelize.rejected : 0));

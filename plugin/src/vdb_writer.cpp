@@ -60,8 +60,9 @@ Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::u
     velocity->setVectorType(openvdb::VEC_INVARIANT);
     auto pressure = openvdb::FloatGrid::create(0.0f);
     pressure->setName("pressure");
-    for (openvdb::GridBase* g : {static_cast<openvdb::GridBase*>(solid.get()), static_cast<openvdb::GridBase*>(velocity.get()),
-                                 static_cast<openvdb::GridBase*>(pressure.get())})
+    for (openvdb::GridBase* g :
+         {static_cast<openvdb::GridBase*>(solid.get()), static_cast<openvdb::GridBase*>(velocity.get()),
+          static_cast<openvdb::GridBase*>(pressure.get())})
         g->setTransform(transform->copy());
     auto s = solid->getAccessor();
     auto v = velocity->getAccessor();

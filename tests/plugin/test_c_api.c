@@ -230,6 +230,7 @@ static void fills_the_documented_defaults(void) {
     CHECK(desc.domain.focus.x == 0.0f && desc.domain.focus.y == 0.0f && desc.domain.focus.z == 0.0f);
     CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 32);
     CHECK(desc.wind.vorticity == 0.2f && desc.wind.viscosity == 0.0f);
+    CHECK(desc.wind.advection == GUST_ADVECTION_MACCORMACK && desc.wind.max_solid_speed == 50.0f);
     CHECK(desc.hooks.user == NULL && desc.hooks.allocate == NULL && desc.hooks.free == NULL &&
           desc.hooks.log == NULL && desc.hooks.assert_failed == NULL);
     /* The inline gust_system_desc_defaults calls gust_system_desc_init, whose name the message carries. */
@@ -333,10 +334,12 @@ static void rejects_bad_meshes_and_instances(gust_system system, gust_mesh box, 
     transform[13] = NAN;
     CHECK_RESULT(system, gust_system_create_instance(system, box, transform, false, &instance),
                  GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_set_transform(system, placed, transform), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_transform(system, placed, transform, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
     transform[13] = INFINITY;
-    CHECK_RESULT(system, gust_system_set_transform(system, placed, transform), GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_set_transform(system, placed, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_transform(system, placed, transform, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_transform(system, placed, NULL, false), GUST_ERROR_INVALID_ARGUMENT);
 
     /* A mesh in use cannot go; once its instance is gone it can, and both ids are dead for good. */
     CHECK_RESULT(system, gust_system_destroy_mesh(system, box), GUST_ERROR_INVALID_HANDLE);
@@ -347,7 +350,8 @@ static void rejects_bad_meshes_and_instances(gust_system system, gust_mesh box, 
     CHECK_RESULT(system, gust_system_create_instance(system, spare, transform, false, &instance), GUST_OK);
     CHECK(instance != 0 && instance != placed);
     CHECK_RESULT(system, gust_system_destroy_instance(system, instance), GUST_OK);
-    CHECK_RESULT(system, gust_system_set_transform(system, instance, transform), GUST_ERROR_INVALID_HANDLE);
+    CHECK_RESULT(system, gust_system_set_transform(system, instance, transform, false),
+                 GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(system, gust_system_destroy_instance(system, instance), GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(system, gust_system_destroy_instance(system, 0), GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(system, gust_system_destroy_mesh(system, spare), GUST_OK);
@@ -357,19 +361,20 @@ static void rejects_bad_meshes_and_instances(gust_system system, gust_mesh box, 
 
     /* Vertices: only deforming meshes take them, and only as many as they have; a vertex buffer needs a host
      * device. */
-    CHECK_RESULT(system, gust_system_set_vertices(system, box, kBoxPositions, 8, 16),
+    CHECK_RESULT(system, gust_system_set_vertices(system, box, kBoxPositions, 8, 16, false),
                  GUST_ERROR_INVALID_ARGUMENT);
     gust_mesh skinned = 0;
     desc = box_desc();
     desc.deforming = true;
     CHECK_RESULT(system, gust_system_create_mesh(system, &desc, &skinned), GUST_OK);
-    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, kBoxPositions, 8, 16), GUST_OK);
-    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, kBoxPositions, 7, 16),
+    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, kBoxPositions, 8, 16, false), GUST_OK);
+    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, kBoxPositions, 7, 16, false),
                  GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, NULL, 8, 16), GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_set_vertices(system, 12345, kBoxPositions, 8, 16),
+    CHECK_RESULT(system, gust_system_set_vertices(system, skinned, NULL, 8, 16, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_vertices(system, 12345, kBoxPositions, 8, 16, false),
                  GUST_ERROR_INVALID_HANDLE);
-    CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, VK_NULL_HANDLE, 0, 8),
+    CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, VK_NULL_HANDLE, 0, 8, false),
                  GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_destroy_mesh(system, skinned), GUST_OK);
 }
@@ -569,7 +574,7 @@ static void simulates_a_small_world(void) {
     for (int frame = 0; frame < frames; ++frame) {
         mover_at.x += 0.25f;
         scale_translate(transform, 0.5f, mover_at);
-        CHECK_RESULT(system, gust_system_set_transform(system, mover, transform), GUST_OK);
+        CHECK_RESULT(system, gust_system_set_transform(system, mover, transform, false), GUST_OK);
         CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
     }
 
@@ -948,11 +953,11 @@ static void runs_on_a_host_device_with_host_commands(void) {
             for (int a = 0; a < 3; ++a)
                 doubled[3 * v + a] = 2.0f * kBoxPositions[4 * v + a];
         host_buffer vertices = host_buffer_create(&host, doubled, sizeof doubled);
-        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 2, 8),
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 2, 8, false),
                      GUST_ERROR_INVALID_ARGUMENT);
-        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 9),
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 9, false),
                      GUST_ERROR_INVALID_ARGUMENT);
-        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 8),
+        CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, vertices.buffer, 0, 8, false),
                      GUST_OK);
         host_step(&host, system);
         host_step(&host, system);

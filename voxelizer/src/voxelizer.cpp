@@ -442,7 +442,7 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
         r.prev_positions = mesh.prev_positions_ ? mesh.prev_positions_.address() : r.positions;
         r.indices = mesh.indices_ ? mesh.indices_.address() : 0;
         r.triangle_count = mesh.triangles_;
-        r.inv_dt = inv_dt_;
+        r.inv_dt = inst.teleport ? 0.0f : inv_dt_;
     }
     const std::size_t with_velocity = inv_dt_ > 0.0f ? 1 : 0;
     VoxelizePush push{};

@@ -34,7 +34,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 3
+#define GUST_VERSION_MINOR 4
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -129,11 +129,19 @@ typedef struct gust_wind_domain {
 } gust_wind_domain;
 
 /// Numerics of the wind (the defaults suit game wind; docs/solver.md explains each).
+/// How the wind carries itself along (gust::WindAdvection).
+typedef enum gust_advection {
+    GUST_ADVECTION_MACCORMACK = 0,      ///< second order, clamped (the default)
+    GUST_ADVECTION_SEMI_LAGRANGIAN = 1, ///< first order: cheaper, smooths the flow next to obstacles
+} gust_advection;
+
 typedef struct gust_wind_settings {
-    float tolerance;     ///< relative residual the pressure solve stops at
-    uint32_t max_cycles; ///< V-cycles per step at most
-    float vorticity;     ///< vorticity confinement epsilon (0: off)
-    float viscosity;     ///< m^2/s (0: off)
+    float tolerance;          ///< relative residual the pressure solve stops at
+    uint32_t max_cycles;      ///< V-cycles per step at most
+    float vorticity;          ///< vorticity confinement epsilon (0: off)
+    float viscosity;          ///< m^2/s (0: off)
+    gust_advection advection; ///< GUST_ADVECTION_MACCORMACK by default
+    float max_solid_speed;    ///< m/s, in (0, 256]: the fastest a moving surface pushes air (default 50)
 } gust_wind_settings;
 
 /// How a system's GPU work reaches a queue.
@@ -227,8 +235,10 @@ typedef struct gust_frame_stats {
     float divergence_after;      ///< max |divergence| after projection, 1/s
     float residual;              ///< max |residual| at the solve's last check, 1/s
     uint32_t cycles;             ///< V-cycles (or iterations) the pressure solve ran
+    uint32_t sealed_cells;       ///< cells whose air is sealed inside solids (solid for the wind)
     uint32_t rejected_triangles; ///< triangles with non-finite vertices after transform this frame
     bool converged;              ///< the pressure solve reached the tolerance
+    bool diverged;               ///< the solve diverged and was stopped; the step projected nothing
 } gust_frame_stats;
 
 /// The voxel grid of the solid boundary (gust_system_debug_voxel_grid). Voxel (i, j, k) is the world-space
@@ -310,22 +320,25 @@ gust_result gust_system_create_mesh(gust_system system, const gust_mesh_desc* de
 gust_result gust_system_destroy_mesh(gust_system system, gust_mesh mesh);
 
 /// New mesh-space positions for a deforming mesh (vertex_count of them, `stride` bytes apart, read during the
-/// call), used from the next step on; the previous pose gives the surface velocity.
+/// call), used from the next step on; the previous pose gives the surface velocity. `teleport`: the change is
+/// a jump (an animation loop's wrap), so the next step's surfaces of this mesh push no air.
 gust_result gust_system_set_vertices(gust_system system, gust_mesh mesh, const float* positions,
-                                     uint32_t vertex_count, uint32_t stride);
+                                     uint32_t vertex_count, uint32_t stride, bool teleport);
 
 /// The same from a host VkBuffer (host device only): vertex_count packed float3 at `offset` bytes, copied on
 /// gust's queue at the next step; the host keeps the buffer unchanged until gust_system_step returns.
 gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, VkBuffer buffer,
-                                            VkDeviceSize offset, uint32_t vertex_count);
+                                            VkDeviceSize offset, uint32_t vertex_count, bool teleport);
 
 /// Places `mesh` with a column-major mesh-to-world `transform` (16 finite floats); moving instances are
 /// voxelized every frame, static ones once. `*instance` receives its id.
 gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, const float transform[16],
                                         bool moving, gust_instance* instance);
 
-/// Sets an instance's column-major mesh-to-world transform (16 finite floats).
-gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16]);
+/// Sets an instance's column-major mesh-to-world transform (16 finite floats). `teleport`: the change is a
+/// jump (a respawn, a cut), so the next step moves the solid without pushing air.
+gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16],
+                                      bool teleport);
 
 /// Removes an instance; its id is dead afterwards.
 gust_result gust_system_destroy_instance(gust_system system, gust_instance instance);

@@ -21,7 +21,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 3;
+inline constexpr std::uint32_t kVersionMinor = 4;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -120,12 +120,22 @@ struct WindDomain {
     Vec3 focus{};                          ///< the domain's first centre (player or camera)
 };
 
+/// How the wind carries itself along (docs/solver.md "Advection").
+enum class WindAdvection : std::int32_t {
+    MacCormack = 0,     ///< second order, clamped: keeps the speed-up beside obstacles over many steps
+    SemiLagrangian = 1, ///< first order: a third of the cost, smooths the flow next to obstacles
+};
+
 /// Numerics of the wind (defaults suit game wind; docs/solver.md explains each).
 struct WindSettings {
     float tolerance = 1e-5f;       ///< relative residual the pressure solve stops at
     std::uint32_t max_cycles = 32; ///< V-cycles per step at most (docs/solver.md: about 48 for 128^3)
     float vorticity = 0.2f;        ///< vorticity confinement ε (0: off)
     float viscosity = 0.0f;        ///< m^2/s (0: off)
+    WindAdvection advection = WindAdvection::MacCormack;
+    /// m/s, in (0, 256]: the fastest a moving surface pushes air; faster surface motion is clamped to it
+    /// (docs/solver.md "Motion"). A jump meant as a teleport should say so (set_transform's `teleport`).
+    float max_solid_speed = 50.0f;
 };
 
 /// How a System's GPU work reaches a queue.
@@ -215,20 +225,24 @@ struct WindTexture {
 
 /// What one step did (GPU milliseconds per pass where the device has timestamps).
 struct FrameStats {
-    std::uint64_t frame = 0;              ///< 0 for the first step
-    std::uint64_t fragments = 0;          ///< voxel fragments of the static and moving surfaces
-    std::uint64_t voxels = 0;             ///< voxels set in the tree's leaves
-    std::uint64_t nodes = 0;              ///< tree nodes, root included
-    std::uint64_t refined = 0;            ///< tree blocks handed out this step
-    std::uint64_t coarsened = 0;          ///< tree blocks taken back this step
-    std::uint64_t pool_bytes = 0;         ///< bytes of live tree blocks
-    std::uint64_t fragment_bytes = 0;     ///< bytes of the fragment lists
-    std::uint64_t dense_bytes = 0;        ///< bytes a dense voxel grid of the same size would take
-    float divergence_before = 0.0f;       ///< max |divergence| before projection, 1/s
-    float divergence_after = 0.0f;        ///< the same after, 1/s
-    float residual = 0.0f;                ///< max |residual| of the pressure solve, 1/s
-    std::uint32_t cycles = 0;             ///< V-cycles the solve took
-    bool converged = false;               ///< the solve met its tolerance
+    std::uint64_t frame = 0;          ///< 0 for the first step
+    std::uint64_t fragments = 0;      ///< voxel fragments of the static and moving surfaces
+    std::uint64_t voxels = 0;         ///< voxels set in the tree's leaves
+    std::uint64_t nodes = 0;          ///< tree nodes, root included
+    std::uint64_t refined = 0;        ///< tree blocks handed out this step
+    std::uint64_t coarsened = 0;      ///< tree blocks taken back this step
+    std::uint64_t pool_bytes = 0;     ///< bytes of live tree blocks
+    std::uint64_t fragment_bytes = 0; ///< bytes of the fragment lists
+    std::uint64_t dense_bytes = 0;    ///< bytes a dense voxel grid of the same size would take
+    float divergence_before = 0.0f;   ///< max |divergence| before projection, 1/s
+    float divergence_after = 0.0f;    ///< the same after, 1/s
+    float residual = 0.0f;            ///< max |residual| of the pressure solve, 1/s
+    std::uint32_t cycles = 0;         ///< V-cycles the solve took
+    bool converged = false;           ///< the solve met its tolerance
+    /// The solve diverged (an inconsistent problem): it was stopped and this step projected nothing, so
+    /// the wind stays bounded; converged is false. docs/solver.md "Stability".
+    bool diverged = false;
+    std::uint32_t sealed_cells = 0;       ///< cells whose air is sealed inside solids (solid for the wind)
     std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
     /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate).
     using Timings = std::pmr::vector<std::pair<std::pmr::string, double>>;
@@ -284,18 +298,23 @@ class System {
     /// Destroys a mesh; fails with InvalidHandle while an instance still uses it.
     Outcome destroy_mesh(MeshId mesh);
     /// New positions for a deforming mesh (a skinned pose), vertex_count of them with `stride` bytes
-    /// between; used from the next step on, the previous pose gives the surface velocity.
+    /// between; used from the next step on, the previous pose gives the surface velocity. `teleport`: the
+    /// change from the previous pose is a jump (an animation loop's wrap, a new clip), not motion, so the
+    /// next step's surfaces of this mesh push no air.
     Outcome set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
-                         std::uint32_t stride = 12);
+                         std::uint32_t stride = 12, bool teleport = false);
     /// The same from a host VkBuffer (host device only): vertex_count tightly packed float3 at `offset`,
     /// copied on gust's queue at the next step; the host keeps the buffer unchanged until step() returns.
-    Outcome set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count);
+    Outcome set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
+                         bool teleport = false);
 
     /// Places a mesh. Static instances are voxelized once (again only when the static set changes);
     /// moving ones every frame, with velocities from their last transform.
     Outcome create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id);
     /// Sets an instance's mesh-to-world transform (finite; a static instance's move re-voxelizes the set).
-    Outcome set_transform(InstanceId instance, const Mat4& transform);
+    /// A moving instance's velocity comes from its last transform; with `teleport` the change is a jump
+    /// (a respawn, a cut), so the next step moves the solid without pushing air.
+    Outcome set_transform(InstanceId instance, const Mat4& transform, bool teleport = false);
     /// Removes an instance; its mesh may then be destroyed.
     Outcome destroy_instance(InstanceId instance);
 

@@ -54,8 +54,8 @@ struct SolverDesc {
     float cell_size = 1.0f;            ///< metres, > 0
     glm::vec3 origin{0.0f};            ///< world position of the grid's min corner, metres
     std::uint32_t voxels_per_cell = 4; ///< tree voxels per cell per axis, 1..8
-    /// Semi-Lagrangian by default: docs/solver.md ("Advection") says why not MacCormack.
-    Advection advection = Advection::SemiLagrangian;
+    /// MacCormack by default: docs/solver.md ("Advection default") says why.
+    Advection advection = Advection::MacCormack;
     PressureSolver pressure = PressureSolver::MultigridPCG;
     /// The solve stops when max |residual| <= tolerance · max |divergence before projection|.
     float tolerance = 1e-5f;

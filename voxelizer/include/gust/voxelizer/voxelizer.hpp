@@ -64,6 +64,8 @@ struct GpuInstance {
     const GpuMesh* mesh = nullptr;
     glm::mat4 model{1.0f};               ///< mesh space -> world space, this frame
     std::optional<glm::mat4> prev_model; ///< last frame's; none means it did not move
+    /// The change since last frame (transform or positions) is a jump, not motion: no surface velocity.
+    bool teleport = false;
 };
 
 /// Options for a Voxelizer.
