@@ -138,6 +138,7 @@ int run_simulate(const SimulateArgs& args) {
                     return fail(s.message());
             GpuInstance inst{&mesh_of(i), runtime->model(i, t)};
             inst.prev_model = runtime->model(i, t - dt);
+            inst.teleport = runtime->jumps(i, t - dt, t);
             dynamic.push_back(inst);
         }
         auto step = (*world)->step(dynamic, float(dt));

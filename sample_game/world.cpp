@@ -224,6 +224,17 @@ gust::WindEmitter World::fan(double t) const {
 
 void World::update(double t) {
     const float tf = static_cast<float>(t) * settings_.walk_speed;
+    // Poses a skinned object at clip time `clip_t` (looping) and notes when the clip wraps: that frame's
+    // change of pose is a jump, which gust must not take for motion (a teleport).
+    auto pose = [&](WorldObject& o, double clip_t) {
+        const WorldMesh& mesh = meshes_[o.mesh];
+        const double duration = mesh.animation->clip_duration(mesh.clip);
+        const double lap = duration > 0.0 ? std::floor(clip_t / duration) : 0.0;
+        o.wrapped = lap != o.lap;
+        o.lap = lap;
+        posed_[o.mesh].clear();
+        mesh.animation->pose(mesh.clip, clip_t, true, posed_[o.mesh]);
+    };
     for (WorldObject& o : objects_) {
         if (o.name == "fox") {
             // A circle of radius 4.5 m around (0, 0, 2) at about 1.1 m/s, facing along the path (+z forward).
@@ -232,8 +243,7 @@ void World::update(double t) {
             const glm::vec3 forward(-std::sin(a), 0.0f, std::cos(a));
             o.model = place(p, std::atan2(forward.x, forward.z), 0.01f);
             follow_target_ = p + glm::vec3(0.0f, 0.6f, 0.0f);
-            posed_[o.mesh].clear();
-            meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, 1.4 * tf, true, posed_[o.mesh]);
+            pose(o, 1.4 * tf);
         } else if (o.name == "cesium man") {
             // An ellipse around the middle of the field, walking at about 1 m/s; the file is z-up.
             const float a = -0.16f * tf;
@@ -242,8 +252,7 @@ void World::update(double t) {
                 glm::normalize(glm::vec3(7.0f * std::sin(a), 0.0f, -3.5f * std::cos(a)));
             o.model = glm::rotate(place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f), -0.5f * kPi,
                                   glm::vec3(1, 0, 0));
-            posed_[o.mesh].clear();
-            meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, tf, true, posed_[o.mesh]);
+            pose(o, tf);
         } else if (o.name == "flying bunny") {
             // A figure of eight (Gerono's lemniscate) 9 m across at 2.5 m, bobbing, every 16 s.
             const float a = 2.0f * kPi * tf / 16.0f;
@@ -296,8 +305,9 @@ gust::Outcome World::step_wind(gust::System& wind, float dt, double t) {
             if (gust::Outcome moved = wind.set_transform(o.instance, to_gust(o.model)); !moved) return moved;
         if (o.kind == ObjectKind::Skinned) {
             const std::vector<glm::vec3>& positions = posed_[o.mesh];
-            if (gust::Outcome posed = wind.set_vertices(gust_meshes_[o.mesh], &positions[0].x,
-                                                        static_cast<std::uint32_t>(positions.size()));
+            if (gust::Outcome posed =
+                    wind.set_vertices(gust_meshes_[o.mesh], &positions[0].x,
+                                      static_cast<std::uint32_t>(positions.size()), 12, o.wrapped);
                 !posed)
                 return posed;
         }

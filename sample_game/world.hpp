@@ -42,6 +42,8 @@ struct WorldObject {
     float sway_height = 1.0f;       ///< Tree: model-space height from which the crown bends
     float sway_length = 1.0f;       ///< Tree: model-space height over which bending reaches full
     gust::InstanceId instance = 0;  ///< solids: gust's instance
+    double lap = 0.0;               ///< Skinned: laps of its walk clip played so far
+    bool wrapped = false;           ///< Skinned: the clip wrapped from its end to its start this frame
 };
 
 /// One grass blade (width > 0) or tree crown (width 0, rooted at the top of its tree) that the wind bends.

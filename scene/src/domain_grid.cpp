@@ -25,6 +25,7 @@ SolverDesc solver_desc(const SceneDesc& scene) {
     desc.max_iterations = s.max_iterations;
     desc.vorticity = s.vorticity;
     desc.viscosity = s.viscosity;
+    desc.max_solid_speed = s.max_solid_speed;
     return desc;
 }
 

@@ -387,7 +387,7 @@ std::vector<Keyframe> read_keyframes(const json& value, const std::string& at) {
     for (std::size_t i = 0; i < value.size(); ++i) {
         const std::string key_at = index_path(at, i);
         const json& item = object(value[i], key_at);
-        allow_keys(item, key_at, {"t", "translate", "rotate_deg", "scale"});
+        allow_keys(item, key_at, {"t", "translate", "rotate_deg", "scale", "teleport"});
         Keyframe keyframe;
         const std::string t_at = key_path(key_at, "t");
         keyframe.t = number(required(item, "t", key_at), t_at);
@@ -396,6 +396,8 @@ std::vector<Keyframe> read_keyframes(const json& value, const std::string& at) {
                            format(keyframes.back().t) + ")");
         }
         keyframe.transform = transform_keys(item, key_at);
+        if (const json* v = member(item, "teleport"))
+            keyframe.teleport = boolean(*v, key_path(key_at, "teleport"));
         keyframes.push_back(keyframe);
     }
     return keyframes;
@@ -501,9 +503,9 @@ EmitterDesc read_emitter(const json& value, const std::string& at) {
 
 SolverSettings read_solver(const json& value, const std::string& at) {
     object(value, at);
-    allow_keys(
-        value, at,
-        {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity", "viscosity"});
+    allow_keys(value, at,
+               {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity",
+                "viscosity", "max_solid_speed"});
     SolverSettings solver;
     if (const json* v = member(value, "advection")) {
         const std::string advection_at = key_path(at, "advection");
@@ -541,6 +543,12 @@ SolverSettings read_solver(const json& value, const std::string& at) {
         solver.viscosity = float_number(*v, viscosity_at);
         if (solver.viscosity < 0.0f)
             fail(viscosity_at, "must not be negative (found " + format(solver.viscosity) + ")");
+    }
+    if (const json* v = member(value, "max_solid_speed")) {
+        const std::string speed_at = key_path(at, "max_solid_speed");
+        solver.max_solid_speed = positive_float(*v, speed_at);
+        if (solver.max_solid_speed > 256.0f)
+            fail(speed_at, "must be at most 256 m/s (found " + format(solver.max_solid_speed) + ")");
     }
     return solver;
 }
@@ -621,12 +629,22 @@ glm::mat4 object_matrix(const SceneObject& object, double t) {
                                        [](double time, const Keyframe& key) { return time < key.t; });
     const Transform& a = std::prev(next)->transform;
     const Transform& b = next->transform;
+    if (next->teleport) return a.matrix();
     const double s = (t - std::prev(next)->t) / (next->t - std::prev(next)->t);
     Transform between;
     between.translate = glm::vec3(glm::mix(glm::dvec3(a.translate), glm::dvec3(b.translate), s));
     between.rotate_deg = glm::vec3(glm::mix(glm::dvec3(a.rotate_deg), glm::dvec3(b.rotate_deg), s));
     between.scale = static_cast<float>(glm::mix(double{a.scale}, double{b.scale}, s));
     return between.matrix();
+}
+
+bool object_jumps(const SceneObject& object, double t0, double t1) {
+    const std::vector<Keyframe>& keys = object.keyframes;
+    for (std::size_t i = 1; i < keys.size(); ++i) {
+        const bool ends_now = keys[i].t > t0 && keys[i].t <= t1;
+        if (ends_now && (keys[i].teleport || keys[i].t - keys[i - 1].t < t1 - t0)) return true;
+    }
+    return false;
 }
 
 glm::vec3 emitter_position(const EmitterDesc& emitter, double t) {

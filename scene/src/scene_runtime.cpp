@@ -4,6 +4,7 @@
 #include "gust/scene/import.hpp"
 
 #include <cassert>
+#include <cmath>
 #include <exception>
 #include <map>
 #include <new>
@@ -92,6 +93,20 @@ bool SceneRuntime::deforms(std::size_t object) const {
 glm::mat4 SceneRuntime::model(std::size_t object, double t) const {
     assert(object < objects_.size());
     return object_matrix(objects_[object].desc, t);
+}
+
+bool SceneRuntime::jumps(std::size_t object, double t0, double t1) const {
+    assert(object < objects_.size());
+    const Object& o = objects_[object];
+    if (object_jumps(o.desc, t0, t1)) return true;
+    if (!o.animated || !o.desc.animation->loop) return false;
+    const double duration = o.animated->clip_duration(o.clip);
+    if (!(duration > 0.0)) return false;
+    const AnimationDesc& animation = *o.desc.animation;
+    // The clip wraps between the two clip times when they lie in different laps of it.
+    const double lap0 = std::floor((animation.offset + animation.speed * t0) / duration);
+    const double lap1 = std::floor((animation.offset + animation.speed * t1) / duration);
+    return lap0 != lap1;
 }
 
 const std::vector<glm::vec3>& SceneRuntime::positions(std::size_t object, double t) {

@@ -303,6 +303,62 @@ TEST(ObjectMatrix, usesTheTransformWithoutKeyframes) {
     EXPECT_EQ(gust::object_matrix(object, 99.0), object.transform.matrix());
 }
 
+TEST_F(SceneFile, readsTeleportKeysAndTheSolidSpeedLimit) {
+    const gust::SceneDesc scene = load_ok(R"({"solver": {"max_solid_speed": 12.5},
+      "objects": [{"mesh": "bunny.ply", "keyframes": [
+        {"t": 0, "translate": [-10, 0, 0]}, {"t": 1, "translate": [10, 0, 0], "teleport": true}]}]})");
+    EXPECT_FALSE(scene.objects[0].keyframes[0].teleport);
+    EXPECT_TRUE(scene.objects[0].keyframes[1].teleport);
+    EXPECT_EQ(gust::solver_desc(scene).max_solid_speed, 12.5f);
+    EXPECT_EQ(gust::solver_desc(load_ok("{}")).max_solid_speed, 50.0f);
+    EXPECT_EQ(gust::solver_desc(load_ok("{}")).advection, gust::Advection::MacCormack);
+}
+
+// A "teleport" key holds its predecessor's placement until its own time, then jumps: no frame sees the
+// move as motion.
+TEST(ObjectMatrix, aTeleportKeyHoldsThePreviousKeyUntilItsTime) {
+    gust::SceneObject object;
+    object.keyframes.resize(2);
+    object.keyframes[0].transform.translate = {-10, 0, 0};
+    object.keyframes[1].t = 1.0;
+    object.keyframes[1].transform.translate = {10, 0, 0};
+    object.keyframes[1].teleport = true;
+    EXPECT_EQ(gust::object_matrix(object, 0.5), object.keyframes[0].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 0.999), object.keyframes[0].transform.matrix());
+    EXPECT_EQ(gust::object_matrix(object, 1.0), object.keyframes[1].transform.matrix());
+}
+
+// A jump is a teleport key, or a segment shorter than the frame that ends within it; keys a frame or more
+// apart are motion, whatever the distance.
+TEST(ObjectJumps, aTeleportKeyOrASegmentShorterThanAFrameIsAJump) {
+    gust::SceneObject object;
+    object.keyframes.resize(4);
+    object.keyframes[1].t = 1.0;
+    object.keyframes[2].t = 1.001; // 20 m within a millisecond
+    object.keyframes[2].transform.translate = {20, 0, 0};
+    object.keyframes[3].t = 3.0;
+    object.keyframes[3].teleport = true;
+    const double dt = 0.02;
+    int jumps = 0;
+    for (int frame = 1; frame < 200; ++frame) {
+        const double t = frame * dt;
+        const bool jump = gust::object_jumps(object, t - dt, t);
+        jumps += jump ? 1 : 0;
+        if (jump) {
+            EXPECT_TRUE(std::abs(t - 1.02) < 1e-9 || std::abs(t - 3.0) < 1e-9) << t;
+        }
+    }
+    EXPECT_EQ(jumps, 2);
+    gust::SceneObject per_frame;
+    for (int k = 0; k < 10; ++k) {
+        per_frame.keyframes.emplace_back();
+        per_frame.keyframes.back().t = k * dt;
+        per_frame.keyframes.back().transform.translate = {float(k), 0, 0}; // 50 m/s, but motion
+    }
+    for (int frame = 1; frame < 10; ++frame)
+        EXPECT_FALSE(gust::object_jumps(per_frame, (frame - 1) * dt, frame * dt)) << frame;
+}
+
 TEST_F(SceneFile, designExampleBunnyCrossesTheWindAtHalfTime) {
     const gust::SceneDesc scene = load_ok(kDesignExample);
     // t = 1 s: halfway from (-10,2,0) to (10,2,0), turned 90 degrees about y.

@@ -151,6 +151,30 @@ TEST_F(SceneRuntimeTest, posesAnimatedObjectsAtOffsetPlusSpeedTimesSceneTime) {
     EXPECT_EQ(runtime.positions(0, 0.0).size(), runtime.mesh(0).positions.size());
 }
 
+// A looping clip's wrap from its end to its start is a jump (a teleport for the wind); a clip that holds
+// its last key, and the frames between wraps, are motion.
+TEST_F(SceneRuntimeTest, aLoopingClipJumpsWhereItWrapsAndNowhereElse) {
+    const fs::path fox = copy(kAssets / "characters/Fox.glb", "Fox.glb");
+    gust::SceneRuntime runtime = runtime_ok(scene_ok(scene(R"({"objects": [
+        {"mesh": "Fox.glb", "animation": {"clip": "Walk", "speed": 1.4}},
+        {"mesh": "Fox.glb", "animation": {"clip": "Walk", "loop": false}},
+        {"mesh": "Fox.glb"}]})")));
+    const gust::Result<gust::AnimatedMesh> animated = gust::AnimatedMesh::load(fox);
+    ASSERT_TRUE(animated.ok()) << animated.message();
+    const double duration = animated->clip_duration(*animated->find_clip("Walk"));
+    const double dt = 1.0 / 30.0;
+    int wraps = 0;
+    for (int frame = 1; frame <= 300; ++frame) {
+        const double t0 = (frame - 1) * dt, t1 = frame * dt;
+        const bool wrapped = std::floor(1.4 * t1 / duration) != std::floor(1.4 * t0 / duration);
+        EXPECT_EQ(runtime.jumps(0, t0, t1), wrapped) << frame;
+        wraps += wrapped ? 1 : 0;
+        EXPECT_FALSE(runtime.jumps(1, t0, t1)) << frame;
+        EXPECT_FALSE(runtime.jumps(2, t0, t1)) << frame;
+    }
+    EXPECT_GT(wraps, 10) << "a 0.7 s clip at 1.4x wraps about twice a second";
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Errors
 

@@ -3,7 +3,6 @@
 
 #include <cstdint>
 #include <glm/glm.hpp>
-
 #include <gust/voxelizer/grid.hpp>
 #include <string>
 #include <vector>

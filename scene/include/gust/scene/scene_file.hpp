@@ -27,6 +27,9 @@ struct Transform {
 struct Keyframe {
     double t = 0.0;      ///< seconds (frame · dt)
     Transform transform; ///< the object's placement at t
+    /// JSON "teleport": the object holds the previous key's placement until t and jumps here then (a
+    /// respawn, a cut); the wind sees the jump as a teleport (object_jumps).
+    bool teleport = false;
 };
 
 /// A skinned clip to play (glTF meshes only): clip time = offset + speed · scene time.
@@ -54,12 +57,12 @@ struct EmitterKey {
 
 /// A wind source. The solver defines each type's profile; these are its parameters.
 struct EmitterDesc {
-    std::string type;             ///< "directional", "omni", "vortex" or "motor"
-    glm::vec3 position{0.0f};     ///< world units (metres); a motor's start
-    glm::vec3 direction{1, 0, 0}; ///< unit vector (normalised at load): flow or axis direction
-    float radius = 1.0f;          ///< metres, > 0
-    float strength = 0.0f;        ///< wind speed at the centre, m/s (negative reverses it)
-    float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p inside the radius, >= 0 (0 = uniform)
+    std::string type;              ///< "directional", "omni", "vortex" or "motor"
+    glm::vec3 position{0.0f};      ///< world units (metres); a motor's start
+    glm::vec3 direction{1, 0, 0};  ///< unit vector (normalised at load): flow or axis direction
+    float radius = 1.0f;           ///< metres, > 0
+    float strength = 0.0f;         ///< wind speed at the centre, m/s (negative reverses it)
+    float falloff = 1.0f;          ///< exponent p of (1 − d/radius)^p inside the radius, >= 0 (0 = uniform)
     std::string shape = "capsule"; ///< motors: "capsule" or "cone"
     float length = 0.0f;           ///< motors: metres along `direction`, >= 0 (> 0 for a cone)
     std::vector<EmitterKey> path;  ///< strictly increasing t; empty: fixed at `position`
@@ -67,13 +70,14 @@ struct EmitterDesc {
 
 /// Numerics of the wind solver (all optional in the file; defaults as in gust::SolverDesc).
 struct SolverSettings {
-    std::string advection = "semi_lagrangian"; ///< "semi_lagrangian", "maccormack" or "none"
-    std::string pressure = "mgpcg";            ///< "mgpcg", "multigrid" or "jacobi"
-    float tolerance = 1e-5f;                   ///< relative residual, in (0, 1)
-    std::uint32_t max_cycles = 32;             ///< multigrid V-cycles per step, 1..1000
-    std::uint32_t max_iterations = 4000;       ///< Jacobi iterations per step, 1..1000000
-    float vorticity = 0.2f;                    ///< confinement strength, 0..10
-    float viscosity = 0.0f;                    ///< m^2/s, >= 0
+    std::string advection = "maccormack"; ///< "maccormack", "semi_lagrangian" or "none"
+    std::string pressure = "mgpcg";       ///< "mgpcg", "multigrid" or "jacobi"
+    float tolerance = 1e-5f;              ///< relative residual, in (0, 1)
+    std::uint32_t max_cycles = 32;        ///< multigrid V-cycles per step, 1..1000
+    std::uint32_t max_iterations = 4000;  ///< Jacobi iterations per step, 1..1000000
+    float vorticity = 0.2f;               ///< confinement strength, 0..10
+    float viscosity = 0.0f;               ///< m^2/s, >= 0
+    float max_solid_speed = 50.0f;        ///< m/s, in (0, 256]: fastest a surface pushes air
 };
 
 /// The simulated box and its resolution.
@@ -104,9 +108,14 @@ struct SceneDesc {
 Result<SceneDesc> load_scene(const std::filesystem::path& file);
 
 /// World matrix of an object at time t (seconds): keyframes interpolate linearly in time per component
-/// (translate, rotate_deg, scale), holding the end values outside their range; without keyframes the
-/// object's transform.
+/// (translate, rotate_deg, scale), holding the end values outside their range (and a key's predecessor's
+/// until a "teleport" key); without keyframes the object's transform.
 glm::mat4 object_matrix(const SceneObject& object, double t);
+
+/// Whether the object's keyframed motion jumps between times t0 and t1 (t0 < t1, one frame apart): a
+/// "teleport" key falls in (t0, t1], or a keyframe segment shorter than t1 − t0 ends there (a change no
+/// frame sees as motion). A frame whose motion jumps is a teleport: it moves the solid without pushing air.
+bool object_jumps(const SceneObject& object, double t0, double t1);
 
 /// Position of an emitter at time t (seconds): its path interpolated linearly, holding the end keys
 /// outside their range; without a path its position.

@@ -41,6 +41,11 @@ class SceneRuntime {
     /// stays valid until the next call for that object.
     const std::vector<glm::vec3>& positions(std::size_t object, double t);
 
+    /// Whether the object's change from time t0 to t1 (one frame) is a jump rather than motion: its
+    /// keyframes jump (object_jumps), or its looping clip wraps from its end to its start in between. The
+    /// wind takes such a frame as a teleport (no surface velocity).
+    bool jumps(std::size_t object, double t0, double t1) const;
+
   private:
     struct Object {
         SceneObject desc;
