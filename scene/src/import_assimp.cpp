@@ -4,17 +4,21 @@
 // checked here first.
 #include "import_detail.hpp"
 
+#include <array>
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <bit>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace gust::detail {
@@ -333,6 +337,39 @@ FaceCounts count_faces(const aiScene& scene) {
     return counts;
 }
 
+/// Merges vertices at exactly the same position, keeping the first's index, so that files listing each
+/// triangle's corners apart (STL, many PLYs) share them. Non-finite positions are never merged: Assimp's
+/// JoinIdenticalVertices compared positions with `<`, so a NaN corner compared equal to a finite one and
+/// was merged into it, and its triangle became a finite zero-area one (skipped) instead of a rejected one.
+class Welder {
+  public:
+    explicit Welder(Mesh& mesh) : mesh_(mesh) {}
+    std::uint32_t add(const aiVector3D& p) {
+        const glm::vec3 position(p.x, p.y, p.z);
+        const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        if (finite) {
+            // +0.0 and −0.0 are one position.
+            const Key key{std::bit_cast<std::uint32_t>(p.x + 0.0f), std::bit_cast<std::uint32_t>(p.y + 0.0f),
+                          std::bit_cast<std::uint32_t>(p.z + 0.0f)};
+            const auto [at, added] = seen_.try_emplace(key, std::uint32_t(mesh_.positions.size()));
+            if (!added) return at->second;
+        }
+        mesh_.positions.push_back(position);
+        return std::uint32_t(mesh_.positions.size() - 1);
+    }
+
+  private:
+    using Key = std::array<std::uint32_t, 3>;
+    struct Hash {
+        std::size_t operator()(const Key& k) const {
+            return std::hash<std::uint64_t>{}((std::uint64_t(k[0]) << 32 | k[1]) ^
+                                              (std::uint64_t(k[2]) * 0x9e3779b97f4a7c15ull));
+        }
+    };
+    Mesh& mesh_;
+    std::unordered_map<Key, std::uint32_t, Hash> seen_;
+};
+
 } // namespace
 
 Result<Mesh> load_with_assimp(const std::vector<unsigned char>& bytes, std::string_view extension) {
@@ -343,7 +380,7 @@ Result<Mesh> load_with_assimp(const std::vector<unsigned char>& bytes, std::stri
     }
 
     Assimp::Importer importer;
-    // Only positions matter; dropping the rest lets JoinIdenticalVertices merge by position alone.
+    // Only positions matter.
     importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
                                 aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
                                     aiComponent_COLORS | aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS |
@@ -357,29 +394,29 @@ Result<Mesh> load_with_assimp(const std::vector<unsigned char>& bytes, std::stri
     const FaceCounts counts = count_faces(*raw);
     if (counts.polygons == 0) return Result<Mesh>::failure(no_triangles_reason(counts.other > 0));
 
-    const aiScene* scene = importer.ApplyPostProcessing(
-        aiProcess_ValidateDataStructure | aiProcess_RemoveComponent | aiProcess_Triangulate |
-        aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    const aiScene* scene =
+        importer.ApplyPostProcessing(aiProcess_ValidateDataStructure | aiProcess_RemoveComponent |
+                                     aiProcess_Triangulate | aiProcess_PreTransformVertices);
     if (!scene) {
         return Result<Mesh>::failure("invalid mesh data: " + clean_message(importer.GetErrorString()));
     }
 
     Mesh mesh;
+    Welder welder(mesh);
+    std::vector<std::uint32_t> index;
     for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
         const aiMesh& in = *scene->mMeshes[m];
         if (mesh.positions.size() + in.mNumVertices > std::numeric_limits<std::uint32_t>::max()) {
             return Result<Mesh>::failure("too many vertices for 32-bit indices");
         }
-        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
-        for (unsigned v = 0; v < in.mNumVertices; ++v) {
-            const aiVector3D& p = in.mVertices[v];
-            mesh.positions.emplace_back(p.x, p.y, p.z);
-        }
+        index.resize(in.mNumVertices);
+        for (unsigned v = 0; v < in.mNumVertices; ++v)
+            index[v] = welder.add(in.mVertices[v]);
         for (unsigned f = 0; f < in.mNumFaces; ++f) {
             const aiFace& face = in.mFaces[f];
             if (face.mNumIndices != 3) continue; // points and lines left by Triangulate
             mesh.indices.insert(mesh.indices.end(),
-                                {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+                                {index[face.mIndices[0]], index[face.mIndices[1]], index[face.mIndices[2]]});
         }
     }
     if (mesh.indices.empty()) return Result<Mesh>::failure(no_triangles_reason(true));

@@ -397,6 +397,28 @@ TEST_F(ImportTest, acceptsUpperCaseExtension) {
     EXPECT_EQ(load_ok(path).triangle_count(), 12u);
 }
 
+// A NaN corner is its own vertex: welding it into a finite corner would turn its triangle into a finite,
+// zero-area one, which the voxelizer skips instead of counting as rejected.
+TEST_F(ImportTest, keepsANanCornerOfAnAsciiPlyApartFromTheFiniteOnes) {
+    const fs::path path = write("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                           "property float y\nproperty float z\nelement face 1\n"
+                                           "property list uchar int vertex_indices\nend_header\n"
+                                           "0 0 0\n1 0 0\nnan 1 0\n3 0 1 2\n");
+    const gust::Mesh mesh = load_ok(path);
+    ASSERT_EQ(mesh.triangle_count(), 1u);
+    ASSERT_EQ(mesh.positions.size(), 3u);
+    const glm::vec3 corner = mesh.positions[mesh.indices[2]];
+    EXPECT_TRUE(std::isnan(corner.x));
+    EXPECT_NE(mesh.indices[2], mesh.indices[0]);
+    EXPECT_NE(mesh.indices[2], mesh.indices[1]);
+}
+
+TEST(LoadMesh, weldsTheCornersAnStlListsPerTriangle) {
+    // An STL lists three corners per triangle; the closed spider shares each corner among its triangles.
+    const gust::Mesh mesh = load_ok(kModels / "STL/Spider_binary.stl");
+    EXPECT_LT(mesh.positions.size(), 3 * mesh.triangle_count() / 4);
+}
+
 // ---------------------------------------------------------------------------------------------------
 // PLY and STL headers that would make Assimp allocate from unchecked counts
 
