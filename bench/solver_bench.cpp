@@ -584,19 +584,40 @@ struct Workload {
     }
 };
 
-/// The "solid" pass: solid_cells, solid_motion, solid_faces, coarse_weights per coarser level.
+/// The "solid" pass: solid_cells (the cells' voxels from the tree, split into parts) and solid_motion.
 Traffic solid_traffic(const Workload& w) {
     Traffic t;
-    const double F = w.faces(0), C = w.cells(0), fluid = 4.0 * w.cut_cells * w.cell_words;
-    // solid_cells: the last flags read, flag and fraction stored per cell, the voxel set of a cut cell,
-    // the tree once. Clearing the last step's moving cells' motion is left out (at most one per fragment).
-    t.add(12 * C + fluid + w.tree_bytes, 12 * C + fluid + w.tree_bytes);
+    const double C = w.cells(0), parts = 4.0 * 2 * w.cut_cells * w.cell_words;
+    // solid_cells: the last flags read, the flags and two labels stored per cell, the parts (and static
+    // voxels, at most as many words) of a cut cell, the tree once. Clearing the last step's moving cells'
+    // motion is left out (at most one per fragment).
+    t.add(16 * C + 1.5 * parts + w.tree_bytes, 16 * C + 1.5 * parts + w.tree_bytes);
     // solid_motion: key and half-float velocity, four 4-byte atomics, per fragment.
     t.add(44 * w.fragments, 44 * w.fragments);
+    return t;
+}
+
+/// The "fill" pass: the outside-air fill's union-find, linking each cell's parts to its three upper
+/// neighbours' and finding each part's root (fill_link, fill_finish).
+Traffic fill_traffic(const Workload& w) {
+    Traffic t;
+    const double C = w.cells(0), parts = 4.0 * 2 * w.cut_cells * w.cell_words;
+    // fill_link: the flags of the cell and three neighbours, the parts of cut cells and their neighbours,
+    // the labels of each union (about two finds of two loads each), per cell.
+    t.add(C * (4 * 4 + 3 * 2 * 8) + 4 * parts, 12 * C + parts);
+    // fill_finish: flags, parts of cut cells, a find per part, the label and the solid fraction stored.
+    t.add(C * (4 + 2 * 8 + 2 * 4 + 4) + parts, 16 * C + parts);
+    return t;
+}
+
+/// The "faces" pass: solid_faces, then coarse_weights per coarser level.
+Traffic faces_traffic(const Workload& w) {
+    Traffic t;
+    const double F = w.faces(0), C = w.cells(0), air = 4.0 * w.cut_cells * w.cell_words;
     // solid_faces: two flags, the open count (a byte) and solid velocity stored; a face of a cut cell (six
-    // per cut cell) also reads both voxel sets. The motion sums of moving cells are left out (at most
+    // per cut cell) also reads both cells' air. The motion sums of moving cells are left out (at most
     // 6 x 16 B per fragment).
-    t.add(13 * F + 6 * 2 * fluid, 4 * C + 5 * F + fluid);
+    t.add(13 * F + 6 * 2 * air, 4 * C + 5 * F + air);
     // coarse_weights: the fine faces a coarse face covers (each read by one coarse face) and the store.
     for (std::size_t l = 1; l < w.levels.size(); ++l) {
         double accessed = 0.0, unique = 0.0;
@@ -684,21 +705,23 @@ Traffic pressure_traffic(const Workload& w) {
     return t;
 }
 
-/// The "project" pass: the gradient subtracted per face, then the divergence measured again.
+/// The "project" pass: the gradient subtracted per face, the air's velocity extended into closed faces
+/// in two passes, then the divergence measured again.
 Traffic project_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), W = w.weight(0) * F;
     t.add(F * 20, W + 8 * F + 4 * C);
+    // extend_face: the face's weight, value and store; the closed faces' neighbours are left out.
+    for (int layer = 0; layer < 2; ++layer)
+        t.add(F * 12, W + 8 * F);
     t.add(C * (12 * 4 + 6 * 3 * 4), W + 8 * F + 4 * C);
     return t;
 }
 
 /// The byte model of one step, per pass in the order the solver runs them.
 std::vector<std::pair<std::string, Traffic>> step_traffic(const Workload& w) {
-    return {{"solid", solid_traffic(w)},
-            {"advect", advect_traffic(w)},
-            {"forces", forces_traffic(w)},
-            {"pressure", pressure_traffic(w)},
+    return {{"solid", solid_traffic(w)},    {"fill", fill_traffic(w)},     {"faces", faces_traffic(w)},
+            {"advect", advect_traffic(w)},  {"forces", forces_traffic(w)}, {"pressure", pressure_traffic(w)},
             {"project", project_traffic(w)}};
 }
 
@@ -732,7 +755,7 @@ std::string fmt_mb(double bytes) {
 }
 
 /// The passes the step-time table shows, in the solver's order.
-constexpr const char* kPasses[] = {"solid", "advect", "forces", "pressure", "project"};
+constexpr const char* kPasses[] = {"solid", "fill", "faces", "advect", "forces", "pressure", "project"};
 
 void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
                   const Options& options, std::vector<std::string>& notes) {

@@ -21,11 +21,13 @@ void main() {
         uint flags = flags_at(i);
         uint counts[2];
         uint roots[2];
+        bool cut = (flags & kCellCut) != 0u;
         for (uint k = 0u; k < kCellParts; ++k) {
-            counts[k] = bits_count(part_of(i, flags, k));
+            counts[k] = cut ? bits_count(part_of(i, flags, k)) : (k == 0u ? v * v * v : 0u);
             uint node = part_node(uint(i), k);
             roots[k] = counts[k] != 0u ? uf_find(node) : node;
-            atomicMin(LabelsRef(sb().b.labels).v[node], roots[k]);
+            // Later passes read a label only to find a sealed part's region (solid_motion_of).
+            if (roots[k] != kOutsideNode && roots[k] != node) atomicMin(LabelsRef(sb().b.labels).v[node], roots[k]);
         }
         uint add = 0u, air = 0u;
         if (counts[0] != 0u && roots[0] == kOutsideNode) {

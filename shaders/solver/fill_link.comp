@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // The outside-air fill, per wind cell: unites each of its parts with the parts of its +x, +y and +z
 // neighbours that share an open voxel pair across the face, and with the outside (node 0) where it
-// touches an open domain side. Parts left apart from node 0 are sealed (fill_finish.comp).
+// touches an open domain side. Parts left apart from node 0 are sealed (fill_finish.comp). Cells without
+// solid voxels are one whole part and need no voxel sets: most cells take that path.
 #include "solver_common.glsl"
 
 layout(local_size_x = kSolverGroupSize) in;
@@ -14,20 +15,25 @@ void main() {
     ivec3 c = cell_from_index(n, i);
     uint v = sb().b.voxels_per_cell;
     uint flags = flags_at(i);
+    bool cut = (flags & kCellCut) != 0u;
     uint open = sb().b.open_sides;
     CellBits faces[6];
-    load_face_masks(faces);
     CellBits parts[2];
-    parts[0] = part_of(i, flags, 0u);
-    parts[1] = part_of(i, flags, 1u);
-    for (uint k = 0u; k < kCellParts; ++k) {
-        if (bits_count(parts[k]) == 0u) continue;
-        for (uint s = 0u; s < 6u; ++s) {
-            uint a = s / 2u;
-            bool at_side = (s & 1u) == 0u ? c[a] == 0 : c[a] == n[a] - 1;
-            if (at_side && (open >> s & 1u) != 0u && bits_touch(parts[k], faces, s))
-                uf_unite(part_node(uint(i), k), kOutsideNode);
+    if (cut) {
+        load_face_masks(faces);
+        parts[0] = part_of(i, flags, 0u);
+        parts[1] = part_of(i, flags, 1u);
+    }
+    for (uint s = 0u; s < 6u; ++s) {
+        uint a = s / 2u;
+        bool at_side = (s & 1u) == 0u ? c[a] == 0 : c[a] == n[a] - 1;
+        if (!at_side || (open >> s & 1u) == 0u) continue;
+        if (!cut) {
+            uf_unite(part_node(uint(i), 0u), kOutsideNode);
+            continue;
         }
+        for (uint k = 0u; k < kCellParts; ++k)
+            if (bits_touch(parts[k], faces, s)) uf_unite(part_node(uint(i), k), kOutsideNode);
     }
     for (uint a = 0u; a < 3u; ++a) {
         ivec3 nb = c + axis_unit(a);
@@ -35,9 +41,15 @@ void main() {
         int j = cell_index(n, nb);
         uint nb_flags = flags_at(j);
         // Two cells without solid voxels meet over a whole open face: one union, no voxel sets.
-        if (((flags | nb_flags) & kCellCut) == 0u) {
+        if (!cut && (nb_flags & kCellCut) == 0u) {
             uf_unite(part_node(uint(i), 0u), part_node(uint(j), 0u));
             continue;
+        }
+        if (!cut) {
+            load_face_masks(faces);
+            parts[0] = bits_all(v);
+            parts[1] = bits_none();
+            cut = true;
         }
         for (uint k = 0u; k < kCellParts; ++k) {
             if (bits_count(parts[k]) == 0u) continue;

@@ -41,6 +41,9 @@ void main() {
     if (uint(t) >= open_count_words(uint(total))) return;
     uint v = sb().b.voxels_per_cell;
     uint counts = 0u;
+    // The face layers are loaded once, by the first face that compares voxel sets.
+    CellBits faces[6];
+    bool masks = false;
     for (int k = 0; k < 4 && 4 * t + k < total; ++k) {
         int i = 4 * t + k;
         uint axis;
@@ -48,17 +51,19 @@ void main() {
         ivec3 lo = f - axis_unit(axis);
         uint flags_lo = flags_of(lo), flags_hi = flags_of(f);
         uint open = v * v;
-        if (((flags_lo | flags_hi) & (kCellCut | kCellNoAir)) != 0u) {
-            CellBits faces[6];
-            load_face_masks(faces);
+        if (((flags_lo | flags_hi) & kCellNoAir) != 0u) {
+            open = 0u;
+        } else if (((flags_lo | flags_hi) & kCellCut) != 0u) {
+            if (!masks) load_face_masks(faces);
+            masks = true;
             open = face_open_count(air_at(lo, flags_lo), air_at(f, flags_hi), axis, v, faces);
         }
         counts |= open << (8 * k);
         ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
         float share = 1.0;
         if (m.w > 0 && ((flags_lo | flags_hi) & kCellStatic) != 0u) {
-            CellBits faces[6];
-            load_face_masks(faces);
+            if (!masks) load_face_masks(faces);
+            masks = true;
             share = moving_share(v * v - open, face_any_count(static_at(lo, flags_lo), static_at(f, flags_hi), axis, v, faces));
         }
         FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;

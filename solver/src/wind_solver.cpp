@@ -548,14 +548,20 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
     gpu::barrier(ctx_, cmd);
 
+    // The solid boundary in three timed parts: the cells' voxels and the moving fragments (solid), the
+    // outside-air fill (fill), the faces' open fractions and solid velocities (faces).
     m.profiler.begin(cmd, "solid");
     run(m.solid_cells, cell_groups);
     run(m.fragment_args, {1, 1, 1});
     m.solid_motion.bind(cmd, &push, sizeof(push));
     vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
+    m.profiler.end(cmd);
+    m.profiler.begin(cmd, "fill");
     run(m.fill_link, cell_groups);
     run(m.fill_finish, cell_groups);
+    m.profiler.end(cmd);
+    m.profiler.begin(cmd, "faces");
     run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
     for (std::uint32_t l = 1; l < levels; ++l) {
         push.level = l;
