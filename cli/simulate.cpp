@@ -130,6 +130,7 @@ int run_simulate(const SimulateArgs& args) {
     const auto start = std::chrono::steady_clock::now();
     for (std::uint64_t frame = 0; frame < args.frames; ++frame) {
         const double t = double(frame) * dt;
+        const gpu::WorkCounts before = (*ctx)->work();
         std::vector<GpuInstance> dynamic;
         for (std::size_t i = 0; i < count; ++i) {
             if (scene->objects[i].is_static) continue;
@@ -169,6 +170,10 @@ int run_simulate(const SimulateArgs& args) {
         for (const auto& [pass, value] : air->ms)
             ms["wind_" + std::string(pass)] = value;
         line["ms"] = ms;
+        const gpu::WorkCounts& after = (*ctx)->work();
+        line["dispatches"] = after.dispatches - before.dispatches;
+        line["submissions"] = after.submissions - before.submissions;
+        line["waits"] = after.waits - before.waits;
         line["divergence_before"] = air->divergence_before;
         line["divergence_after"] = air->divergence_after;
         line["residual"] = air->residual;

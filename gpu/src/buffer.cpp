@@ -5,8 +5,8 @@
 
 namespace gust::gpu {
 
-Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
-                              VkBufferUsageFlags extra_usage) {
+Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, VkBufferUsageFlags extra_usage,
+                              const char* name) {
     if (size == 0) return Result<Buffer>::failure("cannot create a buffer of 0 bytes");
     if (ctx.info().max_allocation_size && size > ctx.info().max_allocation_size)
         return Result<Buffer>::failure("buffer of " + std::to_string(size) + " bytes exceeds the device's " +
@@ -23,6 +23,7 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use,
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     if (VkResult r = vk.vkCreateBuffer(ctx.device(), &info, ctx.allocator(), &b.buffer_); r != VK_SUCCESS)
         return Result<Buffer>::failure(std::string("vkCreateBuffer failed: ") + to_string(r));
+    ctx.name(VK_OBJECT_TYPE_BUFFER, std::uint64_t(b.buffer_), name);
 
     VkMemoryRequirements req;
     vk.vkGetBufferMemoryRequirements(ctx.device(), b.buffer_, &req);
@@ -108,7 +109,7 @@ Status upload(Context& ctx, Buffer& dst, const void* data, std::size_t bytes, st
         std::memcpy(static_cast<char*>(dst.mapped()) + offset, data, bytes);
         return {};
     }
-    auto staging = Buffer::create(ctx, bytes, MemoryUse::Upload);
+    auto staging = Buffer::create(ctx, bytes, MemoryUse::Upload, 0, "gust staging");
     if (!staging) return staging.status();
     std::memcpy(staging->mapped(), data, bytes);
     return ctx.submit_and_wait([&](VkCommandBuffer cmd) {

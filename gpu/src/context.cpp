@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
+#include <filesystem>
+#include <fstream>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
 
@@ -362,6 +364,7 @@ Status Context::init(const ContextDesc& desc) {
     if (debug_utils && vk_.vkCreateDebugUtilsMessengerEXT)
         vk_.vkCreateDebugUtilsMessengerEXT(instance_, &messenger, allocator(), &messenger_);
 
+    pipeline_cache_path_ = desc.pipeline_cache;
     std::string_view override_spec = desc.device;
     if (override_spec.empty())
         if (const char* env = std::getenv("GUST_DEVICE")) override_spec = env;
@@ -441,10 +444,12 @@ Status Context::init_adopted(const HostDevice& host) {
 #undef GUST_LOAD
     if (Status s = load_instance_functions(vk_, instance_); !s) return s;
     if (host.get_device_proc_addr) vk_.vkGetDeviceProcAddr = host.get_device_proc_addr;
-    if (on_message_) {
+    if (on_message_ || host.debug_utils) {
 #define GUST_LOAD(name) vk_.name = reinterpret_cast<PFN_##name>(vk_.vkGetInstanceProcAddr(instance_, #name));
         GUST_VK_DEBUG_FUNCTIONS(GUST_LOAD)
 #undef GUST_LOAD
+    }
+    if (on_message_) {
         if (!vk_.vkCreateDebugUtilsMessengerEXT || !vk_.vkDestroyDebugUtilsMessengerEXT)
             return Status::failure("HostDevice::on_message needs VK_EXT_debug_utils enabled on the host's "
                                    "instance");
@@ -570,6 +575,27 @@ Status Context::finish_device(std::uint32_t queue_index) {
     info_.max_workgroup_size =
         std::min(props.limits.maxComputeWorkGroupInvocations, props.limits.maxComputeWorkGroupSize[0]);
 
+    // The cache file's blob is used only when its header names this device and driver build (Vulkan's
+    // VkPipelineCacheHeaderVersionOne), so a stale or foreign file costs nothing but the compile.
+    std::pmr::vector<char> blob(host_memory_);
+    if (!pipeline_cache_path_.empty()) {
+        std::ifstream in(std::string(pipeline_cache_path_), std::ios::binary);
+        blob.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        VkPipelineCacheHeaderVersionOne header{};
+        const bool same = blob.size() >= sizeof(header) &&
+                          (std::memcpy(&header, blob.data(), sizeof(header)), true) &&
+                          header.headerVersion == VK_PIPELINE_CACHE_HEADER_VERSION_ONE &&
+                          header.vendorID == props.vendorID && header.deviceID == props.deviceID &&
+                          std::memcmp(header.pipelineCacheUUID, props.pipelineCacheUUID, VK_UUID_SIZE) == 0;
+        if (!same) blob.clear();
+    }
+    VkPipelineCacheCreateInfo cache_info{VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO};
+    cache_info.initialDataSize = blob.size();
+    cache_info.pInitialData = blob.empty() ? nullptr : blob.data();
+    if (VkResult r = vk_.vkCreatePipelineCache(device_, &cache_info, allocator(), &pipeline_cache_);
+        r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreatePipelineCache failed: ") + to_string(r));
+
     VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool_info.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pool_info.queueFamilyIndex = queue_family_;
@@ -588,6 +614,7 @@ Context::~Context() {
         if (owns_device_) vk_.vkDeviceWaitIdle(device_);
         retire(UINT64_MAX);
         if (fence_) vk_.vkDestroyFence(device_, fence_, allocator());
+        if (pipeline_cache_) vk_.vkDestroyPipelineCache(device_, pipeline_cache_, allocator());
         if (pool_) vk_.vkDestroyCommandPool(device_, pool_, allocator());
         if (owns_device_) vk_.vkDestroyDevice(device_, allocator());
     }
@@ -626,12 +653,58 @@ Status Context::end_one_time(VkCommandBuffer cmd) {
         if (queue_mutex_) lock = std::unique_lock<std::mutex>(*queue_mutex_);
         submitted = vk_.vkQueueSubmit2(queue_, 1, &submit, fence_);
     }
+    ++work_.submissions;
     if (submitted != VK_SUCCESS)
         status = Status::failure(std::string("vkQueueSubmit2 failed: ") + to_string(submitted));
-    else if (VkResult w = vk_.vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX); w != VK_SUCCESS)
-        status = Status::failure(std::string("waiting for the GPU failed: ") + to_string(w));
+    else if (++work_.waits; vk_.vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX) != VK_SUCCESS)
+        status = Status::failure("waiting for the GPU failed");
     vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
     return status;
+}
+
+Status Context::save_pipeline_cache() const {
+    if (pipeline_cache_path_.empty() || !pipeline_cache_) return {};
+    std::size_t bytes = 0;
+    if (VkResult r = vk_.vkGetPipelineCacheData(device_, pipeline_cache_, &bytes, nullptr); r != VK_SUCCESS)
+        return Status::failure(std::string("vkGetPipelineCacheData failed: ") + to_string(r));
+    std::pmr::vector<char> blob(bytes, host_memory_);
+    if (VkResult r = vk_.vkGetPipelineCacheData(device_, pipeline_cache_, &bytes, blob.data());
+        r != VK_SUCCESS)
+        return Status::failure(std::string("vkGetPipelineCacheData failed: ") + to_string(r));
+    // Written beside the file and renamed over it, so a reader never sees half a cache.
+    const std::filesystem::path path{std::string(pipeline_cache_path_)};
+    std::error_code ec;
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+    const std::filesystem::path partial = path.string() + ".partial";
+    {
+        std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+        out.write(blob.data(), std::streamsize(bytes));
+        if (!out) return Status::failure(partial.string() + ": cannot write the pipeline cache");
+    }
+    std::filesystem::rename(partial, path, ec);
+    if (ec)
+        return Status::failure(path.string() + ": cannot write the pipeline cache (" + ec.message() + ")");
+    return {};
+}
+
+void Context::name(VkObjectType type, std::uint64_t handle, const char* name) const {
+    if (!vk_.vkSetDebugUtilsObjectNameEXT || !name || handle == 0) return;
+    VkDebugUtilsObjectNameInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_OBJECT_NAME_INFO_EXT};
+    info.objectType = type;
+    info.objectHandle = handle;
+    info.pObjectName = name;
+    vk_.vkSetDebugUtilsObjectNameEXT(device_, &info);
+}
+
+void Context::begin_label(VkCommandBuffer cmd, const char* name) const {
+    if (!vk_.vkCmdBeginDebugUtilsLabelEXT) return;
+    VkDebugUtilsLabelEXT label{VK_STRUCTURE_TYPE_DEBUG_UTILS_LABEL_EXT};
+    label.pLabelName = name;
+    vk_.vkCmdBeginDebugUtilsLabelEXT(cmd, &label);
+}
+
+void Context::end_label(VkCommandBuffer cmd) const {
+    if (vk_.vkCmdEndDebugUtilsLabelEXT) vk_.vkCmdEndDebugUtilsLabelEXT(cmd);
 }
 
 void Context::begin_frame(std::uint64_t frame) {

@@ -45,7 +45,7 @@ Status Pipeline::create_layout(std::uint32_t push_constant_bytes) {
     return {};
 }
 
-Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> spirv,
+Result<Pipeline> Pipeline::compute(Context& ctx, const char* name, std::span<const std::uint32_t> spirv,
                                    std::uint32_t push_constant_bytes,
                                    std::span<const std::uint32_t> constants) {
     Pipeline p;
@@ -63,15 +63,16 @@ Result<Pipeline> Pipeline::compute(Context& ctx, std::span<const std::uint32_t> 
     const VkSpecializationInfo spec = specialization(constants, entries);
     info.stage.pSpecializationInfo = constants.empty() ? nullptr : &spec;
     info.layout = p.layout_;
-    VkResult r = ctx.vk().vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &info, ctx.allocator(),
-                                                   &p.pipeline_);
+    VkResult r = ctx.vk().vkCreateComputePipelines(ctx.device(), ctx.pipeline_cache(), 1, &info,
+                                                   ctx.allocator(), &p.pipeline_);
     ctx.vk().vkDestroyShaderModule(ctx.device(), *module, ctx.allocator());
     if (r != VK_SUCCESS)
         return Result<Pipeline>::failure(std::string("vkCreateComputePipelines failed: ") + to_string(r));
+    ctx.name(VK_OBJECT_TYPE_PIPELINE, std::uint64_t(p.pipeline_), name);
     return p;
 }
 
-Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& desc) {
+Result<Pipeline> Pipeline::graphics(Context& ctx, const char* name, const GraphicsPipelineDesc& desc) {
     Pipeline p;
     p.ctx_ = &ctx;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
@@ -133,10 +134,12 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
     info.pDynamicState = &dynamic;
     info.layout = p.layout_;
     if (status) {
-        VkResult r = ctx.vk().vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &info,
+        VkResult r = ctx.vk().vkCreateGraphicsPipelines(ctx.device(), ctx.pipeline_cache(), 1, &info,
                                                         ctx.allocator(), &p.pipeline_);
         if (r != VK_SUCCESS)
             status = Status::failure(std::string("vkCreateGraphicsPipelines failed: ") + to_string(r));
+        else
+            ctx.name(VK_OBJECT_TYPE_PIPELINE, std::uint64_t(p.pipeline_), name);
     }
     for (VkShaderModule m : modules)
         ctx.vk().vkDestroyShaderModule(ctx.device(), m, ctx.allocator());
@@ -147,6 +150,21 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const GraphicsPipelineDesc& de
 void Pipeline::bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) const {
     ctx_->vk().vkCmdBindPipeline(cmd, bind_point_, pipeline_);
     if (bytes) ctx_->vk().vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_ALL, 0, bytes, push);
+}
+
+void Pipeline::dispatch(VkCommandBuffer cmd, std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+    ctx_->vk().vkCmdDispatch(cmd, x, y, z);
+    ctx_->count_dispatch();
+}
+
+void Pipeline::dispatch_indirect(VkCommandBuffer cmd, VkBuffer arguments, VkDeviceSize offset) const {
+    ctx_->vk().vkCmdDispatchIndirect(cmd, arguments, offset);
+    ctx_->count_dispatch();
+}
+
+void Pipeline::draw(VkCommandBuffer cmd, std::uint32_t vertices) const {
+    ctx_->vk().vkCmdDraw(cmd, vertices, 1, 0, 0);
+    ctx_->count_dispatch();
 }
 
 void Pipeline::release() {

@@ -28,6 +28,7 @@ void Profiler::reset(VkCommandBuffer cmd) {
 }
 
 void Profiler::begin(VkCommandBuffer cmd, const char* name) {
+    ctx_->begin_label(cmd, name);
     std::uint32_t& count = counts_[slot_];
     if (!pool_ || count >= capacity_) return;
     ctx_->vk().vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_,
@@ -36,6 +37,7 @@ void Profiler::begin(VkCommandBuffer cmd, const char* name) {
 }
 
 void Profiler::end(VkCommandBuffer cmd) {
+    ctx_->end_label(cmd);
     const std::uint32_t count = counts_[slot_];
     if (!pool_ || count == 0) return;
     ctx_->vk().vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_,

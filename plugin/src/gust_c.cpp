@@ -295,7 +295,7 @@ gust::Hooks to_cpp(gust_hooks& c) {
 gust::HostDevice to_cpp(const gust_host_device& c) {
     gust::HostDevice out;
     auto& [instance, physical_device, device, queue_family, queue_index, get_instance_proc_addr,
-           get_device_proc_addr, enabled_extensions] = out;
+           get_device_proc_addr, enabled_extensions, debug_utils] = out;
     instance = c.instance;
     physical_device = c.physical_device;
     device = c.device;
@@ -304,6 +304,7 @@ gust::HostDevice to_cpp(const gust_host_device& c) {
     get_instance_proc_addr = c.get_instance_proc_addr;
     get_device_proc_addr = c.get_device_proc_addr;
     if (c.enabled_extension_count > 0) enabled_extensions = {c.enabled_extensions, c.enabled_extension_count};
+    debug_utils = c.debug_utils;
     return out;
 }
 
@@ -446,7 +447,8 @@ gust_wind_texture to_c(const gust::WindTexture& t) {
 gust_frame_stats to_c(const gust::FrameStats& f) {
     const auto& [frame, fragments, voxels, nodes, refined, coarsened, pool_bytes, fragment_bytes, dense_bytes,
                  divergence_before, divergence_after, residual, cycles, converged, diverged, sealed_cells,
-                 rejected_triangles, ms] = f;
+                 rejected_triangles, dispatches, submissions, waits, cut_cells, fluid_cells, free_node_blocks,
+                 free_mask_blocks, exhausted, static_rebuilt, nodes_per_level, ms] = f;
     return {.frame = frame,
             .fragments = fragments,
             .voxels = voxels,
@@ -462,8 +464,17 @@ gust_frame_stats to_c(const gust::FrameStats& f) {
             .cycles = cycles,
             .sealed_cells = sealed_cells,
             .rejected_triangles = rejected_triangles,
+            .dispatches = dispatches,
+            .submissions = submissions,
+            .waits = waits,
+            .cut_cells = cut_cells,
+            .fluid_cells = fluid_cells,
+            .free_node_blocks = free_node_blocks,
+            .free_mask_blocks = free_mask_blocks,
+            .exhausted = exhausted,
             .converged = converged,
-            .diverged = diverged};
+            .diverged = diverged,
+            .static_rebuilt = static_rebuilt};
 }
 
 std::vector<gust::Vec3> to_cpp(const gust_vec3* points, std::size_t count) {
@@ -779,6 +790,19 @@ gust_result gust_system_stats(gust_system system, gust_frame_stats* stats) {
     return on_system(system, "gust_system_stats", [&](gust::System& s) -> gust::Outcome {
         if (!stats) return invalid("stats (the output) is NULL");
         *stats = to_c(s.stats());
+        return {};
+    });
+}
+
+gust_result gust_system_stats_nodes_per_level(gust_system system, uint64_t* nodes, uint32_t capacity,
+                                              uint32_t* count) {
+    return on_system(system, "gust_system_stats_nodes_per_level", [&](gust::System& s) -> gust::Outcome {
+        if (!count) return invalid("count (the output) is NULL");
+        if (!nodes && capacity > 0)
+            return invalid("nodes is NULL but capacity is " + std::to_string(capacity));
+        const auto& levels = s.stats().nodes_per_level;
+        *count = count32(levels.size());
+        std::copy_n(levels.begin(), std::min<std::size_t>(capacity, levels.size()), nodes);
         return {};
     });
 }

@@ -96,7 +96,9 @@ template <class F> Outcome guarded(F&& body) {
 struct System::Impl {
     explicit Impl(const Hooks& h)
         : hooks(h), memory(h), meshes(&memory), instances(&memory),
-          queries(&memory), stats{.ms = FrameStats::Timings(&memory)}, slots(&memory) {}
+          queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
+                                  .ms = FrameStats::Timings(&memory)},
+          slots(&memory) {}
 
     Hooks hooks;
     HookResource memory;
@@ -180,7 +182,7 @@ struct System::Impl {
     /// static set to the world.
     std::pmr::vector<GpuInstance> frame_instances();
     /// Stats from a finished frame.
-    void take_stats(const WorldFrame& frame, const WindStats& wind);
+    void take_stats(const WorldFrame& frame, const WindStats& wind, const gpu::WorkCounts& work);
 
     /// HostCommands: per frame in flight, where its counters and async answers come back.
     struct Slot {
@@ -188,8 +190,9 @@ struct System::Impl {
         gpu::Buffer readback; ///< world counters, solver counters, then answers at answers_offset()
         gpu::Buffer points;   ///< async query points asked in the frame
         std::pmr::vector<QueryId> asked;
-        bool used = false;       ///< a recorded frame's results wait here
-        std::uint64_t frame = 0; ///< the frame they belong to (gpu::Context::begin_frame)
+        bool used = false;            ///< a recorded frame's results wait here
+        std::uint64_t frame = 0;      ///< the frame they belong to (gpu::Context::begin_frame)
+        std::uint64_t dispatches = 0; ///< dispatches and draws the frame recorded
     };
     std::pmr::vector<Slot> slots;
     static std::size_t answers_offset();
@@ -240,6 +243,7 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::mem
         host.get_instance_proc_addr = h.get_instance_proc_addr;
         host.get_device_proc_addr = h.get_device_proc_addr;
         host.enabled_extensions = h.enabled_extensions;
+        host.debug_utils = h.debug_utils;
         host.memory = memory;
         auto ctx = gpu::Context::adopt(host);
         if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
@@ -618,8 +622,12 @@ std::pmr::vector<GpuInstance> System::Impl::frame_instances() {
     return dynamic;
 }
 
-void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wind) {
+void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wind,
+                              const gpu::WorkCounts& work) {
     FrameStats& st = stats;
+    st.dispatches = work.dispatches;
+    st.submissions = std::uint32_t(work.submissions);
+    st.waits = std::uint32_t(work.waits);
     const TreeStats& tree = world_frame.tree;
     st.frame = world_frame.frame;
     st.fragments = world_frame.static_voxelize.fragments + world_frame.dynamic_voxelize.fragments;
@@ -641,6 +649,13 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
     st.rejected_triangles =
         std::uint32_t(world_frame.dynamic_voxelize.rejected +
                       (world_frame.static_rebuilt ? world_frame.static_voxelize.rejected : 0));
+    st.cut_cells = wind.cut_cells;
+    st.fluid_cells = wind.fluid_cells;
+    st.free_node_blocks = tree.free_node_blocks;
+    st.free_mask_blocks = tree.free_mask_blocks;
+    st.exhausted = tree.exhausted;
+    st.static_rebuilt = world_frame.static_rebuilt;
+    st.nodes_per_level.assign(tree.nodes_per_level.begin(), tree.nodes_per_level.end());
     st.ms.assign(world_frame.ms.begin(), world_frame.ms.end());
     for (const auto& [pass, ms] : wind.ms)
         st.ms.emplace_back("wind_", ms).first.append(pass);
@@ -660,6 +675,7 @@ Outcome System::step(float dt) {
     if (Outcome o = check_dt(dt); !o) return o;
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
+        const gpu::WorkCounts before = m.ctx->work();
         glm::ivec3 shift;
         if (Outcome o = m.scroll_cells(shift); !o) return o;
         if (shift != glm::ivec3(0)) {
@@ -692,7 +708,10 @@ Outcome System::step(float dt) {
             if (Outcome o = m.check(at == answers->size(), "every queued point answered", __LINE__); !o)
                 return o;
         }
-        m.take_stats(*frame, *wind);
+        const gpu::WorkCounts& after = m.ctx->work();
+        m.take_stats(*frame, *wind,
+                     {after.dispatches - before.dispatches, after.submissions - before.submissions,
+                      after.waits - before.waits});
         return {};
     });
 }
@@ -718,7 +737,7 @@ Outcome System::Impl::collect(Slot& slot) {
     }
     slot.asked.clear();
     slot.used = false;
-    take_stats(*done, wind);
+    take_stats(*done, wind, {slot.dispatches, 0, 0});
     return {};
 }
 
@@ -762,6 +781,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
 
         // Whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
         // comes before this frame's work.
+        const std::uint64_t dispatched = m.ctx->work().dispatches;
         gpu::barrier(*m.ctx, commands);
         if (shift != glm::ivec3(0)) {
             m.solver->record_scroll(commands, shift);
@@ -798,6 +818,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         slot.asked = std::move(asked);
         slot.used = true;
         slot.frame = n;
+        slot.dispatches = m.ctx->work().dispatches - dispatched;
         ++m.frame;
         m.publish_texture();
         return {};

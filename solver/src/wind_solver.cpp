@@ -110,39 +110,40 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     struct Stage {
         gpu::Pipeline* pipeline;
         std::span<const std::uint32_t> code;
+        const char* name;
     };
-    const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp)},
-                            {&m.fragment_args, words(fragment_args_comp)},
-                            {&m.solid_motion, words(solid_motion_comp)},
-                            {&m.fill_link, words(fill_link_comp)},
-                            {&m.fill_finish, words(fill_finish_comp)},
-                            {&m.solid_faces, words(solid_faces_comp)},
-                            {&m.coarse_weights, words(coarse_weights_comp)},
-                            {&m.advect, words(advect_comp)},
-                            {&m.forces, words(forces_comp)},
-                            {&m.vorticity, words(vorticity_comp)},
-                            {&m.confine, words(confine_comp)},
-                            {&m.diffuse, words(diffuse_comp)},
-                            {&m.divergence, words(divergence_comp)},
-                            {&m.relax, words(relax_comp)},
-                            {&m.residual, words(residual_comp)},
-                            {&m.restrict_, words(restrict_comp)},
-                            {&m.prolong, words(prolong_comp)},
-                            {&m.coarse_solve, words(coarse_solve_comp)},
-                            {&m.check, words(check_comp)},
-                            {&m.cg, words(cg_comp)},
-                            {&m.cg_scalars, words(cg_scalars_comp)},
-                            {&m.project, words(project_comp)},
-                            {&m.extend, words(extend_comp)},
-                            {&m.scroll, words(scroll_comp)},
-                            {&m.sample, words(sample_comp)}};
+    const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp), "gust solid_cells"},
+                            {&m.fragment_args, words(fragment_args_comp), "gust fragment_args"},
+                            {&m.solid_motion, words(solid_motion_comp), "gust solid_motion"},
+                            {&m.fill_link, words(fill_link_comp), "gust fill_link"},
+                            {&m.fill_finish, words(fill_finish_comp), "gust fill_finish"},
+                            {&m.solid_faces, words(solid_faces_comp), "gust solid_faces"},
+                            {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
+                            {&m.advect, words(advect_comp), "gust advect"},
+                            {&m.forces, words(forces_comp), "gust forces"},
+                            {&m.vorticity, words(vorticity_comp), "gust vorticity"},
+                            {&m.confine, words(confine_comp), "gust confine"},
+                            {&m.diffuse, words(diffuse_comp), "gust diffuse"},
+                            {&m.divergence, words(divergence_comp), "gust divergence"},
+                            {&m.relax, words(relax_comp), "gust relax"},
+                            {&m.residual, words(residual_comp), "gust residual"},
+                            {&m.restrict_, words(restrict_comp), "gust restrict"},
+                            {&m.prolong, words(prolong_comp), "gust prolong"},
+                            {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
+                            {&m.check, words(check_comp), "gust check"},
+                            {&m.cg, words(cg_comp), "gust cg"},
+                            {&m.cg_scalars, words(cg_scalars_comp), "gust cg_scalars"},
+                            {&m.project, words(project_comp), "gust project"},
+                            {&m.extend, words(extend_comp), "gust extend"},
+                            {&m.scroll, words(scroll_comp), "gust scroll"},
+                            {&m.sample, words(sample_comp), "gust sample"}};
     // cg_scalars.comp sums every level-0 workgroup's partial in one workgroup: as wide as the device
     // allows (a power of two, up to 1024), so that each thread adds few of them.
     const std::uint32_t sum_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, 1024u));
     for (const Stage& stage : stages) {
         const std::uint32_t constants[] = {sum_group};
         auto pipeline = gpu::Pipeline::compute(
-            ctx, stage.code, sizeof(SolverPush),
+            ctx, stage.name, stage.code, sizeof(SolverPush),
             stage.pipeline == &m.cg_scalars ? std::span(constants) : std::span<const std::uint32_t>());
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
@@ -337,7 +338,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
         push.parity = 2;
         const LevelDispatch g = groups_for(cell_count());
         m.sample.bind(cmd, &push, sizeof(push));
-        ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+        m.sample.dispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     });
     if (!s) return s;
@@ -387,7 +388,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     push.parity = 0;
     const LevelDispatch g = groups_for(count);
     m.sample.bind(cmd, &push, sizeof(push));
-    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    m.sample.dispatch(cmd, g.x, g.y, g.z);
     gpu::barrier(ctx_, cmd);
 }
 
@@ -408,7 +409,7 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     push.parity = 1;
     const LevelDispatch g = groups_for(cell_count());
     m.sample.bind(cmd, &push, sizeof(push));
-    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    m.sample.dispatch(cmd, g.x, g.y, g.z);
     gpu::barrier(ctx_, cmd);
 }
 
@@ -427,7 +428,7 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     push.shift = cells;
     const LevelDispatch g = groups_for(face_count());
     m.scroll.bind(cmd, &push, sizeof(push));
-    ctx_.vk().vkCmdDispatch(cmd, g.x, g.y, g.z);
+    m.scroll.dispatch(cmd, g.x, g.y, g.z);
     gpu::barrier(ctx_, cmd);
     const VkBufferCopy face_bytes{0, 0, face_count() * sizeof(float)};
     ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &face_bytes);
@@ -497,14 +498,14 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     push.dt = dt;
     auto run = [&](const gpu::Pipeline& p, LevelDispatch g) {
         p.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatch(cmd, g.x, g.y, g.z);
+        p.dispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     };
     // Indirect dispatches are the pressure solve's many small passes, each followed by another
     // dispatch (or the check, whose run() ends in a full barrier), so a compute barrier suffices.
     auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
         p.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
+        p.dispatch_indirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
         gpu::compute_barrier(ctx_, cmd);
     };
     auto copy = [&](const gpu::Buffer& from, const gpu::Buffer& to) {
@@ -554,7 +555,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     run(m.solid_cells, cell_groups);
     run(m.fragment_args, {1, 1, 1});
     m.solid_motion.bind(cmd, &push, sizeof(push));
-    vk.vkCmdDispatchIndirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
+    m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
     m.profiler.end(cmd);
     m.profiler.begin(cmd, "fill");

@@ -74,16 +74,20 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     tree->fragment_shift_ = desc.fragment_shift;
     struct Stage {
         gpu::Pipeline* pipeline;
+        const char* name;
         std::span<const std::uint32_t> code;
     };
-    const Stage stages[] = {
-        {&tree->begin_, words(tree_begin_comp)},     {&tree->fragments_, words(tree_fragments_comp)},
-        {&tree->clear_, words(tree_clear_comp)},     {&tree->visit_, words(tree_visit_comp)},
-        {&tree->plan_, words(tree_plan_comp)},       {&tree->alloc_, words(tree_alloc_comp)},
-        {&tree->advance_, words(tree_advance_comp)}, {&tree->leaf_, words(tree_leaf_comp)},
-        {&tree->coarsen_, words(tree_coarsen_comp)}};
+    const Stage stages[] = {{&tree->begin_, "gust tree_begin", words(tree_begin_comp)},
+                            {&tree->fragments_, "gust tree_fragments", words(tree_fragments_comp)},
+                            {&tree->clear_, "gust tree_clear", words(tree_clear_comp)},
+                            {&tree->visit_, "gust tree_visit", words(tree_visit_comp)},
+                            {&tree->plan_, "gust tree_plan", words(tree_plan_comp)},
+                            {&tree->alloc_, "gust tree_alloc", words(tree_alloc_comp)},
+                            {&tree->advance_, "gust tree_advance", words(tree_advance_comp)},
+                            {&tree->leaf_, "gust tree_leaf", words(tree_leaf_comp)},
+                            {&tree->coarsen_, "gust tree_coarsen", words(tree_coarsen_comp)}};
     for (const Stage& stage : stages) {
-        auto pipeline = gpu::Pipeline::compute(ctx, stage.code, sizeof(TreePush));
+        auto pipeline = gpu::Pipeline::compute(ctx, stage.name, stage.code, sizeof(TreePush));
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
@@ -194,16 +198,15 @@ void SparseTree::write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings
 }
 
 void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned) {
-    const auto& vk = ctx_.vk();
     TreePush push{bindings.address(), frame_, 0, pinned ? 1u : 0u, 0};
     auto once = [&](const gpu::Pipeline& p) {
         p.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatch(cmd, 1, 1, 1);
+        p.dispatch(cmd, 1, 1, 1);
         gpu::barrier(ctx_, cmd);
     };
     auto indirect = [&](const gpu::Pipeline& p, std::size_t offset) {
         p.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, state_.handle(), offset);
+        p.dispatch_indirect(cmd, state_.handle(), offset);
         gpu::barrier(ctx_, cmd);
     };
     once(fragments_);
@@ -281,10 +284,10 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     gpu::barrier(ctx_, cmd);
     TreePush push{dynamic_bindings_.address(), frame_, 0, 0, 0};
     begin_.bind(cmd, &push, sizeof(push));
-    vk.vkCmdDispatch(cmd, 1, 1, 1);
+    begin_.dispatch(cmd, 1, 1, 1);
     gpu::barrier(ctx_, cmd);
     clear_.bind(cmd, &push, sizeof(push));
-    vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
+    clear_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
     gpu::barrier(ctx_, cmd);
     profiler_.end(cmd);
     if (rebuild_static) {
@@ -299,7 +302,7 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     }
     profiler_.begin(cmd, "tree_coarsen");
     coarsen_.bind(cmd, &push, sizeof(push));
-    vk.vkCmdDispatchIndirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
+    coarsen_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));
     gpu::barrier(ctx_, cmd);
     profiler_.end(cmd);
 }

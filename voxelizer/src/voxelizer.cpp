@@ -121,17 +121,20 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
         raster.fragment = words(voxelize_frag);
         raster.push_constant_bytes = sizeof(VoxelizePush);
         raster.constants = constants;
-        auto r = gpu::Pipeline::graphics(ctx, raster);
+        auto r = gpu::Pipeline::graphics(ctx, "gust voxelize_raster", raster);
         if (!r) return r.status();
         v->raster_[with_velocity] = std::move(*r);
-        auto small = gpu::Pipeline::compute(ctx, words(voxelize_tri_comp), sizeof(VoxelizePush), constants);
+        auto small = gpu::Pipeline::compute(ctx, "gust voxelize_tri", words(voxelize_tri_comp),
+                                            sizeof(VoxelizePush), constants);
         if (!small) return small.status();
         v->compute_small_[with_velocity] = std::move(*small);
-        auto large = gpu::Pipeline::compute(ctx, words(voxelize_large_comp), sizeof(VoxelizePush), constants);
+        auto large = gpu::Pipeline::compute(ctx, "gust voxelize_large", words(voxelize_large_comp),
+                                            sizeof(VoxelizePush), constants);
         if (!large) return large.status();
         v->compute_large_[with_velocity] = std::move(*large);
     }
-    auto args = gpu::Pipeline::compute(ctx, words(voxelize_args_comp), sizeof(VoxelizePush));
+    auto args =
+        gpu::Pipeline::compute(ctx, "gust voxelize_args", words(voxelize_args_comp), sizeof(VoxelizePush));
     if (!args) return args.status();
     v->compute_args_ = std::move(*args);
     auto profiler = gpu::Profiler::create(ctx);
@@ -489,7 +492,7 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
             push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
             push.triangle_count = mesh.triangles_;
             raster_[with_velocity].bind(cmd, &push, sizeof(push));
-            vk.vkCmdDraw(cmd, 3 * mesh.triangles_, 1, 0, 0);
+            raster_[with_velocity].draw(cmd, 3 * mesh.triangles_);
         }
         vk.vkCmdEndRendering(cmd);
         profiler_.end(cmd);
@@ -509,14 +512,16 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
             push.first_triangle = first;
             push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
             compute_small_[with_velocity].bind(cmd, &push, sizeof(push));
-            vk.vkCmdDispatch(cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
+            compute_small_[with_velocity].dispatch(
+                cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
         }
         gpu::barrier(ctx_, cmd);
         compute_args_.bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatch(cmd, 1, 1, 1);
+        compute_args_.dispatch(cmd, 1, 1, 1);
         gpu::barrier(ctx_, cmd);
         compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
-        vk.vkCmdDispatchIndirect(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_dispatch));
+        compute_large_[with_velocity].dispatch_indirect(cmd, counters_.handle(),
+                                                        offsetof(VoxelizeCounters, large_dispatch));
         gpu::barrier(ctx_, cmd);
     }
     if (!first_compute) profiler_.end(cmd);

@@ -106,6 +106,7 @@ typedef struct gust_host_device {
     PFN_vkGetDeviceProcAddr get_device_proc_addr;     ///< NULL: loaded through get_instance_proc_addr
     const char* const* enabled_extensions;            ///< device extensions the host enabled; read in create
     uint32_t enabled_extension_count;                 ///< entries in enabled_extensions
+    bool debug_utils; ///< the instance has VK_EXT_debug_utils: gust names its pipelines, buffers and passes
 } gust_host_device;
 
 /// What a host enables on its instance and device before gust can adopt it (arrays and strings are static).
@@ -237,8 +238,17 @@ typedef struct gust_frame_stats {
     uint32_t cycles;             ///< V-cycles (or iterations) the pressure solve ran
     uint32_t sealed_cells;       ///< cells whose air is sealed inside solids (solid for the wind)
     uint32_t rejected_triangles; ///< triangles with non-finite vertices after transform this frame
+    uint64_t dispatches;         ///< GPU dispatches and draws the step recorded (indirect ones included)
+    uint32_t submissions;        ///< queue submissions the step made (host commands: 0)
+    uint32_t waits;              ///< times the step waited for the GPU (host commands: 0)
+    uint32_t cut_cells;          ///< wind cells holding solid voxels
+    uint32_t fluid_cells;        ///< wind cells in the pressure solve
+    uint32_t free_node_blocks;   ///< tree node blocks on the free list
+    uint32_t free_mask_blocks;   ///< tree leaf-mask blocks on the free list
+    uint32_t exhausted;          ///< refinements refused by a full pool (that frame's solids were partial)
     bool converged;              ///< the pressure solve reached the tolerance
     bool diverged;               ///< the solve diverged and was stopped; the step projected nothing
+    bool static_rebuilt;         ///< the static set was voxelized again
 } gust_frame_stats;
 
 /// The voxel grid of the solid boundary (gust_system_debug_voxel_grid). Voxel (i, j, k) is the world-space
@@ -385,6 +395,12 @@ gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* text
 
 /// Fills `stats` with the last step's statistics.
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats);
+
+/// Tree nodes per level of the last step's statistics (levels 1..depth-1, then leaf bricks): `*count`
+/// receives the number of levels and the first min(capacity, *count) go into `nodes` (NULL with capacity 0
+/// asks for the count).
+gust_result gust_system_stats_nodes_per_level(gust_system system, uint64_t* nodes, uint32_t capacity,
+                                              uint32_t* count);
 
 /// `*count` receives how many timed GPU passes the last step's statistics hold (0 without timestamps).
 gust_result gust_system_stats_pass_count(gust_system system, uint32_t* count);

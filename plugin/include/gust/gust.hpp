@@ -96,6 +96,9 @@ struct HostDevice {
     PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;     ///< null: loaded through the above
     /// Device extensions the host enabled (gust uses VK_EXT_conservative_rasterization when listed).
     std::span<const char* const> enabled_extensions;
+    /// The instance has VK_EXT_debug_utils enabled: gust names its pipelines and buffers and labels its
+    /// passes in the host's command buffers, so RenderDoc or Nsight show them by name.
+    bool debug_utils = false;
 };
 
 /// What a host must enable on its instance and device before gust can adopt it.
@@ -244,6 +247,21 @@ struct FrameStats {
     bool diverged = false;
     std::uint32_t sealed_cells = 0;       ///< cells whose air is sealed inside solids (solid for the wind)
     std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
+    /// The step's GPU work: dispatches and draws recorded (indirect ones counted even when emptied).
+    std::uint64_t dispatches = 0;
+    std::uint32_t submissions = 0; ///< queue submissions the step made (HostCommands: 0, the host submits)
+    std::uint32_t waits = 0;       ///< times the step waited for the GPU (HostCommands: 0)
+    std::uint32_t cut_cells = 0;   ///< wind cells holding solid voxels
+    std::uint32_t fluid_cells = 0; ///< wind cells in the pressure solve (with an open face)
+    std::uint32_t free_node_blocks = 0; ///< tree node blocks on the free list
+    std::uint32_t free_mask_blocks = 0; ///< tree leaf-mask blocks on the free list
+    /// Refinements refused because a tree pool was full: that frame's solids were partial, and the pools
+    /// grow for the frames after it.
+    std::uint32_t exhausted = 0;
+    bool static_rebuilt = false; ///< the static set was voxelized again (added, moved, removed; a scroll)
+    /// Tree nodes per level 1..depth−1, then leaf bricks (the root is level 0), in the System's host memory.
+    using Counts = std::pmr::vector<std::uint64_t>;
+    Counts nodes_per_level;
     /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate).
     using Timings = std::pmr::vector<std::pair<std::pmr::string, double>>;
     Timings ms;

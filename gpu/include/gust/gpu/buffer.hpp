@@ -21,9 +21,10 @@ enum class MemoryUse {
 class Buffer {
   public:
     Buffer() = default;
-    /// Creates a buffer of `size` bytes (> 0). Storage, transfer and device-address usage are always added.
+    /// Creates a buffer of `size` bytes (> 0) named `name` for capture tools (a literal, or null). Storage,
+    /// transfer and device-address usage are always added.
     static Result<Buffer> create(Context& ctx, VkDeviceSize size, MemoryUse use,
-                                 VkBufferUsageFlags extra_usage = 0);
+                                 VkBufferUsageFlags extra_usage = 0, const char* name = nullptr);
     ~Buffer();
     Buffer(Buffer&& other) noexcept;
     Buffer& operator=(Buffer&& other) noexcept;

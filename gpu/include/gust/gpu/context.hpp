@@ -37,6 +37,10 @@ struct ContextDesc {
     /// Host memory for the Context, the modules created on it and Vulkan's host allocations; null is
     /// new/delete (and the driver's own allocator). Must outlive the Context.
     std::pmr::memory_resource* memory = nullptr;
+    /// A file the pipeline cache is read from (when it holds this device's cache) and written to by
+    /// Context::save_pipeline_cache(); empty keeps the cache in memory only. Tools that run once per
+    /// call (gust voxelize) create their pipelines from it instead of compiling them.
+    std::string pipeline_cache;
 };
 
 /// What gust needs from a device, for a host that creates the VkDevice gust adopts. Names are static
@@ -96,6 +100,9 @@ struct HostDevice {
     /// (which must have VK_EXT_debug_utils enabled); it also sees messages about the host's own calls.
     /// Null creates no messenger.
     MessageCallback on_message;
+    /// The host's instance has VK_EXT_debug_utils enabled: gust names its pipelines and buffers and labels
+    /// its passes in the host's command buffers (RenderDoc, Nsight). Implied by on_message.
+    bool debug_utils = false;
     /// As ContextDesc::memory.
     std::pmr::memory_resource* memory = nullptr;
 };
@@ -115,6 +122,13 @@ struct DeviceInfo {
     /// Largest one-dimensional compute workgroup: min(maxComputeWorkGroupInvocations,
     /// maxComputeWorkGroupSize[0]); Vulkan guarantees 128.
     std::uint32_t max_workgroup_size = 0;
+};
+
+/// GPU work counted over a Context's life; a frame's cost is the difference across it.
+struct WorkCounts {
+    std::uint64_t dispatches = 0;  ///< dispatches and draws recorded, indirect ones included
+    std::uint64_t submissions = 0; ///< queue submissions
+    std::uint64_t waits = 0;       ///< times the host waited for the GPU
 };
 
 /// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
@@ -152,6 +166,26 @@ class Context : public HostObject {
     /// Names and types of every device the instance sees, in enumeration order (for errors and `gust info`);
     /// empty for an adopted device.
     const std::pmr::vector<std::pmr::string>& device_names() const { return device_names_; }
+
+    /// Dispatches, draws, submissions and waits so far (Pipeline counts the first two, submit_and_wait the
+    /// others).
+    const WorkCounts& work() const { return work_; }
+    /// Internal: a dispatch or draw was recorded.
+    void count_dispatch() { ++work_.dispatches; }
+
+    /// The pipeline cache every pipeline is created through (ContextDesc::pipeline_cache).
+    VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
+    /// Writes the pipeline cache to ContextDesc::pipeline_cache (nothing when none was named), so the
+    /// next process creates its pipelines from it instead of compiling them.
+    Status save_pipeline_cache() const;
+
+    /// Whether VK_EXT_debug_utils is on, so that names and labels reach capture tools.
+    bool debug_utils() const { return vk_.vkSetDebugUtilsObjectNameEXT != nullptr; }
+    /// Names a Vulkan object for capture tools (nothing without VK_EXT_debug_utils; `name` may be null).
+    void name(VkObjectType type, std::uint64_t handle, const char* name) const;
+    /// Opens a labelled region of `cmd` (a pass) for capture tools; close it with end_label().
+    void begin_label(VkCommandBuffer cmd, const char* name) const;
+    void end_label(VkCommandBuffer cmd) const;
 
     /// Validation-layer messages of warning or error severity seen so far (tests fail when > 0).
     std::uint32_t validation_messages() const { return validation_messages_.load(); }
@@ -218,6 +252,8 @@ class Context : public HostObject {
     std::mutex* queue_mutex_ = nullptr;
     VkCommandPool pool_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
+    VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;
+    std::pmr::string pipeline_cache_path_;
     VkPhysicalDeviceMemoryProperties memory_{};
     DeviceInfo info_;
     std::pmr::vector<std::pmr::string> device_names_;
@@ -230,6 +266,7 @@ class Context : public HostObject {
     bool deferred_ = false;
     std::uint64_t recording_frame_ = 0;
     std::pmr::vector<Released> released_;
+    WorkCounts work_;
     std::atomic<std::uint32_t> validation_messages_{0};
     mutable std::mutex message_mutex_;
     std::pmr::string last_message_;

@@ -22,13 +22,13 @@ struct GraphicsPipelineDesc {
 class Pipeline {
   public:
     Pipeline() = default;
-    /// A compute pipeline with `push_constant_bytes` of push constants (entry point "main");
-    /// `constants[i]` specializes constant_id i.
-    static Result<Pipeline> compute(Context& ctx, std::span<const std::uint32_t> spirv,
+    /// A compute pipeline named `name` (for capture tools; a literal) with `push_constant_bytes` of push
+    /// constants (entry point "main"); `constants[i]` specializes constant_id i.
+    static Result<Pipeline> compute(Context& ctx, const char* name, std::span<const std::uint32_t> spirv,
                                     std::uint32_t push_constant_bytes,
                                     std::span<const std::uint32_t> constants = {});
     /// A graphics pipeline with no vertex input, no attachments and dynamic viewport and scissor.
-    static Result<Pipeline> graphics(Context& ctx, const GraphicsPipelineDesc& desc);
+    static Result<Pipeline> graphics(Context& ctx, const char* name, const GraphicsPipelineDesc& desc);
     ~Pipeline();
     Pipeline(Pipeline&& other) noexcept;
     Pipeline& operator=(Pipeline&& other) noexcept;
@@ -37,6 +37,12 @@ class Pipeline {
 
     /// Binds the pipeline and pushes `bytes` of constants (all stages).
     void bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) const;
+    /// vkCmdDispatch, counted in the Context's work (every dispatch of gust goes through these three).
+    void dispatch(VkCommandBuffer cmd, std::uint32_t x, std::uint32_t y = 1, std::uint32_t z = 1) const;
+    /// vkCmdDispatchIndirect, counted alike (an emptied one still costs its dispatch).
+    void dispatch_indirect(VkCommandBuffer cmd, VkBuffer arguments, VkDeviceSize offset) const;
+    /// vkCmdDraw of `vertices` vertices, one instance, counted alike.
+    void draw(VkCommandBuffer cmd, std::uint32_t vertices) const;
     VkPipeline handle() const { return pipeline_; }
     VkPipelineLayout layout() const { return layout_; }
 

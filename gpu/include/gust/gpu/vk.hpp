@@ -32,11 +32,17 @@ namespace gust::gpu {
 // Optional instance entry points (VK_EXT_debug_utils); null when the extension is off.
 #define GUST_VK_DEBUG_FUNCTIONS(X)                                                                           \
     X(vkCreateDebugUtilsMessengerEXT)                                                                        \
-    X(vkDestroyDebugUtilsMessengerEXT)
+    X(vkDestroyDebugUtilsMessengerEXT)                                                                       \
+    X(vkSetDebugUtilsObjectNameEXT)                                                                          \
+    X(vkCmdBeginDebugUtilsLabelEXT)                                                                          \
+    X(vkCmdEndDebugUtilsLabelEXT)
 
 // Entry points loaded from vkGetDeviceProcAddr(device, ...).
 #define GUST_VK_DEVICE_FUNCTIONS(X)                                                                          \
     X(vkDestroyDevice)                                                                                       \
+    X(vkCreatePipelineCache)                                                                                 \
+    X(vkDestroyPipelineCache)                                                                                \
+    X(vkGetPipelineCacheData)                                                                                \
     X(vkGetDeviceQueue)                                                                                      \
     X(vkDeviceWaitIdle)                                                                                      \
     X(vkCreateBuffer)                                                                                        \
@@ -87,8 +93,8 @@ namespace gust::gpu {
     X(vkCmdDispatchIndirect)                                                                                 \
     X(vkCmdPipelineBarrier2)                                                                                 \
     X(vkCmdFillBuffer)                                                                                       \
-    X(vkCmdCopyBuffer)                                                                                     \
-    X(vkCmdUpdateBuffer)                                                                                       \
+    X(vkCmdCopyBuffer)                                                                                       \
+    X(vkCmdUpdateBuffer)                                                                                     \
     X(vkCmdBeginRendering)                                                                                   \
     X(vkCmdEndRendering)                                                                                     \
     X(vkCmdSetViewport)                                                                                      \
