@@ -235,13 +235,13 @@ void World::update(double t) {
             posed_[o.mesh].clear();
             meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, 1.4 * tf, true, posed_[o.mesh]);
         } else if (o.name == "cesium man") {
-            // An ellipse around the middle of the field, walking at about 1 m/s; the file is z-up.
+            // An ellipse around the middle of the field, walking at about 1 m/s. The file is z-up, but its
+            // skin's joints carry the turn to y-up, so the posed vertices stand up already (+x forward).
             const float a = -0.16f * tf;
             const glm::vec3 p(1.0f + 7.0f * std::cos(a), 0.0f, -2.0f + 3.5f * std::sin(a));
             const glm::vec3 forward =
                 glm::normalize(glm::vec3(7.0f * std::sin(a), 0.0f, -3.5f * std::cos(a)));
-            o.model = glm::rotate(place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f), -0.5f * kPi,
-                                  glm::vec3(1, 0, 0));
+            o.model = place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f);
             posed_[o.mesh].clear();
             meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, tf, true, posed_[o.mesh]);
         } else if (o.name == "flying bunny") {
