@@ -133,7 +133,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     grass_ = graphics(grass_v, grass_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
     voxels_ = graphics(full_v, voxels_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
     lines_ = graphics(lines_v, lines_f, VK_PRIMITIVE_TOPOLOGY_LINE_LIST, false, true, false, false);
-    arrows_ = graphics(arrows_v, lines_f, VK_PRIMITIVE_TOPOLOGY_LINE_LIST, false, false, false, false);
+    arrows_ = graphics(arrows_v, lines_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, false, false);
     slice_ = graphics(slice_v, slice_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, false, false, false, true);
     VkComputePipelineCreateInfo compute{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     compute.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -442,7 +442,9 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
     u.wind_min = glm::vec4(view.wind_origin, domain_.cell_size);
     u.wind_cells = glm::vec4(static_cast<float>(domain_.cells[0]), static_cast<float>(domain_.cells[1]),
                              static_cast<float>(domain_.cells[2]), 8.0f);
-    u.slice = glm::vec4(views.slice_height, 0.25f, 0.0f, 0.0f);
+    // Arrows as long as 0.15 of a cell per m/s, so that they keep clear of each other on any grid.
+    u.slice = glm::vec4(views.slice_height, 0.15f * domain_.cell_size, static_cast<float>(extent.width),
+                        static_cast<float>(extent.height));
     std::memcpy(uniforms_.mapped, &u, sizeof(u));
 
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
@@ -506,7 +508,7 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
     }
     if (views.arrows) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, arrows_);
-        vkCmdDraw(cmd, 6, domain_.cells[0] * domain_.cells[2], 0, 0);
+        vkCmdDraw(cmd, io::kArrowVertices, domain_.cells[0] * domain_.cells[2], 0, 0);
     }
     if (views.slice) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, slice_);

@@ -9,6 +9,8 @@ GUST_NAMESPACE_BEGIN
 GUST_CONST uint kFoliageGroupSize = 64;
 /// Vertices of one grass blade: one triangle, root to tip.
 GUST_CONST uint kBladeVertices = 3;
+/// Vertices of one wind arrow: a shaft of two triangles and a head.
+GUST_CONST uint kArrowVertices = 9;
 
 /// Per-frame values every pass reads (uniform buffer, binding 0; only vec4 and mat4 for std140).
 struct FrameUniforms {
@@ -21,7 +23,7 @@ struct FrameUniforms {
     vec4 voxel_dims;            ///< xyz: voxels per axis; w: 1 when the occupancy volume is valid
     vec4 wind_min;              ///< xyz: min corner of the wind domain (world, m); w: cell size (m)
     vec4 wind_cells;            ///< xyz: wind cells per axis; w: speed drawn as the top colour (m/s)
-    vec4 slice;                 ///< x: slice height (world y, m); y: arrow length per m/s (m); z, w: 0
+    vec4 slice;                 ///< x: slice height (world y, m); y: arrow length per m/s (m); zw: frame size (px)
 };
 
 /// Push constants of mesh draws.
