@@ -452,7 +452,7 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
         vkCmdBindIndexBuffer(cmd, meshes_[d.mesh].indices.buffer, 0, VK_INDEX_TYPE_UINT32);
         vkCmdDrawIndexed(cmd, meshes_[d.mesh].index_count, 1, 0, 0, 0);
     }
-    if (grass_count_ > 0) {
+    if (views.grass && grass_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, grass_);
         vkCmdDraw(cmd, grass_count_ * io::kBladeVertices, 1, 0, 0);
     }

@@ -2,6 +2,7 @@
 // GPU, and the debug views (voxels, tree nodes, wind slice and arrows).
 #pragma once
 
+#include "views.hpp"
 #include "vk_host.hpp"
 #include "voxel_faces.hpp"
 #include "world.hpp"
@@ -13,16 +14,6 @@
 #include <vector>
 
 namespace sample {
-
-/// What the views show; keys toggle them (docs/sample.md).
-struct Views {
-    bool triangles = true; ///< Q: the solid meshes
-    bool voxels = false;   ///< W: gust's voxels, ray-cast
-    bool nodes = false;    ///< R: tree node boxes, coloured by this frame's refine and coarsen
-    bool slice = false;    ///< T: wind speed on a horizontal slice
-    bool arrows = false;   ///< Y: wind arrows on the slice
-    float slice_height = 1.0f;
-};
 
 /// A coloured line vertex (node boxes).
 struct LineVertex {

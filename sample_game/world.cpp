@@ -231,7 +231,7 @@ void World::update(double t) {
             const glm::vec3 p(4.5f * std::cos(a), 0.0f, 2.0f + 4.5f * std::sin(a));
             const glm::vec3 forward(-std::sin(a), 0.0f, std::cos(a));
             o.model = place(p, std::atan2(forward.x, forward.z), 0.01f);
-            follow_target_ = p + glm::vec3(0.0f, 0.6f, 0.0f);
+            stage_.fox = {p, forward};
             posed_[o.mesh].clear();
             meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, 1.4 * tf, true, posed_[o.mesh]);
         } else if (o.name == "cesium man") {
@@ -242,6 +242,7 @@ void World::update(double t) {
             const glm::vec3 forward =
                 glm::normalize(glm::vec3(7.0f * std::sin(a), 0.0f, -3.5f * std::cos(a)));
             o.model = place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f);
+            stage_.walker = {p, forward};
             posed_[o.mesh].clear();
             meshes_[o.mesh].animation->pose(meshes_[o.mesh].clip, tf, true, posed_[o.mesh]);
         } else if (o.name == "flying bunny") {
@@ -252,6 +253,7 @@ void World::update(double t) {
             const glm::vec3 v(9.0f * std::cos(a), 0.0f, 5.0f * std::cos(2.0f * a));
             const glm::vec3 forward = glm::normalize(v);
             o.model = place(p, std::atan2(forward.x, forward.z), 0.12f);
+            stage_.flyer = {p, forward};
             // The bunny carries a motor that blows backwards along its path, like a propeller.
             flyer_motor_.type = gust::WindEmitterType::CapsuleMotor;
             flyer_motor_.position = to_gust(p + glm::vec3(0.0f, 0.6f, 0.0f));
@@ -264,6 +266,7 @@ void World::update(double t) {
             const gust::WindEmitter f = fan(t);
             o.model = place({f.position.x, f.position.y, f.position.z},
                             std::atan2(-f.direction.z, f.direction.x), 1.0f);
+            stage_.fan = {f.position.x, f.position.y, f.position.z};
         }
     }
 }
