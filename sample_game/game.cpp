@@ -6,6 +6,7 @@
 #include "overlay.hpp"
 #include "renderer.hpp"
 #include "tour.hpp"
+#include "video.hpp"
 
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>
@@ -91,6 +92,7 @@ class Game {
     void build_overlay(bool windowed);
     void refresh_debug_views();
     void write_stats(std::ofstream& stats, std::uint64_t frame, double frame_ms, double wind_ms);
+    void write_video(const std::vector<std::filesystem::path>& frames, float dt) const;
 
     GameOptions options_;
     bool glfw_ = false;
@@ -384,6 +386,13 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     stats << line.dump() << "\n";
 }
 
+void Game::write_video(const std::vector<std::filesystem::path>& frames, float dt) const {
+    const int frame_ms = static_cast<int>(std::lround(1000.0 * dt * options_.png_every));
+    const VideoOutcome video =
+        write_animated_webp(frames, frame_ms, options_.out / (options_.tour ? "tour.webp" : "frames.webp"));
+    std::fprintf(stderr, "gust_sample: %s\n", video.message.c_str());
+}
+
 int Game::run() {
     const bool windowed = open_window();
     // Headless runs step a fixed dt so their frames do not depend on the machine's speed; windowed runs
@@ -447,6 +456,7 @@ int Game::run() {
 
     std::uint64_t frame = 0;
     double steady_ms = 0.0;
+    std::vector<std::filesystem::path> pngs;
     Clock::time_point last = Clock::now();
     while (options_.frames == 0 || frame < options_.frames) {
         if (windowed) {
@@ -520,7 +530,8 @@ int Game::run() {
         if (!windowed && !options_.out.empty() && frame % options_.png_every == 0) {
             char name[32];
             std::snprintf(name, sizeof(name), "frame_%04llu.png", static_cast<unsigned long long>(frame));
-            offscreen_->write_png(options_.out / name);
+            pngs.push_back(options_.out / name);
+            offscreen_->write_png(pngs.back());
         }
         if (!windowed && frame % 30 == 0)
             std::fprintf(stderr, "gust_sample: frame %llu, %.1f fps%s%s\n", static_cast<unsigned long long>(frame),
@@ -533,6 +544,7 @@ int Game::run() {
         static_cast<unsigned long long>(frame), fps_,
         frame > 1 ? steady_ms / static_cast<double>(frame - 1) : 0.0);
     std::fflush(stdout);
+    if (options_.video && pngs.size() >= 2) write_video(pngs, fixed_dt);
     if (vk_->validation_messages() > 0) {
         std::fprintf(stderr, "gust_sample: %u validation messages\n", vk_->validation_messages());
         return 1;

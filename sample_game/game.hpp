@@ -15,7 +15,7 @@ namespace sample {
 struct GameOptions {
     bool headless = false;       ///< render offscreen even when a display exists
     std::uint32_t frames = 0;    ///< stop after this many frames (0: windowed, until closed; headless, the tour)
-    std::filesystem::path out;   ///< PNG frames (headless) and stats.jsonl; empty: no files
+    std::filesystem::path out;   ///< PNG frames (headless), the animated WebP and stats.jsonl; empty: no files
     std::uint32_t png_every = 1; ///< headless: write every K-th frame's PNG
     std::uint32_t width = 960, height = 540;
     std::filesystem::path assets; ///< the repository's assets/ folder
@@ -27,6 +27,7 @@ struct GameOptions {
     bool tour = true;                ///< play the guided tour (windowed: until the camera is touched)
     bool follow = false;             ///< start with the camera following the fox
     bool hud = true;                 ///< start with the overlay shown (H toggles it)
+    bool video = true;               ///< headless: encode the PNG frames into an animated WebP as well
     WorldSettings world;             ///< its grass_blades are the preset's (or --grass)
 };
 

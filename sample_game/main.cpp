@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
                  "render offscreen and write PNG frames (also without a display)");
     app.add_option("--frames", options.frames, "stop after N frames (headless default: the tour's length)");
     app.add_option("--out", out,
-                   "folder for PNG frames and stats.jsonl (headless default out/sample)");
+                   "folder for PNG frames, the animated WebP and stats.jsonl (headless default out/sample)");
     app.add_option("--png-every", options.png_every, "headless: write every K-th frame's PNG")
         ->check(CLI::PositiveNumber);
     app.add_option("--width", options.width, "frame width in pixels")->check(CLI::Range(64u, 8192u));
@@ -41,11 +41,12 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(-360.0f, 360.0f));
     app.add_option("--gustiness", options.world.gustiness, "relative size of the gusts")
         ->check(CLI::Range(0.0f, 1.0f));
-    bool no_fan = false, no_motor = false, no_hud = false, no_tour = false;
+    bool no_fan = false, no_motor = false, no_hud = false, no_tour = false, no_video = false;
     app.add_flag("--no-hud", no_hud, "start with the HUD and captions hidden");
     app.add_flag("--no-fan", no_fan, "switch the fan off");
     app.add_flag("--no-motor", no_motor, "switch the flyer's motor off");
     app.add_flag("--no-tour", no_tour, "no guided tour: a slowly circling camera (headless) or yours (windowed)");
+    app.add_flag("--no-video", no_video, "headless: write no animated WebP of the frames");
     CLI::Option* cells_option =
         app.add_option("--cells", cells, "wind cells X,Y,Z, each 8..256 (default: the preset's)")
             ->delimiter(',')
@@ -104,6 +105,7 @@ int main(int argc, char** argv) {
     // Asking for views or the follow camera is asking for a camera of one's own.
     options.tour = !no_tour && !views_option->count() && !follow_option->count();
     options.hud = !no_hud;
+    options.video = !no_video;
     options.world.fan_on = !no_fan;
     options.world.flyer_motor_on = !no_motor;
     options.assets = assets;

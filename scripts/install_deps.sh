@@ -12,6 +12,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth
+  webp
 )
 
 missing=()
