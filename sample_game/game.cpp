@@ -88,7 +88,8 @@ class Game {
     void on_key(int key);
     /// A person moved the camera or changed a view: the tour gives them the camera.
     void take_over() { touring_ = false; }
-    void direct_camera(bool windowed);
+    /// Points the camera (and, touring, sets the views) for the frame that starts at world time `start`.
+    void direct_camera(bool windowed, double start);
     void build_overlay(bool windowed);
     void refresh_debug_views();
     void write_stats(std::ofstream& stats, std::uint64_t frame, double frame_ms, double wind_ms);
@@ -320,9 +321,10 @@ void Game::refresh_debug_views() {
     }
 }
 
-void Game::direct_camera(bool windowed) {
+void Game::direct_camera(bool windowed, double start) {
     if (touring_) {
-        tour_frame_ = tour_at(t_ - tour_start_, world_->stage());
+        // The tour's clock reads 0 on its first frame, so N frames of dt show [0, N dt) of it.
+        tour_frame_ = tour_at(start - tour_start_, world_->stage());
         camera_ = tour_frame_.camera;
         views_ = tour_frame_.views;
     } else if (follow_) {
@@ -358,6 +360,10 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     line["frame"] = frame;
     line["time"] = t_;
     if (touring_) line["shot"] = tour_frame_.shot->key;
+    line["views"] = view_letters(views_);
+    line["follow"] = follow_;
+    const glm::vec3 eye = camera_.eye();
+    line["eye"] = {eye.x, eye.y, eye.z};
     line["quality"] = quality_name(quality_);
     line["cells"] = {domain_.cells[0], domain_.cells[1], domain_.cells[2]};
     line["cell_size"] = domain_.cell_size;
@@ -472,9 +478,10 @@ int Game::run() {
             vkDeviceWaitIdle(vk_->device());
             make_wind();
         }
+        const double start_t = t_;
         t_ += dt;
         world_->update(t_);
-        direct_camera(windowed);
+        direct_camera(windowed, start_t);
         const Clock::time_point wind_start = Clock::now();
         if (dt > 0.0f) {
             const glm::vec3 focus = follow_ ? world_->follow_target() : glm::vec3(0.0f);

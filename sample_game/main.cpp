@@ -3,7 +3,6 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -24,14 +23,10 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_option("--width", options.width, "frame width in pixels")->check(CLI::Range(64u, 8192u));
     app.add_option("--height", options.height, "frame height in pixels")->check(CLI::Range(64u, 8192u));
-    app.add_option("--quality", options.quality,
+    std::string quality = "auto";
+    app.add_option("--quality", quality,
                    "detail preset: auto (from the device type), low, medium or high (docs/sample.md)")
-        ->transform(CLI::CheckedTransformer(std::map<std::string, sample::Quality>{
-                                                {"auto", sample::Quality::Auto},
-                                                {"low", sample::Quality::Low},
-                                                {"medium", sample::Quality::Medium},
-                                                {"high", sample::Quality::High}},
-                                            CLI::ignore_case));
+        ->check(CLI::IsMember({"auto", "low", "medium", "high"}, CLI::ignore_case));
     CLI::Option* grass_option = app.add_option("--grass", grass, "grass blades (default: the preset's)")
                                     ->check(CLI::Range(0u, 2000000u));
     app.add_option("--wind", options.world.wind_speed, "ambient wind speed, m/s")
@@ -66,7 +61,7 @@ int main(int argc, char** argv) {
         app.add_option("--dt", dt, "fixed time step, s (default 1/30 headless; windowed: the clock)")
             ->check(CLI::Range(0.001f, 0.5f));
     CLI::Option* views_option = app.add_option(
-        "--views", views, "debug views to start with: any of q (hide triangles), w, r, t, y (no tour)");
+        "--views", views, "views to start with: any of q (hide triangles), g (hide grass), w, r, t, y (no tour)");
     CLI::Option* follow_option = app.add_flag("--follow", options.follow, "camera follows the fox (no tour)");
     app.add_flag("--validation", options.validation, "Khronos validation on; any message fails the run");
     app.add_option("--assets", assets, "the repository's assets/ folder");
@@ -76,6 +71,9 @@ int main(int argc, char** argv) {
         switch (v) {
         case 'q':
             options.views.triangles = false;
+            break;
+        case 'g':
+            options.views.grass = false;
             break;
         case 'w':
             options.views.voxels = true;
@@ -92,10 +90,11 @@ int main(int argc, char** argv) {
         case ',':
             break;
         default:
-            std::fprintf(stderr, "gust_sample: error: --views takes letters from 'qwrty', got '%c'\n", v);
+            std::fprintf(stderr, "gust_sample: error: --views takes letters from 'qgwrty', got '%c'\n", v);
             return 2;
         }
     }
+    options.quality = *sample::parse_quality(quality);
     if (cells_option->count()) options.detail.cells = {{cells[0], cells[1], cells[2]}};
     if (cell_size_option->count()) options.detail.cell_size = cell_size;
     if (voxels_option->count()) options.detail.voxels_per_cell = voxels_per_cell;

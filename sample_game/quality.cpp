@@ -1,5 +1,8 @@
 #include "quality.hpp"
 
+#include <algorithm>
+#include <cctype>
+
 namespace sample {
 
 Quality quality_for_device(VkPhysicalDeviceType type) {
@@ -55,6 +58,16 @@ const char* quality_name(Quality quality) {
         break;
     }
     return "auto";
+}
+
+std::optional<Quality> parse_quality(std::string_view name) {
+    for (Quality q : {Quality::Auto, Quality::Low, Quality::Medium, Quality::High}) {
+        const std::string_view spelled = quality_name(q);
+        if (std::equal(name.begin(), name.end(), spelled.begin(), spelled.end(),
+                       [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; }))
+            return q;
+    }
+    return std::nullopt;
 }
 
 const char* device_type_words(VkPhysicalDeviceType type) {

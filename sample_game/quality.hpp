@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string_view>
 #include <vulkan/vulkan.h>
 
 namespace sample {
@@ -44,6 +45,8 @@ Detail preset(Quality quality);
 Detail apply(Detail detail, const DetailOverrides& overrides);
 /// "auto", "low", "medium" or "high", as the command line spells them.
 const char* quality_name(Quality quality);
+/// The quality quality_name() spells as `name`, in any case; nothing for any other name.
+std::optional<Quality> parse_quality(std::string_view name);
 /// "a CPU device", "a discrete GPU", ...: the words `auto` decides on.
 const char* device_type_words(VkPhysicalDeviceType type);
 
