@@ -109,7 +109,7 @@ class Game {
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
     Quality quality_ = Quality::Low; ///< resolved preset
-    Detail detail_;                  ///< the preset with the command line's overrides; E and the panels change it
+    Detail detail_; ///< the preset with the command line's overrides; E and the panels change it
     OrbitCamera camera_;
     Views views_;
     bool follow_ = false;
@@ -407,8 +407,9 @@ int Game::run() {
     const bool fixed_step = !windowed || options_.dt.has_value();
     if (!windowed) {
         if (options_.frames == 0)
-            options_.frames = options_.tour ? static_cast<std::uint32_t>(std::ceil(tour_seconds() / fixed_dt - 1e-6))
-                                            : kFreeRunFrames;
+            options_.frames = options_.tour
+                                  ? static_cast<std::uint32_t>(std::ceil(tour_seconds() / fixed_dt - 1e-6))
+                                  : kFreeRunFrames;
         if (options_.out.empty()) options_.out = "out/sample";
     }
     std::vector<const char*> extensions;
@@ -425,10 +426,11 @@ int Game::run() {
     std::fprintf(stderr,
                  "gust_sample: %s on %s, %s; quality %s%s: %ux%ux%u cells of %.2f m, %u voxels per cell, %u "
                  "grass blades, %u pressure iterations a frame\n",
-                 windowed ? "windowed" : "headless", vk_->properties().deviceName, device_type_words(device_type),
-                 quality_name(quality_), options_.quality == Quality::Auto ? " (auto)" : "", detail_.cells[0],
-                 detail_.cells[1], detail_.cells[2], detail_.cell_size, detail_.voxels_per_cell,
-                 detail_.grass_blades, detail_.max_cycles);
+                 windowed ? "windowed" : "headless", vk_->properties().deviceName,
+                 device_type_words(device_type), quality_name(quality_),
+                 options_.quality == Quality::Auto ? " (auto)" : "", detail_.cells[0], detail_.cells[1],
+                 detail_.cells[2], detail_.cell_size, detail_.voxels_per_cell, detail_.grass_blades,
+                 detail_.max_cycles);
     world_ = std::make_unique<World>(options_.assets, options_.world);
     if (windowed)
         swapchain_ = std::make_unique<Swapchain>(*vk_, window_);
@@ -541,8 +543,9 @@ int Game::run() {
             offscreen_->write_png(pngs.back());
         }
         if (!windowed && frame % 30 == 0)
-            std::fprintf(stderr, "gust_sample: frame %llu, %.1f fps%s%s\n", static_cast<unsigned long long>(frame),
-                         fps_, touring_ ? ", shot " : "", touring_ ? tour_frame_.shot->key : "");
+            std::fprintf(stderr, "gust_sample: frame %llu, %.1f fps%s%s\n",
+                         static_cast<unsigned long long>(frame), fps_, touring_ ? ", shot " : "",
+                         touring_ ? tour_frame_.shot->key : "");
         ++frame;
     }
     vkDeviceWaitIdle(vk_->device());

@@ -13,13 +13,13 @@ namespace sample {
 
 /// Everything the command line sets (docs/sample.md lists the flags).
 struct GameOptions {
-    bool headless = false;       ///< render offscreen even when a display exists
-    std::uint32_t frames = 0;    ///< stop after this many frames (0: windowed, until closed; headless, the tour)
-    std::filesystem::path out;   ///< PNG frames (headless), the animated WebP and stats.jsonl; empty: no files
+    bool headless = false;    ///< render offscreen even when a display exists
+    std::uint32_t frames = 0; ///< stop after this many frames (0: windowed, until closed; headless, the tour)
+    std::filesystem::path out; ///< PNG frames (headless), the animated WebP and stats.jsonl; empty: no files
     std::uint32_t png_every = 1; ///< headless: write every K-th frame's PNG
     std::uint32_t width = 960, height = 540;
-    std::filesystem::path assets; ///< the repository's assets/ folder
-    bool validation = false;      ///< Khronos validation on the game's device; any message fails the run
+    std::filesystem::path assets;    ///< the repository's assets/ folder
+    bool validation = false;         ///< Khronos validation on the game's device; any message fails the run
     Quality quality = Quality::Auto; ///< detail preset (Auto: from the device type)
     DetailOverrides detail;          ///< the preset's values the command line replaced
     std::optional<float> dt;         ///< fixed time step (s); unset: 1/30 headless, the clock windowed

@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
     app.add_flag("--no-hud", no_hud, "start with the HUD and captions hidden");
     app.add_flag("--no-fan", no_fan, "switch the fan off");
     app.add_flag("--no-motor", no_motor, "switch the flyer's motor off");
-    app.add_flag("--no-tour", no_tour, "no guided tour: a slowly circling camera (headless) or yours (windowed)");
+    app.add_flag("--no-tour", no_tour,
+                 "no guided tour: a slowly circling camera (headless) or yours (windowed)");
     app.add_flag("--no-video", no_video, "headless: write no animated WebP of the frames");
     CLI::Option* cells_option =
         app.add_option("--cells", cells, "wind cells X,Y,Z, each 8..256 (default: the preset's)")
@@ -54,14 +55,15 @@ int main(int argc, char** argv) {
         app.add_option("--voxels-per-cell", voxels_per_cell,
                        "voxels per wind cell per axis: 1, 2, 4 or 8 (default: the preset's)")
             ->check(CLI::IsMember({1u, 2u, 4u, 8u}));
-    CLI::Option* iterations_option =
-        app.add_option("--max-iterations", max_iterations, "pressure iterations per frame (default: the preset's)")
-            ->check(CLI::Range(1u, 200u));
+    CLI::Option* iterations_option = app.add_option("--max-iterations", max_iterations,
+                                                    "pressure iterations per frame (default: the preset's)")
+                                         ->check(CLI::Range(1u, 200u));
     CLI::Option* dt_option =
         app.add_option("--dt", dt, "fixed time step, s (default 1/30 headless; windowed: the clock)")
             ->check(CLI::Range(0.001f, 0.5f));
     CLI::Option* views_option = app.add_option(
-        "--views", views, "views to start with: any of q (hide triangles), g (hide grass), w, r, t, y (no tour)");
+        "--views", views,
+        "views to start with: any of q (hide triangles), g (hide grass), w, r, t, y (no tour)");
     CLI::Option* follow_option = app.add_flag("--follow", options.follow, "camera follows the fox (no tour)");
     app.add_flag("--validation", options.validation, "Khronos validation on; any message fails the run");
     app.add_option("--assets", assets, "the repository's assets/ folder");

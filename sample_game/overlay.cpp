@@ -29,11 +29,15 @@ void draw_stats_bar(const OverlayReport& report) {
     ImGui::SetNextWindowBgAlpha(0.55f);
     ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(6, 3));
     ImGui::Begin("##stats", nullptr, kLabel);
-    ImGui::Text("%.1f fps | gust %.1f ms GPU | %ux%ux%u cells of %.2f m, %u vox | tree +%llu -%llu blocks | "
-                "residual %.1e | %s",
-                report.fps, gpu_ms(s), d.cells[0], d.cells[1], d.cells[2], d.cell_size, d.voxels_per_cell,
-                static_cast<unsigned long long>(s.refined), static_cast<unsigned long long>(s.coarsened),
-                s.residual, quality_name(report.quality));
+    // Wrapped at the frame's edge, so that small frames keep it all on two lines.
+    ImGui::PushTextWrapPos(ImGui::GetIO().DisplaySize.x - 20.0f);
+    ImGui::TextWrapped(
+        "%.1f fps | gust %.1f ms GPU | %ux%ux%u cells of %.2f m, %u vox | tree +%llu -%llu blocks | "
+        "residual %.1e | %s",
+        report.fps, gpu_ms(s), d.cells[0], d.cells[1], d.cells[2], d.cell_size, d.voxels_per_cell,
+        static_cast<unsigned long long>(s.refined), static_cast<unsigned long long>(s.coarsened), s.residual,
+        quality_name(report.quality));
+    ImGui::PopTextWrapPos();
     if (report.windowed)
         ImGui::TextDisabled("Tab panels  H hide  C %s  drag orbit  wheel zoom  F follow  Q G W R T Y views",
                             report.touring ? "stop the tour" : "tour");
@@ -82,7 +86,8 @@ PanelActions draw_panels(const OverlayReport& report, const PanelControls& contr
         ImGui::Text("voxels %llu, fragments %llu", static_cast<unsigned long long>(s.voxels),
                     static_cast<unsigned long long>(s.fragments));
         ImGui::Text("tree %.1f KiB, fragments %.1f KiB, dense grid %.1f KiB",
-                    static_cast<double>(s.pool_bytes) / 1024.0, static_cast<double>(s.fragment_bytes) / 1024.0,
+                    static_cast<double>(s.pool_bytes) / 1024.0,
+                    static_cast<double>(s.fragment_bytes) / 1024.0,
                     static_cast<double>(s.dense_bytes) / 1024.0);
         ImGui::Text("pressure: %u iterations, residual %.2e%s", s.cycles, s.residual,
                     s.converged ? "" : " (capped)");

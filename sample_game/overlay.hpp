@@ -16,13 +16,13 @@ namespace sample {
 
 /// What the overlay reports this frame.
 struct OverlayReport {
-    double fps = 0.0;                       ///< frames per second since the first frame
-    double frame_ms = 0.0;                  ///< the last frame, ms
+    double fps = 0.0;                        ///< frames per second since the first frame
+    double frame_ms = 0.0;                   ///< the last frame, ms
     const gust::FrameStats* stats = nullptr; ///< gust's last step
-    gust::WindDomain domain;                ///< the System's domain
-    Quality quality = Quality::Low;         ///< the resolved preset
-    bool windowed = false;                  ///< a person is at the keys: show them
-    bool touring = false;                   ///< the tour directs the camera
+    gust::WindDomain domain;                 ///< the System's domain
+    Quality quality = Quality::Low;          ///< the resolved preset
+    bool windowed = false;                   ///< a person is at the keys: show them
+    bool touring = false;                    ///< the tour directs the camera
 };
 
 /// The stats bar: one line at the top left (and, in a window, one line of keys).
@@ -35,8 +35,8 @@ void draw_caption(const TourFrame& frame);
 struct PanelControls {
     WorldSettings& world;
     Views& views;
-    bool& follow;                                                 ///< camera follows the fox
-    std::array<std::uint32_t, 3>& cells;                          ///< applied on request
+    bool& follow;                                                  ///< camera follows the fox
+    std::array<std::uint32_t, 3>& cells;                           ///< applied on request
     const std::map<std::uint32_t, std::uint64_t>& nodes_per_level; ///< from the R view's download
 };
 

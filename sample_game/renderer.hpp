@@ -85,7 +85,7 @@ class Renderer {
     std::uint32_t foliage_count_ = 0, grass_count_ = 0;
     VoxelFaces face_finder_;
     std::vector<VoxelFace> face_list_;
-    Buffer faces_;                ///< face_list_ for the W view's draw
+    Buffer faces_; ///< face_list_ for the W view's draw
     std::uint32_t face_count_ = 0;
     gust::VoxelGridInfo voxel_grid_{};
     gust::WindTexture wind_{};

@@ -13,9 +13,9 @@ struct Actor {
 
 /// The actors the tour films (World::stage).
 struct Stage {
-    Actor fox;    ///< walking a circle through the grass
-    Actor walker; ///< CesiumMan, walking an ellipse
-    Actor flyer;  ///< the bunny with a motor, flying a figure of eight
+    Actor fox;           ///< walking a circle through the grass
+    Actor walker;        ///< CesiumMan, walking an ellipse
+    Actor flyer;         ///< the bunny with a motor, flying a figure of eight
     glm::vec3 fan{0.0f}; ///< the fan's head
 };
 

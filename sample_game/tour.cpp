@@ -76,7 +76,7 @@ void field(const Stage&, float u, OrbitCamera& camera, Views& views) {
     camera.target = {0.0f, 0.0f, 0.0f};
     camera.yaw = 2.0f + 0.25f * u;
     camera.pitch = 1.1f;
-    camera.distance = 30.0f;
+    camera.distance = 26.0f;
     views.slice = true;
     views.arrows = true;
     views.slice_height = 1.0f;
@@ -91,7 +91,8 @@ constexpr Shot kShots[] = {
      "The fox is a moving solid: it pushes the air it walks through, and the grass around it bends.", 3.0f,
      grass},
     {"fan", "The fan",
-     "A cone emitter sweeping 35 degrees either way every 8 s: the grass in its jet lies flat, the arrows show "
+     "A cone emitter sweeping 35 degrees either way every 8 s: the grass in its jet lies flat, the arrows "
+     "show "
      "the wind at its height.",
      2.5f, fan},
     {"wake", "The flyer's wake",

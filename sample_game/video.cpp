@@ -43,8 +43,8 @@ VideoOutcome write_animated_webp(std::span<const std::filesystem::path> frames, 
     if (encoder.empty())
         return {false, "img2webp not found (Debian package webp): no " + out.filename().string() +
                            ", the PNG frames are all there"};
-    std::vector<std::string> args = {encoder.string(), "-loop", "0", "-lossy", "-q", kQuality, "-m", "4",
-                                     "-d", std::to_string(frame_ms)};
+    std::vector<std::string> args = {encoder.string(), "-loop", "0", "-lossy", "-q",
+                                     kQuality,         "-m",    "4", "-d",     std::to_string(frame_ms)};
     for (const std::filesystem::path& frame : frames)
         args.push_back(frame.string());
     args.push_back("-o");
@@ -57,7 +57,8 @@ VideoOutcome write_animated_webp(std::span<const std::filesystem::path> frames, 
     const std::string log = out.string() + ".log";
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
     pid_t pid = 0;
     const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
@@ -68,7 +69,8 @@ VideoOutcome write_animated_webp(std::span<const std::filesystem::path> frames, 
         if (errno != EINTR) return {false, "lost " + encoder.string() + " while it ran"};
     }
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !std::filesystem::exists(out))
-        return {false, encoder.string() + " failed (its output is in " + log + "): no " + out.filename().string()};
+        return {false,
+                encoder.string() + " failed (its output is in " + log + "): no " + out.filename().string()};
     std::filesystem::remove(log);
     const double kib = static_cast<double>(std::filesystem::file_size(out)) / 1024.0;
     char line[256];

@@ -11,7 +11,7 @@ struct Views {
     bool grass = true;         ///< G: the grass blades
     bool voxels = false;       ///< W: gust's voxels, ray-cast
     bool nodes = false;        ///< R: tree node boxes, coloured by this frame's refine and coarsen
-    bool every_node = true; ///< R draws every node; off: only those moving meshes reach, made or freed
+    bool every_node = true;    ///< R draws every node; off: only those moving meshes reach, made or freed
     bool slice = false;        ///< T: wind speed on a horizontal slice
     bool arrows = false;       ///< Y: wind arrows on the slice
     float slice_height = 1.0f; ///< world y of the slice and the arrows, m

@@ -20,7 +20,8 @@ void VoxelFaces::find(std::span<const gust::VoxelCoord> voxels, std::vector<Voxe
     }
     const std::array<std::int64_t, 3> size{hi[0] - lo[0] + 3, hi[1] - lo[1] + 3, hi[2] - lo[2] + 3};
     auto index = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-        return static_cast<std::size_t>(((k - lo[2] + 1) * size[1] + (j - lo[1] + 1)) * size[0] + (i - lo[0] + 1));
+        return static_cast<std::size_t>(((k - lo[2] + 1) * size[1] + (j - lo[1] + 1)) * size[0] +
+                                        (i - lo[0] + 1));
     };
     const std::size_t words = (static_cast<std::size_t>(size[0] * size[1] * size[2]) + 63) / 64;
     bits_.assign(words, 0);

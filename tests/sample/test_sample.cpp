@@ -280,9 +280,9 @@ TEST(SampleGame, autoQualityFollowsTheDeviceType) {
     const fs::path out = fresh_dir("auto");
     const Outcome r = run("--headless --frames 1 --no-video --out " + out.string() + kSmall);
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const std::string expected = r.output.find("a CPU device") != std::string::npos       ? "low"
+    const std::string expected = r.output.find("a CPU device") != std::string::npos     ? "low"
                                  : r.output.find("a discrete GPU") != std::string::npos ? "high"
-                                                                                         : "medium";
+                                                                                        : "medium";
     EXPECT_NE(r.output.find("quality " + expected + " (auto)"), std::string::npos) << r.output;
     EXPECT_EQ(read_stats(out / "stats.jsonl").at(0)["quality"], expected);
     fs::remove_all(out);
@@ -297,8 +297,9 @@ TEST(SampleGame, anUnknownQualityIsAClearErrorBeforeAnythingStarts) {
 
 TEST(SampleGame, theWindowedTourUnderXvfbPlaysEveryShotAndExitsCleanly) {
     const fs::path out = fresh_dir("windowed_tour");
-    const Outcome r = run_command("xvfb-run -a -s \"-screen 0 640x480x24\" " + std::string(GUST_SAMPLE_BINARY) +
-                                  " --frames 31 --dt 0.5 --out " + out.string() + kSmall);
+    const Outcome r =
+        run_command("xvfb-run -a -s \"-screen 0 640x480x24\" " + std::string(GUST_SAMPLE_BINARY) +
+                    " --frames 31 --dt 0.5 --out " + out.string() + kSmall);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("windowed"), std::string::npos) << r.output;
     EXPECT_EQ(distinct_in_order(shots_of(read_stats(out / "stats.jsonl"))), kShots);
@@ -309,8 +310,8 @@ TEST(SampleGame, aPersonAtTheWindowTakesTheCameraFromTheTourAndCGivesItBack) {
     // Under Xvfb, xdotool drags across the window (the tour stops), presses F and W (follow the fox, voxels
     // on), then C (the tour again) and Esc (quit). Each step waits a second: several frames at any speed.
     const fs::path out = fresh_dir("person");
-    const std::string game = std::string(GUST_SAMPLE_BINARY) + " --frames 3000 --dt 0.1 --out " +
-                             out.string() + kSmall;
+    const std::string game =
+        std::string(GUST_SAMPLE_BINARY) + " --frames 3000 --dt 0.1 --out " + out.string() + kSmall;
     const std::string script = game + " & game=$!; "
                                       "win=$(xdotool search --sync --name \"gust sample\"); "
                                       "xdotool mousemove --window $win 96 54; sleep 1; "
