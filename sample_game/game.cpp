@@ -218,8 +218,10 @@ void Game::on_key(int key) {
         if (!follow_) camera_.target = kFieldCentre;
         break;
     case GLFW_KEY_C:
+        // The tour starts from its first shot and films the field, so the domain stops following the fox.
         touring_ = !touring_;
         tour_start_ = t_;
+        if (touring_) follow_ = false;
         break;
     case GLFW_KEY_H:
         show_hud_ = !show_hud_;
