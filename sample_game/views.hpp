@@ -9,7 +9,7 @@ namespace sample {
 struct Views {
     bool triangles = true;     ///< Q: the solid meshes
     bool grass = true;         ///< G: the grass blades
-    bool voxels = false;       ///< W: gust's voxels, ray-cast
+    bool voxels = false;       ///< W: gust's voxels (their faces that meet empty space)
     bool nodes = false;        ///< R: tree node boxes, coloured by this frame's refine and coarsen
     bool every_node = true;    ///< R draws every node; off: only those moving meshes reach, made or freed
     bool slice = false;        ///< T: wind speed on a horizontal slice

@@ -1,5 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+// Shades the W view's voxel faces (voxels.vert) with the scene's sun, sky and haze.
 #include "sample_common.glsl"
 
 layout(location = 0) in vec3 world;
