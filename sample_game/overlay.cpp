@@ -1,17 +1,20 @@
 #include "overlay.hpp"
 
 #include <algorithm>
-#include <cfloat>
+#include <cstdio>
 #include <imgui.h>
+#include <initializer_list>
 #include <string>
 
 namespace sample {
 
 namespace {
 
-constexpr ImGuiWindowFlags kLabel = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize |
-                                    ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoNav |
-                                    ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoSavedSettings;
+// Labels size themselves here rather than with AlwaysAutoResize, which hides a window on its first frame
+// while it measures itself: the first frame of a headless run would have no overlay.
+constexpr ImGuiWindowFlags kLabel = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
+                                    ImGuiWindowFlags_NoNav | ImGuiWindowFlags_NoFocusOnAppearing |
+                                    ImGuiWindowFlags_NoSavedSettings;
 
 double gpu_ms(const gust::FrameStats& stats) {
     double total = 0.0;
@@ -20,41 +23,70 @@ double gpu_ms(const gust::FrameStats& stats) {
     return total;
 }
 
+/// Lines of text as a label shows them: each wrapped at `wrap` pixels, one item spacing apart.
+ImVec2 text_block(std::initializer_list<const char*> lines, float wrap) {
+    ImVec2 size(0.0f, 0.0f);
+    for (const char* line : lines) {
+        const ImVec2 s = ImGui::CalcTextSize(line, nullptr, false, wrap);
+        size.x = std::max(size.x, s.x);
+        size.y += s.y + (size.y > 0.0f ? ImGui::GetStyle().ItemSpacing.y : 0.0f);
+    }
+    return size;
+}
+
 } // namespace
 
 void draw_stats_bar(const OverlayReport& report) {
     const gust::FrameStats& s = *report.stats;
     const gust::WindDomain& d = report.domain;
-    ImGui::SetNextWindowPos(ImVec2(6, 6));
-    ImGui::SetNextWindowBgAlpha(0.55f);
-    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(6, 3));
-    ImGui::Begin("##stats", nullptr, kLabel);
-    // Wrapped at the frame's edge, so that small frames keep it all on two lines.
-    ImGui::PushTextWrapPos(ImGui::GetIO().DisplaySize.x - 20.0f);
-    ImGui::TextWrapped(
+    char stats[256];
+    std::snprintf(
+        stats, sizeof(stats),
         "%.1f fps | gust %.1f ms GPU | %ux%ux%u cells of %.2f m, %u vox | tree +%llu -%llu blocks | "
         "residual %.1e | %s",
         report.fps, gpu_ms(s), d.cells[0], d.cells[1], d.cells[2], d.cell_size, d.voxels_per_cell,
         static_cast<unsigned long long>(s.refined), static_cast<unsigned long long>(s.coarsened), s.residual,
         quality_name(report.quality));
+    const char* keys =
+        report.touring
+            ? "Tab panels  H hide  C stop the tour  drag orbit  wheel zoom  F follow  Q G W R T Y views"
+            : "Tab panels  H hide  C tour  drag orbit  wheel zoom  F follow  Q G W R T Y views";
+    // Wrapped at the frame's edge, so that small frames keep it all on two lines.
+    const ImVec2 padding(6.0f, 3.0f);
+    const float wrap = ImGui::GetIO().DisplaySize.x - 20.0f - 2.0f * padding.x;
+    const ImVec2 text = report.windowed ? text_block({stats, keys}, wrap) : text_block({stats}, wrap);
+    ImGui::SetNextWindowPos(ImVec2(6, 6));
+    ImGui::SetNextWindowSize(ImVec2(text.x + 2.0f * padding.x, text.y + 2.0f * padding.y));
+    ImGui::SetNextWindowBgAlpha(0.55f);
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, padding);
+    ImGui::Begin("##stats", nullptr, kLabel);
+    ImGui::PushTextWrapPos(padding.x + wrap);
+    ImGui::TextUnformatted(stats);
+    if (report.windowed) {
+        ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+        ImGui::TextUnformatted(keys);
+        ImGui::PopStyleColor();
+    }
     ImGui::PopTextWrapPos();
-    if (report.windowed)
-        ImGui::TextDisabled("Tab panels  H hide  C %s  drag orbit  wheel zoom  F follow  Q G W R T Y views",
-                            report.touring ? "stop the tour" : "tour");
     ImGui::End();
     ImGui::PopStyleVar();
 }
 
 void draw_caption(const TourFrame& frame) {
     const ImVec2 display = ImGui::GetIO().DisplaySize;
+    const ImVec2 padding = ImGui::GetStyle().WindowPadding;
     const float width = std::min(display.x - 16.0f, 720.0f);
+    const float wrap = width - 2.0f * padding.x;
+    char title[128];
+    std::snprintf(title, sizeof(title), "%zu/%zu  %s", frame.index + 1, tour_shots().size(),
+                  frame.shot->title);
+    const ImVec2 text = text_block({title, frame.shot->caption}, wrap);
     ImGui::SetNextWindowPos(ImVec2(0.5f * display.x, display.y - 8.0f), ImGuiCond_Always, ImVec2(0.5f, 1.0f));
-    ImGui::SetNextWindowSizeConstraints(ImVec2(width, 0.0f), ImVec2(width, FLT_MAX));
+    ImGui::SetNextWindowSize(ImVec2(width, text.y + 2.0f * padding.y));
     ImGui::SetNextWindowBgAlpha(0.6f);
     ImGui::Begin("##caption", nullptr, kLabel);
-    ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.35f, 1.0f), "%zu/%zu  %s", frame.index + 1, tour_shots().size(),
-                       frame.shot->title);
-    ImGui::PushTextWrapPos(width - 2.0f * ImGui::GetStyle().WindowPadding.x);
+    ImGui::PushTextWrapPos(padding.x + wrap);
+    ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.35f, 1.0f), "%s", title);
     ImGui::TextUnformatted(frame.shot->caption);
     ImGui::PopTextWrapPos();
     ImGui::End();
