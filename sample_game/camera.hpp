@@ -9,12 +9,13 @@ namespace sample {
 
 /// An eye on a sphere around `target` (world, m; angles in radians).
 struct OrbitCamera {
-    glm::vec3 target{0.0f, 1.0f, 0.0f};
-    float yaw = 2.4f;       ///< direction from the target to the eye, about +y from +x
-    float pitch = 0.38f;    ///< height of the eye above the target's horizon
-    float distance = 19.0f; ///< from the target to the eye, m
-    float fov_deg = 55.0f;  ///< vertical field of view
+    glm::vec3 target{0.0f, 1.0f, 0.0f}; ///< what the eye looks at (world, m)
+    float yaw = 2.4f;                   ///< direction from the target to the eye, about +y from +x
+    float pitch = 0.38f;                ///< height of the eye above the target's horizon
+    float distance = 19.0f;             ///< from the target to the eye, m
+    float fov_deg = 55.0f;              ///< vertical field of view
 
+    /// Where the eye is (world, m).
     glm::vec3 eye() const {
         return target + distance * glm::vec3(std::cos(pitch) * std::cos(yaw), std::sin(pitch),
                                              std::cos(pitch) * std::sin(yaw));
