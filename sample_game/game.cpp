@@ -1,7 +1,12 @@
 #include "game.hpp"
 
+#include "camera.hpp"
 #include "display.hpp"
 #include "hud.hpp"
+#include "overlay.hpp"
+#include "renderer.hpp"
+#include "tour.hpp"
+#include "video.hpp"
 
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>
@@ -11,14 +16,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <glm/gtc/matrix_transform.hpp>
-#include <imgui.h>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <set>
 #include <tuple>
+#include <vector>
 
 namespace sample {
 
@@ -30,22 +33,12 @@ double ms_since(Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-/// Orbit camera (drag to turn, wheel to zoom) around the middle of the field or, following, the fox.
-struct Camera {
-    float yaw = 2.4f, pitch = 0.38f, distance = 19.0f;
-    glm::vec3 target{0.0f, 1.0f, 0.0f};
-    bool follow = false;
-
-    glm::vec3 eye() const {
-        return target + distance * glm::vec3(std::cos(pitch) * std::cos(yaw), std::sin(pitch),
-                                             std::cos(pitch) * std::sin(yaw));
-    }
-    glm::mat4 view_proj(float aspect) const {
-        glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(55.0f), aspect, 0.1f, 300.0f);
-        proj[1][1] *= -1.0f; // Vulkan's clip space has y down
-        return proj * glm::lookAt(eye(), target, glm::vec3(0, 1, 0));
-    }
-};
+/// The headless time step when --dt does not set one, s.
+constexpr float kHeadlessDt = 1.0f / 30.0f;
+/// Frames of a headless run without the tour and without --frames.
+constexpr std::uint32_t kFreeRunFrames = 300;
+/// Where the camera looks when it follows nothing: the middle of the field.
+constexpr glm::vec3 kFieldCentre{0.0f, 1.0f, 0.0f};
 
 /// Where gust's domain is centred for a focus on the ground at `focus`: the domain's floor sits 1 m under
 /// the ground so that the ground is a solid inside it.
@@ -93,9 +86,14 @@ class Game {
     bool open_window();
     void make_wind();
     void on_key(int key);
-    void build_hud(double frame_ms);
+    /// A person moved the camera or changed a view: the tour gives them the camera.
+    void take_over() { touring_ = false; }
+    /// Points the camera (and, touring, sets the views) for the frame that starts at world time `start`.
+    void direct_camera(bool windowed, double start);
+    void build_overlay(bool windowed);
     void refresh_debug_views();
-    void write_stats(std::ofstream& stats, std::uint64_t frame, double t, double frame_ms, double wind_ms);
+    void write_stats(std::ofstream& stats, std::uint64_t frame, double frame_ms, double wind_ms);
+    void write_video(const std::vector<std::filesystem::path>& frames, float dt) const;
 
     GameOptions options_;
     bool glfw_ = false;
@@ -110,10 +108,17 @@ class Game {
     std::unique_ptr<Hud> hud_;
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
-    Camera camera_;
+    Quality quality_ = Quality::Low; ///< resolved preset
+    Detail detail_; ///< the preset with the command line's overrides; E and the panels change it
+    OrbitCamera camera_;
     Views views_;
-    bool paused_ = false, show_hud_ = true, rebuild_wind_ = false;
-    double fps_ = 0.0;
+    bool follow_ = false;
+    bool touring_ = false;
+    double tour_start_ = 0.0; ///< world time at which the tour (re)started, s
+    TourFrame tour_frame_;    ///< this frame's shot while touring
+    double t_ = 0.0;          ///< world time, s
+    bool paused_ = false, show_hud_ = true, panels_ = false, rebuild_wind_ = false;
+    double fps_ = 0.0, loop_ms_ = 0.0;
     std::set<NodeKey> last_nodes_;
     std::map<std::uint32_t, std::uint64_t> nodes_per_level_;
     bool dragging_ = false;
@@ -155,6 +160,7 @@ bool Game::open_window() {
     glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) {
         auto* game = static_cast<Game*>(glfwGetWindowUserPointer(w));
         if (!game->dragging_) return;
+        game->take_over();
         game->camera_.yaw += 0.008f * static_cast<float>(x - game->drag_x_);
         game->camera_.pitch =
             std::clamp(game->camera_.pitch + 0.008f * static_cast<float>(y - game->drag_y_), 0.05f, 1.5f);
@@ -164,6 +170,7 @@ bool Game::open_window() {
     glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double dy) {
         auto* game = static_cast<Game*>(glfwGetWindowUserPointer(w));
         if (game->hud_ && game->hud_->wants_mouse()) return;
+        game->take_over();
         game->camera_.distance =
             std::clamp(game->camera_.distance * std::pow(0.9f, static_cast<float>(dy)), 2.0f, 120.0f);
     });
@@ -171,35 +178,56 @@ bool Game::open_window() {
 }
 
 void Game::on_key(int key) {
+    // The camera and view keys hand the camera to the person; the tour would undo them on the next frame.
     switch (key) {
     case GLFW_KEY_Q:
+        take_over();
         views_.triangles = !views_.triangles;
         break;
+    case GLFW_KEY_G:
+        take_over();
+        views_.grass = !views_.grass;
+        break;
     case GLFW_KEY_W:
+        take_over();
         views_.voxels = !views_.voxels;
         break;
     case GLFW_KEY_E:
         // As in the seed: one more level of subdivision. With an octree that is twice the voxels per
         // wind cell per axis (up to gust's 8).
         if (domain_.voxels_per_cell < 8) {
-            options_.voxels_per_cell = domain_.voxels_per_cell * 2;
+            detail_.voxels_per_cell = domain_.voxels_per_cell * 2;
             rebuild_wind_ = true;
         }
         break;
     case GLFW_KEY_R:
+        take_over();
         views_.nodes = !views_.nodes;
         break;
     case GLFW_KEY_T:
+        take_over();
         views_.slice = !views_.slice;
         break;
     case GLFW_KEY_Y:
+        take_over();
         views_.arrows = !views_.arrows;
         break;
     case GLFW_KEY_F:
-        camera_.follow = !camera_.follow;
+        take_over();
+        follow_ = !follow_;
+        if (!follow_) camera_.target = kFieldCentre;
+        break;
+    case GLFW_KEY_C:
+        // The tour starts from its first shot and films the field, so the domain stops following the fox.
+        touring_ = !touring_;
+        tour_start_ = t_;
+        if (touring_) follow_ = false;
         break;
     case GLFW_KEY_H:
         show_hud_ = !show_hud_;
+        break;
+    case GLFW_KEY_TAB:
+        panels_ = !panels_;
         break;
     case GLFW_KEY_SPACE:
         paused_ = !paused_;
@@ -217,16 +245,16 @@ void Game::make_wind() {
     gust::HostDevice host = vk_->gust_host();
     gust::SystemDesc desc;
     desc.host = &host;
-    desc.domain.cells[0] = options_.wind_cells[0];
-    desc.domain.cells[1] = options_.wind_cells[1];
-    desc.domain.cells[2] = options_.wind_cells[2];
-    desc.domain.cell_size = options_.cell_size;
-    desc.domain.voxels_per_cell = options_.voxels_per_cell;
+    desc.domain.cells[0] = detail_.cells[0];
+    desc.domain.cells[1] = detail_.cells[1];
+    desc.domain.cells[2] = detail_.cells[2];
+    desc.domain.cell_size = detail_.cell_size;
+    desc.domain.voxels_per_cell = detail_.voxels_per_cell;
     // An octree, as in the seed, so that E (one more level) doubles the resolution.
     desc.domain.branching = 2;
     // The domain's floor sits just under the ground so the grass roots are inside it.
-    desc.domain.focus = domain_centre(glm::vec3(0.0f), options_.cell_size, options_.wind_cells[1]);
-    desc.wind.max_cycles = options_.max_cycles;
+    desc.domain.focus = domain_centre(glm::vec3(0.0f), detail_.cell_size, detail_.cells[1]);
+    desc.wind.max_cycles = detail_.max_cycles;
     desc.wind.tolerance = 1e-3f;
     if (gust::Outcome made = gust::System::create(desc, wind_); !made)
         throw std::runtime_error("gust::System::create: " + made.message());
@@ -247,7 +275,11 @@ void Game::refresh_debug_views() {
             renderer_->set_voxels(grid, voxels);
         }
     }
-    if (views_.nodes) {
+    if (!views_.nodes) {
+        // Nothing to compare the next frame's nodes with: when R comes on again, its first frame is all kept.
+        last_nodes_.clear();
+        nodes_per_level_.clear();
+    } else {
         std::vector<gust::TreeNode> nodes(wind_->stats().nodes);
         std::size_t count = 0;
         if (!wind_->debug_tree_nodes(nodes, count)) return;
@@ -273,6 +305,7 @@ void Game::refresh_debug_views() {
             now.insert(key);
             ++nodes_per_level_[n.level];
             const bool refined = !last_nodes_.empty() && !last_nodes_.count(key);
+            if (!views_.every_node && !refined && n.state != gust::TreeNodeState::Reached) continue;
             const float shade = 0.9f - 0.1f * static_cast<float>(n.level);
             add_box(lines, {n.min.x, n.min.y, n.min.z}, n.size,
                     refined ? glm::vec4(0.1f, 0.95f, 0.2f, 1.0f) : glm::vec4(shade, shade, shade, 1.0f));
@@ -290,80 +323,55 @@ void Game::refresh_debug_views() {
     }
 }
 
-void Game::build_hud(double frame_ms) {
-    if (!show_hud_) return;
-    const gust::FrameStats& s = wind_->stats();
-    ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowBgAlpha(0.75f);
-    ImGui::Begin("gust", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-    ImGui::Text("%.1f fps (%.1f ms a frame)", fps_, frame_ms);
-    double gpu_total = 0.0;
-    for (const auto& pass : s.ms)
-        gpu_total += pass.second;
-    ImGui::Text("gust: %.1f ms GPU, %u pressure iterations", gpu_total, s.cycles);
-    ImGui::Text("wind %ux%ux%u cells of %.2f m, %u voxels per cell", domain_.cells[0], domain_.cells[1],
-                domain_.cells[2], domain_.cell_size, domain_.voxels_per_cell);
-    ImGui::TextDisabled("Q tris  W voxels  E subdivide  R nodes  T slice  Y arrows  F follow");
-    if (ImGui::CollapsingHeader("GPU ms per pass")) {
-        for (const auto& [name, ms] : s.ms)
-            ImGui::Text("%-18s %7.2f", name.c_str(), ms);
+void Game::direct_camera(bool windowed, double start) {
+    if (touring_) {
+        // The tour's clock reads 0 on its first frame, so N frames of dt show [0, N dt) of it.
+        tour_frame_ = tour_at(start - tour_start_, world_->stage());
+        camera_ = tour_frame_.camera;
+        views_ = tour_frame_.views;
+    } else if (follow_) {
+        camera_.target = world_->follow_target();
+    } else if (!windowed) {
+        // Without the tour a headless run circles the field slowly, as it always has.
+        camera_.yaw = 2.4f + 0.02f * static_cast<float>(t_);
     }
-    if (ImGui::CollapsingHeader("tree and memory", ImGuiTreeNodeFlags_DefaultOpen)) {
-        ImGui::Text("nodes %llu (+%llu refined, -%llu coarsened blocks)",
-                    static_cast<unsigned long long>(s.nodes), static_cast<unsigned long long>(s.refined),
-                    static_cast<unsigned long long>(s.coarsened));
-        if (!nodes_per_level_.empty()) {
-            std::string levels;
-            for (const auto& [level, n] : nodes_per_level_)
-                levels += std::to_string(n) + " ";
-            ImGui::Text("per level: %s", levels.c_str());
-        }
-        ImGui::Text("voxels %llu, fragments %llu", static_cast<unsigned long long>(s.voxels),
-                    static_cast<unsigned long long>(s.fragments));
-        ImGui::Text("tree %.1f KiB, fragments %.1f KiB, dense grid %.1f KiB",
-                    static_cast<double>(s.pool_bytes) / 1024.0,
-                    static_cast<double>(s.fragment_bytes) / 1024.0,
-                    static_cast<double>(s.dense_bytes) / 1024.0);
-        ImGui::Text("pressure: %u iterations, residual %.2e%s", s.cycles, s.residual,
-                    s.converged ? "" : " (capped)");
-    }
-    if (ImGui::CollapsingHeader("wind controls")) {
-        WorldSettings& w = world_->settings();
-        ImGui::SliderFloat("ambient m/s", &w.wind_speed, 0.0f, 12.0f);
-        ImGui::SliderFloat("heading", &w.wind_heading_deg, -180.0f, 180.0f);
-        ImGui::SliderFloat("gustiness", &w.gustiness, 0.0f, 1.0f);
-        ImGui::Checkbox("fan", &w.fan_on);
-        ImGui::SameLine();
-        ImGui::SliderFloat("fan m/s", &w.fan_strength, 0.0f, 15.0f);
-        ImGui::Checkbox("flyer's motor", &w.flyer_motor_on);
-        ImGui::SliderFloat("walk speed", &w.walk_speed, 0.0f, 2.0f);
-        int cells[3] = {static_cast<int>(options_.wind_cells[0]), static_cast<int>(options_.wind_cells[1]),
-                        static_cast<int>(options_.wind_cells[2])};
-        if (ImGui::SliderInt3("cells", cells, 8, 64)) {
-            for (int i = 0; i < 3; ++i)
-                options_.wind_cells[i] = static_cast<std::uint32_t>(cells[i]);
-        }
-        if (ImGui::Button("apply resolution")) rebuild_wind_ = true;
-    }
-    if (ImGui::CollapsingHeader("views")) {
-        ImGui::Checkbox("Q triangles", &views_.triangles);
-        ImGui::Checkbox("W voxels", &views_.voxels);
-        ImGui::Checkbox("R tree nodes (green refined, red coarsened)", &views_.nodes);
-        ImGui::Checkbox("T wind slice", &views_.slice);
-        ImGui::SameLine();
-        ImGui::Checkbox("Y arrows", &views_.arrows);
-        ImGui::SliderFloat("slice height", &views_.slice_height, 0.1f, 8.0f);
-        ImGui::Checkbox("F follow the fox", &camera_.follow);
-        ImGui::Text("E: one more tree level; drag: orbit; wheel: zoom; space: pause; H: hide");
-    }
-    ImGui::End();
 }
 
-void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double t, double frame_ms, double wind_ms) {
+void Game::build_overlay(bool windowed) {
+    if (!show_hud_) return;
+    OverlayReport report;
+    report.fps = fps_;
+    report.frame_ms = loop_ms_;
+    report.stats = &wind_->stats();
+    report.domain = domain_;
+    report.quality = quality_;
+    report.windowed = windowed;
+    report.touring = touring_;
+    draw_stats_bar(report);
+    if (touring_) draw_caption(tour_frame_);
+    if (!panels_) return;
+    const PanelActions actions =
+        draw_panels(report, {world_->settings(), views_, follow_, detail_.cells, nodes_per_level_});
+    if (actions.camera_or_views_changed) take_over();
+    if (actions.apply_resolution) rebuild_wind_ = true;
+}
+
+void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_ms, double wind_ms) {
     const gust::FrameStats& s = wind_->stats();
     nlohmann::json line;
     line["frame"] = frame;
-    line["time"] = t;
+    line["time"] = t_;
+    if (touring_) line["shot"] = tour_frame_.shot->key;
+    line["views"] = view_letters(views_);
+    line["follow"] = follow_;
+    const glm::vec3 eye = camera_.eye();
+    line["eye"] = {eye.x, eye.y, eye.z};
+    line["quality"] = quality_name(quality_);
+    line["cells"] = {domain_.cells[0], domain_.cells[1], domain_.cells[2]};
+    line["cell_size"] = domain_.cell_size;
+    line["voxels_per_cell"] = domain_.voxels_per_cell;
+    line["grass"] = world_->grass_count();
+    line["max_iterations"] = detail_.max_cycles;
     line["frame_ms"] = frame_ms;
     line["wind_cpu_ms"] = wind_ms;
     line["fragments"] = s.fragments;
@@ -378,7 +386,7 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double t, doub
     for (const auto& [name, value] : s.ms)
         ms[std::string(name)] = value;
     line["gpu_ms"] = ms;
-    const glm::vec3 ambient = world_->ambient(t);
+    const glm::vec3 ambient = world_->ambient(t_);
     line["ambient"] = {ambient.x, ambient.y, ambient.z};
     const auto [mean, largest] = renderer_->grass_bend();
     line["grass_bend_mean"] = mean;
@@ -386,10 +394,24 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double t, doub
     stats << line.dump() << "\n";
 }
 
+void Game::write_video(const std::vector<std::filesystem::path>& frames, float dt) const {
+    const int frame_ms = static_cast<int>(std::lround(1000.0 * dt * options_.png_every));
+    const VideoOutcome video =
+        write_animated_webp(frames, frame_ms, options_.out / (options_.tour ? "tour.webp" : "frames.webp"));
+    std::fprintf(stderr, "gust_sample: %s\n", video.message.c_str());
+}
+
 int Game::run() {
     const bool windowed = open_window();
+    // Headless runs step a fixed dt so their frames do not depend on the machine's speed; windowed runs
+    // follow the clock unless --dt fixes the step (a test's windowed tour).
+    const float fixed_dt = options_.dt.value_or(kHeadlessDt);
+    const bool fixed_step = !windowed || options_.dt.has_value();
     if (!windowed) {
-        if (options_.frames == 0) options_.frames = 300;
+        if (options_.frames == 0)
+            options_.frames = options_.tour
+                                  ? static_cast<std::uint32_t>(std::ceil(tour_seconds() / fixed_dt - 1e-6))
+                                  : kFreeRunFrames;
         if (options_.out.empty()) options_.out = "out/sample";
     }
     std::vector<const char*> extensions;
@@ -399,8 +421,18 @@ int Game::run() {
         extensions.assign(names, names + count);
     }
     vk_ = std::make_unique<VulkanHost>(extensions, options_.validation, windowed);
-    std::fprintf(stderr, "gust_sample: %s on %s, %u grass blades\n", windowed ? "windowed" : "headless",
-                 vk_->properties().deviceName, options_.world.grass_blades);
+    const VkPhysicalDeviceType device_type = vk_->properties().deviceType;
+    quality_ = resolve(options_.quality, device_type);
+    detail_ = apply(preset(quality_), options_.detail);
+    options_.world.grass_blades = detail_.grass_blades;
+    std::fprintf(stderr,
+                 "gust_sample: %s on %s, %s; quality %s%s: %ux%ux%u cells of %.2f m, %u voxels per cell, %u "
+                 "grass blades, %u pressure iterations a frame\n",
+                 windowed ? "windowed" : "headless", vk_->properties().deviceName,
+                 device_type_words(device_type), quality_name(quality_),
+                 options_.quality == Quality::Auto ? " (auto)" : "", detail_.cells[0], detail_.cells[1],
+                 detail_.cells[2], detail_.cell_size, detail_.voxels_per_cell, detail_.grass_blades,
+                 detail_.max_cycles);
     world_ = std::make_unique<World>(options_.assets, options_.world);
     if (windowed)
         swapchain_ = std::make_unique<Swapchain>(*vk_, window_);
@@ -413,7 +445,8 @@ int Game::run() {
                                  window_, VkExtent2D{options_.width, options_.height});
     make_wind();
     views_ = options_.views;
-    camera_.follow = options_.follow;
+    follow_ = options_.follow;
+    touring_ = options_.tour;
     show_hud_ = options_.hud;
 
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -431,9 +464,9 @@ int Game::run() {
         if (!stats) throw std::runtime_error("cannot write " + (options_.out / "stats.jsonl").string());
     }
 
-    double t = 0.0;
     std::uint64_t frame = 0;
-    double loop_ms = 0.0, steady_ms = 0.0;
+    double steady_ms = 0.0;
+    std::vector<std::filesystem::path> pngs;
     Clock::time_point last = Clock::now();
     while (options_.frames == 0 || frame < options_.frames) {
         if (windowed) {
@@ -443,23 +476,21 @@ int Game::run() {
         const Clock::time_point start = Clock::now();
         const float wall_dt = std::min(0.1f, static_cast<float>(ms_since(last) / 1000.0));
         last = start;
-        // Headless runs step a fixed dt so their frames do not depend on the machine's speed.
-        const float dt = paused_ ? 0.0f : (windowed ? std::max(wall_dt, 1e-3f) : options_.dt);
+        const float dt = paused_ ? 0.0f : (fixed_step ? fixed_dt : std::max(wall_dt, 1e-3f));
         if (rebuild_wind_) {
             rebuild_wind_ = false;
             vkDeviceWaitIdle(vk_->device());
             make_wind();
         }
-        t += dt;
-        world_->update(t);
-        const glm::vec3 fox = world_->follow_target();
-        camera_.target = camera_.follow ? fox : glm::vec3(0.0f, 1.0f, 0.0f);
-        if (!windowed) camera_.yaw = 2.4f + 0.02f * static_cast<float>(t);
+        const double start_t = t_;
+        t_ += dt;
+        world_->update(t_);
+        direct_camera(windowed, start_t);
         const Clock::time_point wind_start = Clock::now();
         if (dt > 0.0f) {
-            const glm::vec3 focus = camera_.follow ? fox : glm::vec3(0.0f);
+            const glm::vec3 focus = follow_ ? world_->follow_target() : glm::vec3(0.0f);
             wind_->set_focus(domain_centre(focus, domain_.cell_size, domain_.cells[1]));
-            if (gust::Outcome stepped = world_->step_wind(*wind_, dt, t); !stepped)
+            if (gust::Outcome stepped = world_->step_wind(*wind_, dt, t_); !stepped)
                 throw std::runtime_error("gust step: " + stepped.message());
         }
         const double wind_ms = ms_since(wind_start);
@@ -477,7 +508,7 @@ int Game::run() {
             target = offscreen_->target();
         }
         hud_->begin_frame(dt);
-        build_hud(loop_ms);
+        build_overlay(windowed);
         vkResetCommandBuffer(cmd_, 0);
         VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
         begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -486,7 +517,7 @@ int Game::run() {
         view.view_proj = camera_.view_proj(static_cast<float>(target.extent.width) /
                                            static_cast<float>(std::max(target.extent.height, 1u)));
         view.eye = camera_.eye();
-        view.time = static_cast<float>(t);
+        view.time = static_cast<float>(t_);
         view.dt = dt;
         const gust::Vec3 origin = wind_->domain_origin();
         view.wind_origin = {origin.x, origin.y, origin.z};
@@ -502,19 +533,21 @@ int Game::run() {
         check(vkWaitForFences(vk_->device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
         check(vkResetFences(vk_->device(), 1, &fence_), "vkResetFences");
         if (recreated) renderer_->forget_targets();
-        loop_ms = ms_since(start);
+        loop_ms_ = ms_since(start);
         // The first frame voxelizes the static scene and builds pipelines: leave it out of the rate.
-        if (frame > 0) steady_ms += loop_ms;
+        if (frame > 0) steady_ms += loop_ms_;
         fps_ = frame > 0 ? 1000.0 * static_cast<double>(frame) / steady_ms : 0.0;
-        if (stats.is_open()) write_stats(stats, frame, t, loop_ms, wind_ms);
+        if (stats.is_open()) write_stats(stats, frame, loop_ms_, wind_ms);
         if (!windowed && !options_.out.empty() && frame % options_.png_every == 0) {
             char name[32];
             std::snprintf(name, sizeof(name), "frame_%04llu.png", static_cast<unsigned long long>(frame));
-            offscreen_->write_png(options_.out / name);
+            pngs.push_back(options_.out / name);
+            offscreen_->write_png(pngs.back());
         }
         if (!windowed && frame % 30 == 0)
-            std::fprintf(stderr, "gust_sample: frame %llu, %.1f fps\n",
-                         static_cast<unsigned long long>(frame), fps_);
+            std::fprintf(stderr, "gust_sample: frame %llu, %.1f fps%s%s\n",
+                         static_cast<unsigned long long>(frame), fps_, touring_ ? ", shot " : "",
+                         touring_ ? tour_frame_.shot->key : "");
         ++frame;
     }
     vkDeviceWaitIdle(vk_->device());
@@ -522,6 +555,8 @@ int Game::run() {
         "gust_sample: %llu frames, %.1f fps (mean frame %.1f ms after the first; PNG writing excluded)\n",
         static_cast<unsigned long long>(frame), fps_,
         frame > 1 ? steady_ms / static_cast<double>(frame - 1) : 0.0);
+    std::fflush(stdout);
+    if (options_.video && pngs.size() >= 2) write_video(pngs, fixed_dt);
     if (vk_->validation_messages() > 0) {
         std::fprintf(stderr, "gust_sample: %u validation messages\n", vk_->validation_messages());
         return 1;

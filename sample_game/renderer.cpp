@@ -7,7 +7,6 @@
 #include <cstring>
 #include <gust_shaders/arrows_vert.h>
 #include <gust_shaders/foliage_comp.h>
-#include <gust_shaders/fullscreen_vert.h>
 #include <gust_shaders/grass_frag.h>
 #include <gust_shaders/grass_vert.h>
 #include <gust_shaders/lines_frag.h>
@@ -17,6 +16,7 @@
 #include <gust_shaders/slice_frag.h>
 #include <gust_shaders/slice_vert.h>
 #include <gust_shaders/voxels_frag.h>
+#include <gust_shaders/voxels_vert.h>
 
 namespace sample {
 
@@ -29,7 +29,8 @@ constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr float kFoliageDrag = 0.025f;
 
 static_assert(sizeof(io::DrawPush) == 96);
-static_assert(sizeof(io::FrameUniforms) == 3 * 64 + 7 * 16);
+static_assert(sizeof(io::FrameUniforms) == 3 * 64 + 6 * 16);
+static_assert(sizeof(io::VoxelFace) == 8);
 static_assert(sizeof(io::FoliageSeed) == 32 && sizeof(io::FoliageState) == 16);
 
 template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
@@ -90,7 +91,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
         {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, all, nullptr},
         {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
-        {4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, all, nullptr},
+        {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     set_info.bindingCount = 5;
@@ -98,8 +99,8 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     check(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout_),
           "vkCreateDescriptorSetLayout");
     VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
-                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2}};
+                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3}};
     VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     pool_info.maxSets = 1;
     pool_info.poolSizeCount = 3;
@@ -121,7 +122,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     VkShaderModule mesh_v = vk_.create_shader(spirv(mesh_vert)), mesh_f = vk_.create_shader(spirv(mesh_frag));
     VkShaderModule grass_v = vk_.create_shader(spirv(grass_vert)),
                    grass_f = vk_.create_shader(spirv(grass_frag));
-    VkShaderModule full_v = vk_.create_shader(spirv(fullscreen_vert)),
+    VkShaderModule voxels_v = vk_.create_shader(spirv(voxels_vert)),
                    voxels_f = vk_.create_shader(spirv(voxels_frag));
     VkShaderModule lines_v = vk_.create_shader(spirv(lines_vert)),
                    lines_f = vk_.create_shader(spirv(lines_frag));
@@ -131,9 +132,9 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     VkShaderModule foliage = vk_.create_shader(spirv(foliage_comp));
     mesh_ = graphics(mesh_v, mesh_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, true, false, true, false);
     grass_ = graphics(grass_v, grass_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
-    voxels_ = graphics(full_v, voxels_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
+    voxels_ = graphics(voxels_v, voxels_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
     lines_ = graphics(lines_v, lines_f, VK_PRIMITIVE_TOPOLOGY_LINE_LIST, false, true, false, false);
-    arrows_ = graphics(arrows_v, lines_f, VK_PRIMITIVE_TOPOLOGY_LINE_LIST, false, false, false, false);
+    arrows_ = graphics(arrows_v, lines_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, false, false);
     slice_ = graphics(slice_v, slice_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, false, false, false, true);
     VkComputePipelineCreateInfo compute{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     compute.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -143,15 +144,9 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     compute.layout = layout_;
     check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &compute, nullptr, &foliage_),
           "vkCreateComputePipelines");
-    for (VkShaderModule m : {mesh_v, mesh_f, grass_v, grass_f, full_v, voxels_f, lines_v, lines_f, arrows_v,
+    for (VkShaderModule m : {mesh_v, mesh_f, grass_v, grass_f, voxels_v, voxels_f, lines_v, lines_f, arrows_v,
                              slice_v, slice_f, foliage})
         vkDestroyShaderModule(device, m, nullptr);
-
-    VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    sampler.magFilter = sampler.minFilter = VK_FILTER_NEAREST;
-    sampler.addressModeU = sampler.addressModeV = sampler.addressModeW =
-        VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    check(vkCreateSampler(device, &sampler, nullptr, &nearest_), "vkCreateSampler");
 
     uniforms_ = vk_.create_buffer(sizeof(io::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
     const std::vector<FoliageSeed>& seeds = world.foliage();
@@ -177,8 +172,8 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
         meshes_.push_back(buffers);
     }
 
-    // Until the first voxel upload the volume is one empty voxel, so the set is always complete.
-    make_occupancy({1, 1, 1});
+    // Until the first voxels arrive the face list is empty, but bound, so the set is always complete.
+    faces_ = vk_.create_buffer(4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
     update_world(world);
 }
 
@@ -190,10 +185,8 @@ Renderer::~Renderer() {
         vk_.destroy(m.vertices);
         vk_.destroy(m.indices);
     }
-    for (Buffer* b : {&uniforms_, &seeds_, &states_, &lines_buffer_})
+    for (Buffer* b : {&uniforms_, &seeds_, &states_, &lines_buffer_, &faces_})
         vk_.destroy(*b);
-    vk_.destroy(occupancy_);
-    vkDestroySampler(device, nearest_, nullptr);
     for (VkPipeline p : {mesh_, grass_, voxels_, lines_, arrows_, slice_, foliage_})
         vkDestroyPipeline(device, p, nullptr);
     vkDestroyPipelineLayout(device, layout_, nullptr);
@@ -283,7 +276,7 @@ void Renderer::write_descriptors() {
     VkDescriptorBufferInfo seeds{seeds_.buffer, 0, VK_WHOLE_SIZE};
     VkDescriptorBufferInfo states{states_.buffer, 0, VK_WHOLE_SIZE};
     VkDescriptorImageInfo wind{wind_.sampler, wind_.view, wind_.layout};
-    VkDescriptorImageInfo occupancy{nearest_, occupancy_.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkDescriptorBufferInfo faces{faces_.buffer, 0, VK_WHOLE_SIZE};
     VkWriteDescriptorSet writes[5]{};
     for (std::uint32_t i = 0; i < 5; ++i) {
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
@@ -299,8 +292,8 @@ void Renderer::write_descriptors() {
     writes[2].pBufferInfo = &seeds;
     writes[3].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[3].pBufferInfo = &states;
-    writes[4].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    writes[4].pImageInfo = &occupancy;
+    writes[4].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[4].pBufferInfo = &faces;
     vkUpdateDescriptorSets(vk_.device(), 5, writes, 0, nullptr);
 }
 
@@ -310,49 +303,19 @@ void Renderer::set_wind(const gust::WindTexture& texture, const gust::WindDomain
     write_descriptors();
 }
 
-void Renderer::make_occupancy(VkExtent3D extent) {
-    occupancy_ = vk_.create_image(VK_FORMAT_R8_UNORM, extent,
-                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                  VK_IMAGE_ASPECT_COLOR_BIT);
-    vk_.submit_now([&](VkCommandBuffer cmd) {
-        transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                   VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    });
-}
-
 void Renderer::set_voxels(const gust::VoxelGridInfo& grid, std::span<const gust::VoxelCoord> voxels) {
-    const VkExtent3D extent{grid.resolution[0], grid.resolution[1], grid.resolution[2]};
-    if (occupancy_.extent.width != extent.width || occupancy_.extent.height != extent.height ||
-        occupancy_.extent.depth != extent.depth) {
-        vk_.destroy(occupancy_);
-        make_occupancy(extent);
+    face_finder_.find(voxels, face_list_);
+    const VkDeviceSize bytes = face_list_.size() * sizeof(VoxelFace);
+    if (bytes > faces_.size) {
+        // The last frame's draw may still read the old list, and the descriptor set names it.
+        vkDeviceWaitIdle(vk_.device());
+        vk_.destroy(faces_);
+        faces_ = vk_.create_buffer(bytes + bytes / 2, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
         write_descriptors();
     }
-    const std::size_t bytes = std::size_t(extent.width) * extent.height * extent.depth;
-    Buffer staging = vk_.create_buffer(bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true);
-    auto* texels = static_cast<std::uint8_t*>(staging.mapped);
-    std::memset(texels, 0, bytes);
-    for (const gust::VoxelCoord& v : voxels)
-        if (v.i < extent.width && v.j < extent.height && v.k < extent.depth)
-            texels[(std::size_t(v.k) * extent.height + v.j) * extent.width + v.i] = 255;
-    vk_.submit_now([&](VkCommandBuffer cmd) {
-        transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0,
-                   VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
-        VkBufferImageCopy copy{};
-        copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        copy.imageExtent = extent;
-        vkCmdCopyBufferToImage(cmd, staging.buffer, occupancy_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                               &copy);
-        transition(cmd, occupancy_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                   VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-                   VK_ACCESS_SHADER_READ_BIT);
-    });
-    vk_.destroy(staging);
+    if (bytes > 0) std::memcpy(faces_.mapped, face_list_.data(), bytes);
+    face_count_ = static_cast<std::uint32_t>(face_list_.size());
     voxel_grid_ = grid;
-    occupancy_valid_ = true;
 }
 
 void Renderer::set_lines(std::span<const LineVertex> lines) {
@@ -436,13 +399,12 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
     u.light = glm::vec4(glm::normalize(glm::vec3(0.45f, 0.8f, 0.3f)), static_cast<float>(grass_count_));
     u.voxel_origin =
         glm::vec4(voxel_grid_.origin.x, voxel_grid_.origin.y, voxel_grid_.origin.z, voxel_grid_.voxel_size);
-    u.voxel_dims = glm::vec4(static_cast<float>(voxel_grid_.resolution[0]),
-                             static_cast<float>(voxel_grid_.resolution[1]),
-                             static_cast<float>(voxel_grid_.resolution[2]), occupancy_valid_ ? 1.0f : 0.0f);
     u.wind_min = glm::vec4(view.wind_origin, domain_.cell_size);
     u.wind_cells = glm::vec4(static_cast<float>(domain_.cells[0]), static_cast<float>(domain_.cells[1]),
                              static_cast<float>(domain_.cells[2]), 8.0f);
-    u.slice = glm::vec4(views.slice_height, 0.25f, 0.0f, 0.0f);
+    // Arrows as long as 0.15 of a cell per m/s, so that they keep clear of each other on any grid.
+    u.slice = glm::vec4(views.slice_height, 0.15f * domain_.cell_size, static_cast<float>(extent.width),
+                        static_cast<float>(extent.height));
     std::memcpy(uniforms_.mapped, &u, sizeof(u));
 
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
@@ -490,13 +452,13 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
         vkCmdBindIndexBuffer(cmd, meshes_[d.mesh].indices.buffer, 0, VK_INDEX_TYPE_UINT32);
         vkCmdDrawIndexed(cmd, meshes_[d.mesh].index_count, 1, 0, 0, 0);
     }
-    if (grass_count_ > 0) {
+    if (views.grass && grass_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, grass_);
         vkCmdDraw(cmd, grass_count_ * io::kBladeVertices, 1, 0, 0);
     }
-    if (views.voxels && occupancy_valid_) {
+    if (views.voxels && face_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, voxels_);
-        vkCmdDraw(cmd, 3, 1, 0, 0);
+        vkCmdDraw(cmd, face_count_ * io::kFaceVertices, 1, 0, 0);
     }
     if (views.nodes && line_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lines_);
@@ -506,7 +468,7 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
     }
     if (views.arrows) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, arrows_);
-        vkCmdDraw(cmd, 6, domain_.cells[0] * domain_.cells[2], 0, 0);
+        vkCmdDraw(cmd, io::kArrowVertices, domain_.cells[0] * domain_.cells[2], 0, 0);
     }
     if (views.slice) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, slice_);

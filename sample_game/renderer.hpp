@@ -2,7 +2,9 @@
 // GPU, and the debug views (voxels, tree nodes, wind slice and arrows).
 #pragma once
 
+#include "views.hpp"
 #include "vk_host.hpp"
+#include "voxel_faces.hpp"
 #include "world.hpp"
 
 #include <cstdint>
@@ -12,16 +14,6 @@
 #include <vector>
 
 namespace sample {
-
-/// What the views show; keys toggle them (docs/sample.md).
-struct Views {
-    bool triangles = true; ///< Q: the solid meshes
-    bool voxels = false;   ///< W: gust's voxels, ray-cast
-    bool nodes = false;    ///< R: tree node boxes, coloured by this frame's refine and coarsen
-    bool slice = false;    ///< T: wind speed on a horizontal slice
-    bool arrows = false;   ///< Y: wind arrows on the slice
-    float slice_height = 1.0f;
-};
 
 /// A coloured line vertex (node boxes).
 struct LineVertex {
@@ -49,7 +41,8 @@ class Renderer {
     VkRenderPass render_pass() const { return pass_; }
     /// Binds gust's wind texture and domain (again after the System is re-created). The GPU must be idle.
     void set_wind(const gust::WindTexture& texture, const gust::WindDomain& domain);
-    /// Replaces the voxel volume drawn by the W view (ijk triples in the grid given). The GPU must be idle.
+    /// Replaces the voxels drawn by the W view (ijk triples in the grid given, each once). The GPU must have
+    /// finished the last frame.
     void set_voxels(const gust::VoxelGridInfo& grid, std::span<const gust::VoxelCoord> voxels);
     /// Replaces the node-box lines drawn by the R view.
     void set_lines(std::span<const LineVertex> lines);
@@ -77,8 +70,6 @@ class Renderer {
     VkPipeline graphics(VkShaderModule vert, VkShaderModule frag, VkPrimitiveTopology topology,
                         bool mesh_input, bool line_input, bool depth_write, bool blend);
     void write_descriptors();
-    /// A cleared occupancy volume of `extent`, ready to be sampled.
-    void make_occupancy(VkExtent3D extent);
 
     VulkanHost& vk_;
     VkRenderPass pass_ = VK_NULL_HANDLE;
@@ -89,12 +80,13 @@ class Renderer {
     VkPipeline mesh_ = VK_NULL_HANDLE, grass_ = VK_NULL_HANDLE, voxels_ = VK_NULL_HANDLE,
                lines_ = VK_NULL_HANDLE, arrows_ = VK_NULL_HANDLE, slice_ = VK_NULL_HANDLE,
                foliage_ = VK_NULL_HANDLE;
-    VkSampler nearest_ = VK_NULL_HANDLE;
     Buffer uniforms_, seeds_, states_, lines_buffer_;
     std::uint32_t line_count_ = 0;
     std::uint32_t foliage_count_ = 0, grass_count_ = 0;
-    Image occupancy_;
-    bool occupancy_valid_ = false;
+    VoxelFaces face_finder_;
+    std::vector<VoxelFace> face_list_;
+    Buffer faces_; ///< face_list_ for the W view's draw
+    std::uint32_t face_count_ = 0;
     gust::VoxelGridInfo voxel_grid_{};
     gust::WindTexture wind_{};
     gust::WindDomain domain_{};

@@ -242,16 +242,17 @@ void World::update(double t) {
             const glm::vec3 p(4.5f * std::cos(a), 0.0f, 2.0f + 4.5f * std::sin(a));
             const glm::vec3 forward(-std::sin(a), 0.0f, std::cos(a));
             o.model = place(p, std::atan2(forward.x, forward.z), 0.01f);
-            follow_target_ = p + glm::vec3(0.0f, 0.6f, 0.0f);
+            stage_.fox = {p, forward};
             pose(o, 1.4 * tf);
         } else if (o.name == "cesium man") {
-            // An ellipse around the middle of the field, walking at about 1 m/s; the file is z-up.
+            // An ellipse around the middle of the field, walking at about 1 m/s. The file is z-up, but its
+            // skin's joints carry the turn to y-up, so the posed vertices stand up already (+x forward).
             const float a = -0.16f * tf;
             const glm::vec3 p(1.0f + 7.0f * std::cos(a), 0.0f, -2.0f + 3.5f * std::sin(a));
             const glm::vec3 forward =
                 glm::normalize(glm::vec3(7.0f * std::sin(a), 0.0f, -3.5f * std::cos(a)));
-            o.model = glm::rotate(place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f), -0.5f * kPi,
-                                  glm::vec3(1, 0, 0));
+            o.model = place(p, std::atan2(forward.x, forward.z) - 0.5f * kPi, 1.0f);
+            stage_.walker = {p, forward};
             pose(o, tf);
         } else if (o.name == "flying bunny") {
             // A figure of eight (Gerono's lemniscate) 9 m across at 2.5 m, bobbing, every 16 s.
@@ -261,6 +262,7 @@ void World::update(double t) {
             const glm::vec3 v(9.0f * std::cos(a), 0.0f, 5.0f * std::cos(2.0f * a));
             const glm::vec3 forward = glm::normalize(v);
             o.model = place(p, std::atan2(forward.x, forward.z), 0.12f);
+            stage_.flyer = {p, forward};
             // The bunny carries a motor that blows backwards along its path, like a propeller.
             flyer_motor_.type = gust::WindEmitterType::CapsuleMotor;
             flyer_motor_.position = to_gust(p + glm::vec3(0.0f, 0.6f, 0.0f));
@@ -273,6 +275,7 @@ void World::update(double t) {
             const gust::WindEmitter f = fan(t);
             o.model = place({f.position.x, f.position.y, f.position.z},
                             std::atan2(-f.direction.z, f.direction.x), 1.0f);
+            stage_.fan = {f.position.x, f.position.y, f.position.z};
         }
     }
 }

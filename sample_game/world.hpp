@@ -2,6 +2,7 @@
 #pragma once
 
 #include "sample/sample_io.h"
+#include "stage.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -82,8 +83,10 @@ class World {
     /// Grass blades first, then one entry per tree.
     const std::vector<FoliageSeed>& foliage() const { return foliage_; }
     std::uint32_t grass_count() const { return grass_count_; }
-    /// Where the follow camera looks: the fox.
-    glm::vec3 follow_target() const { return follow_target_; }
+    /// Where the follow camera looks: above the fox's feet.
+    glm::vec3 follow_target() const { return stage_.fox.position + glm::vec3(0.0f, 0.6f, 0.0f); }
+    /// Where the actors are this frame (for the tour's cameras).
+    const Stage& stage() const { return stage_; }
     /// The ambient wind at time t (m/s), gusts included.
     glm::vec3 ambient(double t) const;
     /// The fan's emitter at time t (for drawing its cone as well as for gust).
@@ -103,7 +106,7 @@ class World {
     std::vector<gust::MeshId> gust_meshes_;
     std::vector<FoliageSeed> foliage_;
     std::uint32_t grass_count_ = 0;
-    glm::vec3 follow_target_{0.0f};
+    Stage stage_;
     gust::WindEmitter flyer_motor_;
 };
 

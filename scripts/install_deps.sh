@@ -11,7 +11,8 @@ packages=(
   libassimp-dev libtinygltf-dev assimp-testmodels
   nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
-  libglfw3-dev libimgui-dev libstb-dev xvfb xauth
+  libglfw3-dev libimgui-dev libstb-dev xvfb xauth xdotool
+  webp
 )
 
 missing=()

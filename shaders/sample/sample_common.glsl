@@ -5,7 +5,6 @@ layout(set = 0, binding = 0, std140) uniform Frame { FrameUniforms frame; };
 layout(set = 0, binding = 1) uniform sampler3D wind_texture;
 layout(set = 0, binding = 2, std430) readonly buffer Seeds { FoliageSeed seeds[]; };
 layout(set = 0, binding = 3, std430) buffer States { FoliageState states[]; };
-layout(set = 0, binding = 4) uniform sampler3D occupancy;
 
 /// gust's wind at a world point (m/s); the ambient wind outside the domain comes from the clamped edge.
 vec3 wind_at(vec3 world) {

@@ -9,6 +9,8 @@ GUST_NAMESPACE_BEGIN
 GUST_CONST uint kFoliageGroupSize = 64;
 /// Vertices of one grass blade: one triangle, root to tip.
 GUST_CONST uint kBladeVertices = 3;
+/// Vertices of one wind arrow: a shaft of two triangles and a head.
+GUST_CONST uint kArrowVertices = 9;
 
 /// Per-frame values every pass reads (uniform buffer, binding 0; only vec4 and mat4 for std140).
 struct FrameUniforms {
@@ -18,11 +20,18 @@ struct FrameUniforms {
     vec4 camera;                ///< xyz: eye (world, m); w: time (s)
     vec4 light;                 ///< xyz: unit vector towards the sun; w: grass count
     vec4 voxel_origin;          ///< xyz: min corner of the voxel grid (world, m); w: voxel size (m)
-    vec4 voxel_dims;            ///< xyz: voxels per axis; w: 1 when the occupancy volume is valid
     vec4 wind_min;              ///< xyz: min corner of the wind domain (world, m); w: cell size (m)
     vec4 wind_cells;            ///< xyz: wind cells per axis; w: speed drawn as the top colour (m/s)
-    vec4 slice;                 ///< x: slice height (world y, m); y: arrow length per m/s (m); z, w: 0
+    vec4 slice;                 ///< x: slice height (world y, m); y: arrow length per m/s (m); zw: frame size (px)
 };
+
+/// One side of a voxel that no other voxel covers (the W view draws these as two triangles each).
+struct VoxelFace {
+    uint ij;     ///< i in bits 0-15, j in bits 16-31
+    uint k_side; ///< k in bits 0-15, side in bits 16-18: 2 * axis + (1 on the axis' positive side)
+};
+/// Vertices of one voxel face.
+GUST_CONST uint kFaceVertices = 6;
 
 /// Push constants of mesh draws.
 struct DrawPush {

@@ -1,0 +1,22 @@
+// Where the moving things of the sample's world are this frame, as cameras need them.
+#pragma once
+
+#include <glm/glm.hpp>
+
+namespace sample {
+
+/// A moving thing: where it is and where it heads (world, m; `forward` is a horizontal unit vector).
+struct Actor {
+    glm::vec3 position{0.0f}; ///< its feet (walkers) or its centre (the flyer)
+    glm::vec3 forward{0.0f, 0.0f, 1.0f};
+};
+
+/// The actors the tour films (World::stage).
+struct Stage {
+    Actor fox;           ///< walking a circle through the grass
+    Actor walker;        ///< CesiumMan, walking an ellipse
+    Actor flyer;         ///< the bunny with a motor, flying a figure of eight
+    glm::vec3 fan{0.0f}; ///< the fan's head
+};
+
+} // namespace sample

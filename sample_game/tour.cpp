@@ -1,0 +1,143 @@
+#include "tour.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sample {
+
+namespace {
+
+constexpr glm::vec3 kUp{0.0f, 1.0f, 0.0f};
+
+/// An orbit camera `distance` from `target`, its eye in direction `towards_eye` (need not be unit length).
+OrbitCamera looking_at(glm::vec3 target, glm::vec3 towards_eye, float distance) {
+    const glm::vec3 d = glm::normalize(towards_eye);
+    OrbitCamera camera;
+    camera.target = target;
+    camera.yaw = std::atan2(d.z, d.x);
+    camera.pitch = std::asin(d.y);
+    camera.distance = distance;
+    return camera;
+}
+
+/// Right of a horizontal heading.
+glm::vec3 right_of(glm::vec3 forward) {
+    return {-forward.z, 0.0f, forward.x};
+}
+
+void overview(const Stage&, float u, OrbitCamera& camera, Views&) {
+    camera.target = {0.0f, 1.0f, 0.0f};
+    camera.yaw = 2.3f + 0.3f * u;
+    camera.pitch = 0.5f;
+    camera.distance = 26.0f - 4.0f * u;
+}
+
+void grass(const Stage& stage, float u, OrbitCamera& camera, Views&) {
+    // To one side and a little ahead of the fox, closing in: the blades are as tall as its legs.
+    const Actor& fox = stage.fox;
+    camera = looking_at(fox.position + glm::vec3(0.0f, 0.25f, 0.0f),
+                        right_of(fox.forward) + 0.7f * fox.forward + 0.55f * kUp, 4.2f - 1.0f * u);
+}
+
+void fan(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
+    // From beside the fan and above, across its jet (it blows along +x, sweeping ±35°), with arrows of the
+    // wind at the fan's height.
+    camera = looking_at(stage.fan + glm::vec3(3.5f, -0.9f, 0.0f), glm::vec3(-0.35f - 0.2f * u, 0.8f, -0.75f),
+                        9.0f);
+    views.arrows = true;
+    views.slice_height = stage.fan.y;
+}
+
+void wake(const Stage& stage, float, OrbitCamera& camera, Views& views) {
+    // A fixed direction, so the flyer crosses the frame with its wake behind it, and the wind's speed
+    // and arrows at the height of its motor (World: 0.6 m above the bunny).
+    camera = looking_at(stage.flyer.position, glm::vec3(0.25f, 0.9f, 1.0f), 9.0f);
+    views.slice = true;
+    views.arrows = true;
+    views.slice_height = stage.flyer.position.y + 0.6f;
+}
+
+void tree(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
+    // gust's voxels instead of the triangles and grass, and only the tree nodes that change: those moving
+    // meshes reach, made or freed (the ground's and the buildings' would hide them).
+    // Seen from the middle of the field, where no palm or building stands in the way.
+    const Actor& walker = stage.walker;
+    const glm::vec3 inwards = glm::normalize(glm::vec3(-walker.position.x, 0.0f, -walker.position.z));
+    camera = looking_at(walker.position + glm::vec3(0.0f, 0.7f, 0.0f),
+                        inwards + 0.4f * walker.forward + 0.8f * kUp, 6.5f - 1.0f * u);
+    views.triangles = false;
+    views.grass = false;
+    views.voxels = true;
+    views.nodes = true;
+    views.every_node = false;
+}
+
+void field(const Stage&, float u, OrbitCamera& camera, Views& views) {
+    camera.target = {0.0f, 0.0f, 0.0f};
+    camera.yaw = 2.0f + 0.25f * u;
+    camera.pitch = 1.1f;
+    camera.distance = 26.0f;
+    views.slice = true;
+    views.arrows = true;
+    views.slice_height = 1.0f;
+}
+
+constexpr Shot kShots[] = {
+    {"overview", "gust: wind on the GPU",
+     "Wind simulated around the buildings, the walking fox and man, the flying bunny and the fan; the grass "
+     "and palms bend in it.",
+     2.0f, overview},
+    {"grass", "Grass around a walker",
+     "The fox is a moving solid: it pushes the air it walks through, and the grass around it bends.", 3.0f,
+     grass},
+    {"fan", "The fan",
+     "A cone emitter sweeping 35 degrees either way every 8 s: the grass in its jet lies flat, the arrows "
+     "show "
+     "the wind at its height.",
+     2.5f, fan},
+    {"wake", "The flyer's wake",
+     "The bunny carries a motor that blows backwards: the wind's speed and arrows at its height show the jet "
+     "it leaves.",
+     2.5f, wake},
+    {"tree", "The voxel tree",
+     "gust's voxels and the tree nodes that moving meshes reach: green made this frame, grey kept, red freed "
+     "as the walker moves.",
+     3.0f, tree},
+    {"field", "The wind field",
+     "Wind speed 1 m above the ground, blue still to red 8 m/s, with arrows: shelter behind the buildings, "
+     "the fan's jet.",
+     2.5f, field},
+};
+
+} // namespace
+
+std::span<const Shot> tour_shots() {
+    return kShots;
+}
+
+double tour_seconds() {
+    double total = 0.0;
+    for (const Shot& shot : kShots)
+        total += shot.seconds;
+    return total;
+}
+
+TourFrame tour_at(double t, const Stage& stage) {
+    double into = std::fmod(std::max(t, 0.0), tour_seconds());
+    TourFrame frame;
+    for (std::size_t i = 0; i < std::size(kShots); ++i) {
+        const Shot& shot = kShots[i];
+        // The last shot takes what rounding leaves, so every t lands in one.
+        if (into < shot.seconds || i + 1 == std::size(kShots)) {
+            frame.index = i;
+            frame.shot = &shot;
+            shot.direct(stage, static_cast<float>(std::min(into / shot.seconds, 1.0)), frame.camera,
+                        frame.views);
+            break;
+        }
+        into -= shot.seconds;
+    }
+    return frame;
+}
+
+} // namespace sample

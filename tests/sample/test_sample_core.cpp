@@ -1,0 +1,190 @@
+// The sample's parts that need no device: the quality presets, the tour's shots and the voxel faces.
+#include "quality.hpp"
+#include "tour.hpp"
+#include "voxel_faces.hpp"
+
+#include <algorithm>
+#include <gtest/gtest.h>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace sample;
+
+/// The shots docs/sample.md lists, in order, with their lengths in seconds.
+const std::vector<std::pair<std::string, double>> kDocumentedShots = {
+    {"overview", 2.0}, {"grass", 3.0}, {"fan", 2.5}, {"wake", 2.5}, {"tree", 3.0}, {"field", 2.5}};
+
+/// A stage with the actors somewhere in the field, heading in different directions.
+Stage some_stage() {
+    Stage stage;
+    stage.fox = {{3.0f, 0.0f, 4.0f}, {-0.6f, 0.0f, 0.8f}};
+    stage.walker = {{-2.0f, 0.0f, -5.0f}, {1.0f, 0.0f, 0.0f}};
+    stage.flyer = {{5.0f, 2.7f, 1.0f}, {0.0f, 0.0f, -1.0f}};
+    stage.fan = {-10.8f, 1.2f, 0.0f};
+    return stage;
+}
+
+/// Whether two packed faces are the same side of the same voxel.
+bool same_face(const VoxelFace& a, const VoxelFace& b) {
+    return a.ij == b.ij && a.k_side == b.k_side;
+}
+
+/// Where `point` lands in the camera's picture: x and y in [-1, 1] are inside it.
+glm::vec3 in_picture(const OrbitCamera& camera, glm::vec3 point) {
+    const glm::vec4 clip = camera.view_proj(16.0f / 9.0f) * glm::vec4(point, 1.0f);
+    return glm::vec3(clip) / clip.w;
+}
+
+double start_of(std::size_t shot) {
+    double t = 0.0;
+    for (std::size_t i = 0; i < shot; ++i)
+        t += kDocumentedShots[i].second;
+    return t;
+}
+
+} // namespace
+
+TEST(SampleTour, playsTheDocumentedShotsInOrderAndStartsAgainAtTheEnd) {
+    const Stage stage = some_stage();
+    ASSERT_EQ(tour_shots().size(), kDocumentedShots.size());
+    EXPECT_DOUBLE_EQ(tour_seconds(), 15.5);
+    for (std::size_t i = 0; i < kDocumentedShots.size(); ++i) {
+        const double middle = start_of(i) + 0.5 * kDocumentedShots[i].second;
+        const TourFrame frame = tour_at(middle, stage);
+        EXPECT_EQ(frame.index, i);
+        EXPECT_EQ(frame.shot->key, kDocumentedShots[i].first);
+        EXPECT_GT(std::string(frame.shot->caption).size(), 20u) << frame.shot->key;
+        EXPECT_EQ(tour_at(middle + 15.5, stage).index, i) << "a second time round";
+    }
+    EXPECT_EQ(tour_at(start_of(1) - 0.01, stage).index, 0u);
+    EXPECT_EQ(tour_at(start_of(1) + 0.01, stage).index, 1u);
+}
+
+TEST(SampleTour, everyShotMovesTheCamera) {
+    const Stage stage = some_stage();
+    std::set<std::pair<long, long>> eyes;
+    for (std::size_t i = 0; i < kDocumentedShots.size(); ++i) {
+        const glm::vec3 eye = tour_at(start_of(i) + 0.1, stage).camera.eye();
+        eyes.insert({std::lround(eye.x * 10.0f), std::lround(eye.z * 10.0f)});
+    }
+    EXPECT_EQ(eyes.size(), kDocumentedShots.size()) << "two shots start from the same place";
+}
+
+TEST(SampleTour, closeShotsFrameTheirActorNearTheMiddle) {
+    const Stage stage = some_stage();
+    const TourFrame grass = tour_at(start_of(1) + 1.5, stage);
+    EXPECT_LT(glm::distance(grass.camera.eye(), stage.fox.position), 5.0f) << "the fox should fill the frame";
+    const glm::vec3 fox = in_picture(grass.camera, stage.fox.position + glm::vec3(0.0f, 0.3f, 0.0f));
+    EXPECT_LT(std::max(std::abs(fox.x), std::abs(fox.y)), 0.2f);
+
+    const TourFrame wake = tour_at(start_of(3) + 1.0, stage);
+    const glm::vec3 flyer = in_picture(wake.camera, stage.flyer.position);
+    EXPECT_LT(std::max(std::abs(flyer.x), std::abs(flyer.y)), 0.2f);
+    // World puts the flyer's motor 0.6 m above the bunny; the wake is drawn at that height.
+    EXPECT_FLOAT_EQ(wake.views.slice_height, stage.flyer.position.y + 0.6f);
+    EXPECT_TRUE(wake.views.arrows);
+
+    const TourFrame tree = tour_at(start_of(4) + 1.0, stage);
+    const glm::vec3 walker = in_picture(tree.camera, stage.walker.position + glm::vec3(0.0f, 0.7f, 0.0f));
+    EXPECT_LT(std::max(std::abs(walker.x), std::abs(walker.y)), 0.2f);
+}
+
+TEST(SampleTour, eachShotTurnsOnTheViewsItsCaptionTalksAbout) {
+    const Stage stage = some_stage();
+    const Views overview = tour_at(start_of(0) + 1.0, stage).views;
+    EXPECT_TRUE(overview.triangles && overview.grass);
+    EXPECT_FALSE(overview.voxels || overview.nodes || overview.slice || overview.arrows);
+    const Views tree = tour_at(start_of(4) + 1.0, stage).views;
+    EXPECT_TRUE(tree.voxels && tree.nodes);
+    EXPECT_FALSE(tree.triangles || tree.grass || tree.every_node);
+    const Views field = tour_at(start_of(5) + 1.0, stage).views;
+    EXPECT_TRUE(field.slice && field.arrows);
+    EXPECT_FLOAT_EQ(field.slice_height, 1.0f);
+}
+
+TEST(SampleQuality, autoPicksThePresetFromTheDeviceType) {
+    EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_CPU), Quality::Low);
+    EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU), Quality::Medium);
+    EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU), Quality::Medium);
+    EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_OTHER), Quality::Medium);
+    EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU), Quality::High);
+    EXPECT_EQ(resolve(Quality::Auto, VK_PHYSICAL_DEVICE_TYPE_CPU), Quality::Low);
+    EXPECT_EQ(resolve(Quality::High, VK_PHYSICAL_DEVICE_TYPE_CPU), Quality::High);
+}
+
+TEST(SampleQuality, theHighPresetIsAFineGridAndADenseField) {
+    // The issue asks a discrete GPU for about 0.5 m cells, 4 voxels per cell and 64 or more cells across.
+    const Detail high = preset(Quality::High), low = preset(Quality::Low);
+    EXPECT_LE(high.cell_size, 0.5f);
+    EXPECT_EQ(high.voxels_per_cell, 4u);
+    EXPECT_GE(std::min(high.cells[0], high.cells[2]), 64u);
+    EXPECT_GT(high.grass_blades, low.grass_blades);
+    EXPECT_LT(high.cell_size / static_cast<float>(high.voxels_per_cell),
+              low.cell_size / static_cast<float>(low.voxels_per_cell));
+}
+
+TEST(SampleQuality, overridesReplaceOnlyTheValuesTheyName) {
+    DetailOverrides overrides;
+    overrides.cells = std::array<std::uint32_t, 3>{16, 8, 16};
+    overrides.grass_blades = 3000;
+    const Detail medium = preset(Quality::Medium);
+    const Detail d = apply(medium, overrides);
+    EXPECT_EQ(d.cells, (std::array<std::uint32_t, 3>{16, 8, 16}));
+    EXPECT_EQ(d.grass_blades, 3000u);
+    EXPECT_EQ(d.cell_size, medium.cell_size);
+    EXPECT_EQ(d.voxels_per_cell, medium.voxels_per_cell);
+    EXPECT_EQ(d.max_cycles, medium.max_cycles);
+}
+
+TEST(SampleQuality, namesParseInAnyCaseAndOthersDoNot) {
+    EXPECT_EQ(parse_quality("low"), Quality::Low);
+    EXPECT_EQ(parse_quality("High"), Quality::High);
+    EXPECT_EQ(parse_quality("AUTO"), Quality::Auto);
+    EXPECT_FALSE(parse_quality("ultra").has_value());
+    EXPECT_FALSE(parse_quality("").has_value());
+    EXPECT_FALSE(parse_quality("lowest").has_value());
+}
+
+TEST(SampleVoxelFaces, aLoneVoxelShowsSixFacesAndNeighboursHideTheSidesTheyShare) {
+    VoxelFaces finder;
+    std::vector<VoxelFace> faces;
+    const gust::VoxelCoord one[] = {{5, 6, 7}};
+    finder.find(one, faces);
+    ASSERT_EQ(faces.size(), 6u);
+    std::set<std::uint32_t> sides;
+    for (const VoxelFace& f : faces) {
+        EXPECT_EQ(f.ij, 5u | 6u << 16);
+        EXPECT_EQ(f.k_side & 0xffffu, 7u);
+        sides.insert(f.k_side >> 16);
+    }
+    EXPECT_EQ(sides, (std::set<std::uint32_t>{0, 1, 2, 3, 4, 5}));
+
+    // Two voxels side by side along x: 12 faces less the two they share.
+    const gust::VoxelCoord pair[] = {{0, 0, 0}, {1, 0, 0}};
+    finder.find(pair, faces);
+    EXPECT_EQ(faces.size(), 10u);
+    for (const VoxelFace& f : faces) {
+        EXPECT_FALSE(same_face(f, pack_face(0, 0, 0, 1))) << "+x of the first voxel is shared";
+        EXPECT_FALSE(same_face(f, pack_face(1, 0, 0, 0))) << "-x of the second voxel is shared";
+    }
+}
+
+TEST(SampleVoxelFaces, aSolidCubeShowsOnlyItsSurface) {
+    // A 3x3x3 block: 9 faces on each of its 6 sides, none inside; the centre voxel shows nothing.
+    std::vector<gust::VoxelCoord> cube;
+    for (std::uint32_t k = 10; k < 13; ++k)
+        for (std::uint32_t j = 0; j < 3; ++j)
+            for (std::uint32_t i = 20; i < 23; ++i)
+                cube.push_back({i, j, k});
+    VoxelFaces finder;
+    std::vector<VoxelFace> faces;
+    finder.find(cube, faces);
+    EXPECT_EQ(faces.size(), 54u);
+    for (const VoxelFace& f : faces)
+        EXPECT_FALSE(f.ij == (21u | 1u << 16) && (f.k_side & 0xffffu) == 11u) << "the centre voxel is hidden";
+    finder.find({}, faces);
+    EXPECT_TRUE(faces.empty());
+}
