@@ -1,10 +1,13 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face. pc.parity 0: semi-Lagrangian, velocity -> tmp. 1: MacCormack's backward pass, tmp -> back.
-// 2: MacCormack's clamped correction, in place in tmp.
-#include "solver_common.glsl"
-
+// Per face, the velocity's next field into kFieldTmp. pc.parity 0: semi-Lagrangian advection, then the
+// emitters (closing pc.param of the gap), the ambient wind on the domain's faces and vorticity confinement
+// (forced_face), all in this one pass. MacCormack: 1 the forward pass (kFieldTmp), 2 the backward pass
+// (kFieldTmp -> kFieldBack), 3 the clamped correction and the same forces, in place in kFieldTmp (each
+// thread reads and writes only its own face there). 4: no advection, the forces alone.
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();
@@ -12,7 +15,15 @@ void main() {
     if (i >= faces_total(n)) return;
     uint axis;
     ivec3 f = face_from_index(n, i, axis);
-    if (pc.parity == 0u) store_face(kFieldTmp, i, advect_face(kFieldVelocity, axis, f, pc.dt));
-    else if (pc.parity == 1u) store_face(kFieldBack, i, advect_face(kFieldTmp, axis, f, -pc.dt));
-    else store_face(kFieldTmp, i, maccormack_face(axis, f, pc.dt));
+    float epsilon = sb().b.vorticity_strength;
+    if (pc.parity == 0u)
+        store_face(kFieldTmp, i, forced_face(advect_face(kFieldVelocity, axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
+    else if (pc.parity == 1u)
+        store_face(kFieldTmp, i, advect_face(kFieldVelocity, axis, f, pc.dt));
+    else if (pc.parity == 2u)
+        store_face(kFieldBack, i, advect_face(kFieldTmp, axis, f, -pc.dt));
+    else if (pc.parity == 4u)
+        store_face(kFieldTmp, i, forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
+    else
+        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
 }

@@ -1,49 +1,41 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per level-0 cell, one step of multigrid-preconditioned conjugate gradients (McAdams et al. 2010) by
-// pc.parity. The residual r lives in rhs (the V-cycle's right-hand side) and the preconditioned z in φ
-// (its result):
-//   0: partial sums of r·z and r_old·z        1: p = z + β·p
-//   2: partial sums of p·Lp                   3: x += α·p, r_old = r, z = 0 (the next V-cycle's start)
-//   4: r = b − Lx, its maximum to the convergence check. Recomputed rather than updated (r −= α·Lp):
-//      the update drifts from b − Lx in float by more than the tolerance.
+// Per level-0 cell, the rest of a conjugate-gradient iteration after its V-cycle: the new search direction
+// p_k = z + β p_{k-1} (into the other direction buffer), the sum of p_k · L p_k (each neighbour's p_k
+// computed here from its z and p_{k-1}), and in the workgroup that finishes last α = (r·z)/(p·Lp). The next
+// iteration's first pass (smooth.comp) then moves the iterate along p_k.
+#include "solver_io.h"
+layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
-layout(local_size_x = kSolverGroupSize) in;
+float direction(int i, float beta) { return load_cell(kCellPressureUp, i) + beta * load_cell(kCellDirection, i); }
 
 void main() {
     int i = thread_index();
     ivec3 n = sb().b.dims;
     bool inside = i < n.x * n.y * n.z;
-    ivec3 c = inside ? cell_from_index(n, i) : ivec3(0);
-    StateRef st = state();
-    if (pc.parity == 0u) {
-        vec2 sums = vec2(0.0);
-        if (inside) {
-            float z = load_cell(kCellPressure, i);
-            sums = z * vec2(load_cell(kCellRhs, i), load_cell(kCellOldResidual, i));
-        }
-        group_sum_store(sums);
-    } else if (pc.parity == 1u) {
-        if (inside)
-            store_cell(kCellDirection, i, load_cell(kCellPressure, i) + st.s.cg_beta * load_cell(kCellDirection, i));
-    } else if (pc.parity == 2u) {
-        float sum = inside ? load_cell(kCellDirection, i) * laplacian_cell(0u, c, kCellDirection) : 0.0;
-        group_sum_store(vec2(sum, 0.0));
-    } else if (pc.parity == 3u) {
-        if (inside) {
-            store_cell(kCellSolution, i, load_cell(kCellSolution, i) + st.s.cg_alpha * load_cell(kCellDirection, i));
-            store_cell(kCellOldResidual, i, load_cell(kCellRhs, i));
-            store_cell(kCellPressure, i, 0.0);
-        }
-    } else {
-        group_max_begin();
-        if (inside) {
-            float r = load_cell(kCellTarget, i) - laplacian_cell(0u, c, kCellSolution);
-            store_cell(kCellRhs, i, r);
-            group_max_add(r);
-        }
-        uint bits;
-        if (group_max_end(bits) && bits > st.s.residual_scratch) atomicMax(st.s.residual_scratch, bits);
+    float beta = state().s.cg_beta;
+    float sum = 0.0;
+    if (inside) {
+        ivec3 c = cell_from_index(n, i);
+        float p = direction(i, beta);
+        store_cell(kCellDirectionB, i, p);
+        GridLevel level = load_level(0u);
+        uint open = grid_open_sides();
+        float lap = 0.0;
+        for (uint a = 0u; a < 3u; ++a)
+            for (uint s = 0u; s < 2u; ++s) {
+                int nb;
+                float w = face_coupling(level, open, c, a, s, nb);
+                if (w != 0.0) lap += w * ((nb >= 0 ? direction(nb, beta) : 0.0) - p);
+            }
+        sum = p * lap;
+    }
+    vec2 total;
+    if (sum_dispatch(vec2(sum, 0.0), total) && gl_LocalInvocationIndex == 0u) {
+        StateRef st = state();
+        st.s.cg_alpha = cg_alpha(st.s.cg_rz, total.x);
+        // The direction just written is p_k; in absolute terms kCellDirectionB is buffer B on even iterations.
+        st.s.p_slot = (pc.swap & 2u) != 0u ? 0u : 1u;
     }
 }

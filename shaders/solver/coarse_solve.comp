@@ -1,51 +1,88 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// One workgroup: pc.iterations red-black Gauss–Seidel sweeps on the coarsest level, at most 4^3 cells
-// (build_levels), one thread per cell. Each thread reads its cell's weights and right-hand side once
-// and the sweeps run on φ in shared memory, so a sweep waits on no global load: relax_cell with the
-// operator gathered up front.
+// One workgroup solves every level from pc.level down to the coarsest in shared memory, with a V-cycle of
+// its own (SolverBindings::smoothing red-black sweeps before and after each coarser level's correction,
+// pc.iterations sweeps on the coarsest): levels of at most kCoarseCells cells (16^3) cost this one
+// dispatch together, where a dispatch per sweep and level cost microseconds whatever its size. The
+// first level's right-hand side is read from memory; its correction goes to kCellPressureUp for the finer
+// level's upward pass. With pc.level 0 (a grid that small) and pc.parity 1 it is the whole V-cycle of a
+// conjugate-gradient iteration, and also turns the sums z·r and z·r_old into β.
+#include "solver_io.h"
+
+const uint kCoarseValues = kCoarseCells + kCoarseCells / 7u + 16u;
+const uint kCoarseRhs = kCoarseCells / 7u + 16u;
+shared float coarse_phi[kCoarseValues];
+shared float coarse_rhs[kCoarseRhs];
+uint coarse_base = 0u;
+uint coarse_rhs_from = 0x7fffffffu;
+
+// As wide as the device allows (constant 0, a power of two from 64 to 1024).
+layout(local_size_x_id = 0) in;
+#define GUST_COARSE_SHARED 1
 #include "solver_common.glsl"
 
-layout(local_size_x = kSolverGroupSize) in;
+uint cells_of(GridLevel level) { return uint(level.dims.x * level.dims.y * level.dims.z); }
 
-shared float phi_shared[kSolverGroupSize];
-
-void main() {
-    GridLevel level = load_level(pc.level);
-    int count = level.dims.x * level.dims.y * level.dims.z;
-    int i = int(gl_LocalInvocationIndex);
-    bool mine = i < count;
-    // cell_operator's faces in its order (face_coupling): the weight, 0 for a closed face, and the
-    // neighbour's index, or -1 for an open domain side (its φ is 0).
-    float w[6];
-    int neighbour[6];
-    float diag = 0.0;
-    float rhs = 0.0;
-    uint colour = 0u;
-    if (mine) {
-        ivec3 c = cell_from_index(level.dims, i);
-        colour = uint(c.x + c.y + c.z) % 2u;
-        uint open = grid_open_sides();
-        for (uint a = 0u; a < 3u; ++a)
-            for (uint s = 0u; s < 2u; ++s) {
-                w[2u * a + s] = face_coupling(level, open, c, a, s, neighbour[2u * a + s]);
-                diag += w[2u * a + s];
-            }
-        phi_shared[i] = load_cell(kCellPressure, int(level.cells) + i);
-        rhs = load_cell(kCellRhs, int(level.cells) + i);
-    }
-    barrier();
-    for (uint sweep = 0u; sweep < 2u * pc.iterations; ++sweep) {
-        if (mine && colour == sweep % 2u) {
-            float phi = phi_shared[i];
-            float off = 0.0;
-            for (uint k = 0u; k < 6u; ++k) {
-                if (w[k] == 0.0) continue;
-                off += neighbour[k] >= 0 ? w[k] * (phi_shared[neighbour[k]] - phi) : -w[k] * phi;
-            }
-            phi_shared[i] = diag > 0.0 ? phi + (off - rhs) / diag : 0.0;
+void smooth_level(uint l, uint sweeps) {
+    GridLevel level = load_level(l);
+    uint count = cells_of(level);
+    for (uint half_sweep = 0u; half_sweep < 2u * sweeps; ++half_sweep) {
+        for (uint i = gl_LocalInvocationIndex; i < count; i += gl_WorkGroupSize.x) {
+            ivec3 c = cell_from_index(level.dims, int(i));
+            if ((uint(c.x + c.y + c.z) & 1u) == (half_sweep & 1u))
+                coarse_phi[level.cells - coarse_base + i] = relax_cell(l, c, kCellPressure);
         }
         barrier();
     }
-    if (mine) store_cell(kCellPressure, int(level.cells) + i, phi_shared[i]);
+}
+
+void main() {
+    uint top = pc.level;
+    uint levels = sb().b.levels;
+    uint smoothing = sb().b.smoothing;
+    GridLevel first = load_level(top);
+    coarse_base = first.cells;
+    if (top + 1u < levels) coarse_rhs_from = load_level(top + 1u).cells - coarse_base;
+    GridLevel last = load_level(levels - 1u);
+    uint total = last.cells + cells_of(last) - coarse_base;
+    for (uint e = gl_LocalInvocationIndex; e < total; e += gl_WorkGroupSize.x) coarse_phi[e] = 0.0;
+    barrier();
+
+    for (uint l = top; l + 1u < levels; ++l) {
+        smooth_level(l, smoothing);
+        GridLevel coarse = load_level(l + 1u);
+        for (uint i = gl_LocalInvocationIndex; i < cells_of(coarse); i += gl_WorkGroupSize.x)
+            coarse_rhs[coarse.cells - coarse_base - coarse_rhs_from + i] =
+                restrict_cell(l + 1u, cell_from_index(coarse.dims, int(i)));
+        barrier();
+    }
+    smooth_level(levels - 1u, pc.iterations);
+    for (uint l = levels - 1u; l-- > top;) {
+        GridLevel level = load_level(l);
+        for (uint i = gl_LocalInvocationIndex; i < cells_of(level); i += gl_WorkGroupSize.x)
+            coarse_phi[level.cells - coarse_base + i] +=
+                prolong_cell(l, cell_from_index(level.dims, int(i)), kCellPressure);
+        barrier();
+        smooth_level(l, smoothing);
+    }
+
+    if (top == 0u && pc.parity == 0u && gl_LocalInvocationIndex == 0u) {
+        // Plain multigrid on a grid this small: the next iterate adds this z whole (as smooth.comp's
+        // upward pass says on larger grids).
+        state().s.p_slot = 2u;
+        state().s.cg_alpha = 1.0;
+    }
+    vec2 sums = vec2(0.0);
+    for (uint i = gl_LocalInvocationIndex; i < cells_of(first); i += gl_WorkGroupSize.x) {
+        float z = coarse_phi[i];
+        store_cell(kCellPressureUp, int(first.cells + i), z);
+        if (pc.parity == 1u) sums += z * vec2(load_cell(kCellRhs, int(i)), load_cell(kCellOldResidual, int(i)));
+    }
+    if (pc.parity != 1u) return;
+    vec2 total_sums = group_sum(sums);
+    if (gl_LocalInvocationIndex == 0u) {
+        StateRef st = state();
+        st.s.cg_beta = cg_beta(total_sums.x, total_sums.y, st.s.cg_rz);
+        st.s.cg_rz = total_sums.x;
+    }
 }

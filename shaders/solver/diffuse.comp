@@ -2,9 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // Per face: one Jacobi iteration of implicit viscosity (α = pc.param) from face field pc.parity into
 // face field pc.iterations.
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();

@@ -1,10 +1,10 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face: one pass of extending the air's velocity into closed faces (extend_face, layer pc.iterations)
-// from face field pc.parity into pc.level's field (kField* numbers).
-#include "solver_common.glsl"
-
+// Per face: the second pass of extending the air's velocity into closed faces (extend_face, layer 2), from
+// the velocity into kFieldTmp.
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();
@@ -12,5 +12,5 @@ void main() {
     if (i >= faces_total(n)) return;
     uint axis;
     ivec3 f = face_from_index(n, i, axis);
-    store_face(pc.level, i, extend_face(pc.parity, axis, f, pc.iterations));
+    store_face(kFieldTmp, i, extend_face(kFieldVelocity, axis, f, 2u));
 }

@@ -5,9 +5,9 @@
 // part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
 // and adds a moving cell's mean fragment velocity to each sealed region it borders, so the air sealed
 // inside a moving solid moves with it (solid_motion_of).
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 shared uint group_sealed;
 

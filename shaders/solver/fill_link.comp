@@ -4,9 +4,9 @@
 // neighbours that share an open voxel pair across the face, and with the outside (node 0) where it
 // touches an open domain side. Parts left apart from node 0 are sealed (fill_finish.comp). Cells without
 // solid voxels are one whole part and need no voxel sets: most cells take that path.
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();

@@ -1,18 +1,18 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face: the field moved by pc.shift cells (new face f is old face f + shift) into tmp; faces with
+// Per face: the field moved by pc.shift cells (new face f is old face f + shift) into kFieldTmp; faces with
 // no old counterpart take the ambient wind. The first threads, one per cell, move φ the same way into
-// pressure_tmp (new cells 0), so that the next solve's warm start still lines up with the field.
-#include "solver_common.glsl"
-
+// kCellScratch (new cells 0), so that the next solve's warm start still lines up with the field.
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();
     ivec3 n = sb().b.dims;
     if (i < n.x * n.y * n.z) {
         ivec3 src = cell_from_index(n, i) + pc.shift;
-        store_cell(kCellPressureTmp, i, inside_cells(n, src) ? load_cell(kCellPressure, cell_index(n, src)) : 0.0);
+        store_cell(kCellScratch, i, inside_cells(n, src) ? load_cell(kCellPhi, cell_index(n, src)) : 0.0);
     }
     if (i >= faces_total(n)) return;
     uint axis;

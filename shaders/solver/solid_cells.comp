@@ -2,11 +2,11 @@
 #extension GL_GOOGLE_include_directive : require
 // Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
 // parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
-// clears what the last step summed here.
+// clears what the last step summed here. Thread 0 also sizes the moving-fragment pass.
 #include "../tree/tree_io.h"
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 uint b_log2() { return sb().b.tree_log2_branching; }
 
@@ -47,7 +47,14 @@ void main() {
         if ((old & (kCellRegion << k)) != 0u) IVec4Ref(sb().b.region_motion).v[node] = ivec4(0);
         labels.v[node] = node;
     }
-    if (i == 0) labels.v[kOutsideNode] = kOutsideNode;
+    if (i == 0) {
+        labels.v[kOutsideNode] = kOutsideNode;
+        // Sizes solid_motion's dispatch from the voxelizer's fragment count (read by one thread).
+        uint count = sb().b.fragments == 0ul ? 0u : min(WordsRef(sb().b.fragment_count).v[0], sb().b.fragment_capacity);
+        uint groups = (count + kSolverGroupSize - 1u) / kSolverGroupSize;
+        state().s.fragments_dispatch = LevelDispatch(min(groups, 65535u), (groups + 65534u) / 65535u, 1u);
+        state().s.fragments = count;
+    }
     flags.v[i] = 0u;
     if (levels == 0u) return;
     ivec3 lo = sb().b.voxel_offset + c * int(v);

@@ -4,9 +4,9 @@
 // sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
 // both cells (or the sealed region a cell without air lies in), over the share of the face's closed pairs
 // that touch no static solid (moving_share).
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 /// The cell's kCell* flags, none beyond the domain.
 uint flags_of(ivec3 c) {

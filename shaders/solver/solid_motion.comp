@@ -3,9 +3,9 @@
 // Per moving fragment: adds its surface velocity, its length clamped to the solid speed limit, to its wind
 // cell's fixed-point sum and marks the cell kCellMoving (later passes read the sums of marked cells only;
 // solid_cells clears them next step).
-#include "solver_common.glsl"
-
+#include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
 
 void main() {
     int i = thread_index();

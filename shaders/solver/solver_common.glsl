@@ -1,4 +1,6 @@
-// Buffers, accessors and helpers shared by the solver passes; then the shared kernels.
+// Buffers, accessors and helpers shared by the solver passes; then the shared kernels. A pass declares its
+// workgroup size before including this file: group_sum() reads gl_WorkGroupSize, which glslang takes as
+// (1, 1, 1) where it is used before the declaration.
 #extension GL_EXT_control_flow_attributes : enable
 #include "solver_io.h"
 
@@ -36,8 +38,9 @@ uint emitter_count() { return sb().b.emitter_count; }
 GpuEmitter load_emitter(uint i) { return EmittersRef(sb().b.emitters).v[i]; }
 
 uint64_t face_field(uint field) {
-    if (field == kFieldVelocity) return sb().b.velocity;
-    if (field == kFieldTmp) return sb().b.velocity_tmp;
+    bool swapped = (pc.swap & 1u) != 0u;
+    if (field == kFieldVelocity) return swapped ? sb().b.velocity_tmp : sb().b.velocity;
+    if (field == kFieldTmp) return swapped ? sb().b.velocity : sb().b.velocity_tmp;
     if (field == kFieldBack) return sb().b.velocity_back;
     return sb().b.solid_velocity;
 }
@@ -45,9 +48,14 @@ uint64_t cell_field(uint field) {
     if (field == kCellPressure) return sb().b.pressure;
     if (field == kCellRhs) return sb().b.rhs;
     if (field == kCellScratch) return sb().b.scratch;
-    if (field == kCellPressureTmp) return sb().b.pressure_tmp;
+    if (field == kCellPressureUp) return sb().b.pressure_up;
     ivec3 n = sb().b.dims;
-    return sb().b.cg_cells + uint64_t(field - kCellSolution) * uint64_t(n.x * n.y * n.z) * 4ul;
+    // The conjugate-gradient iteration's parity (swap bit 1) says which of each pair is current.
+    bool odd = (pc.swap & 2u) != 0u;
+    if (odd && (field == kCellSolution || field == kCellDirection)) field += 4u;
+    else if (odd && (field == kCellSolutionB || field == kCellDirectionB)) field -= 4u;
+    uint slot = field <= kCellOldResidual ? field - kCellSolution : field - kCellSolutionB + 4u;
+    return sb().b.cg_cells + uint64_t(slot) * uint64_t(n.x * n.y * n.z) * 4ul;
 }
 float load_face(uint field, int index) { return FloatsRef(face_field(field)).v[index]; }
 /// Level 0's open fraction from its byte count, coarser levels' weights from their floats.
@@ -57,8 +65,33 @@ float load_weight(int index) {
     uint word = WordsRef(sb().b.open_counts).v[index >> 2];
     return open_fraction_of(open_count_in(word, uint(index)), sb().b.pair_share);
 }
+#ifdef GUST_COARSE_SHARED
+// coarse_solve.comp keeps the levels it solves in shared memory (coarse_phi, coarse_rhs, from global cell
+// index coarse_base on; the first level's right-hand side stays in memory), so the shared kernels below
+// (relax_cell, restrict_cell, prolong_cell) run on them unchanged. Downward and upward values are one
+// array there.
+float load_cell(uint field, int index) {
+    int at = index - int(coarse_base);
+    if (at >= 0 && (field == kCellPressure || field == kCellPressureUp)) return coarse_phi[at];
+    if (at >= int(coarse_rhs_from) && field == kCellRhs) return coarse_rhs[at - int(coarse_rhs_from)];
+    return FloatsRef(cell_field(field)).v[index];
+}
+#else
 float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
+#endif
 vec4 load_vorticity(int index) { return Vec4Ref(sb().b.vorticity).v[index]; }
+/// The step's pressure solution at level-0 cell `index` as the solve left it: x + α p (or + z for plain
+/// multigrid) of the iterate and direction the state names, 0 after a diverged solve.
+float load_phi(int index) {
+    StateRef st = state();
+    if (st.s.diverged != 0u) return 0.0;
+    float x = FloatsRef(cell_field(st.s.x_slot == 0u ? kCellSolution : kCellSolutionB)).v[index];
+    float alpha = st.s.cg_alpha;
+    if (alpha == 0.0) return x;
+    uint p = st.s.p_slot;
+    uint direction = p == 0u ? kCellDirection : (p == 1u ? kCellDirectionB : kCellPressureUp);
+    return x + alpha * FloatsRef(cell_field(direction)).v[index];
+}
 
 void store_face(uint field, int index, float value) { FloatsRef(face_field(field)).v[index] = value; }
 void store_cell(uint field, int index, float value) { FloatsRef(cell_field(field)).v[index] = value; }
@@ -78,18 +111,67 @@ bool group_max_end(out uint bits) {
     return gl_LocalInvocationIndex == 0u;
 }
 
-// Workgroup sums of two values, stored by thread 0 as the group's entry in partials (summed in a fixed
-// order by cg_scalars, so a step's result does not depend on scheduling). Every thread must call it.
-shared vec2 group_sums[kSolverGroupSize];
-void group_sum_store(vec2 value) {
-    uint t = gl_LocalInvocationIndex;
-    group_sums[t] = value;
+// Reductions over a whole dispatch in the dispatch itself (the "last workgroup" pattern): every group stores
+// its partial result, counts itself done with an atomic, and the group that counts last folds all partials
+// in a fixed order, so a step gives the same result every run on a device. Partials are read only by that
+// group, after the others' writes (released by a memory barrier before their count), through a coherent
+// reference.
+layout(buffer_reference, scalar) coherent buffer PartialsRef { vec2 v[]; };
+layout(buffer_reference, scalar) coherent buffer CoherentStateRef { SolverState s; };
+
+uint group_linear() { return gl_WorkGroupID.x + gl_NumWorkGroups.x * (gl_WorkGroupID.y + gl_NumWorkGroups.y * gl_WorkGroupID.z); }
+uint group_total() { return gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z; }
+
+shared bool group_is_last;
+/// Called by every thread once thread 0 has written this group's partial: true in every thread of the group
+/// that finished last (the others' partials and atomics are then visible to it).
+bool last_group() {
+    memoryBarrierBuffer();
     barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        uint seen = atomicAdd(state().s.reduce_count, 1u);
+        group_is_last = seen + 1u == group_total();
+        if (group_is_last) state().s.reduce_count = 0u;
+    }
+    barrier();
+    memoryBarrierBuffer();
+    return group_is_last;
+}
+
+// Workgroup sums of two values into shared memory (every thread must call them).
+shared vec2 group_sums[kSolverGroupSize];
+/// The workgroup's sum of `value` (valid in every thread after the call); groups up to kSolverGroupSize
+/// threads wide use one slot per thread, wider ones fold in strides.
+vec2 group_sum(vec2 value) {
+    uint t = gl_LocalInvocationIndex;
+    uint width = gl_WorkGroupSize.x * gl_WorkGroupSize.y * gl_WorkGroupSize.z;
+    if (t < kSolverGroupSize) group_sums[t] = vec2(0.0);
+    barrier();
+    for (uint lane = 0u; lane < (width + kSolverGroupSize - 1u) / kSolverGroupSize; ++lane) {
+        if (t / kSolverGroupSize == lane) group_sums[t % kSolverGroupSize] += value;
+        barrier();
+    }
     [[unroll]] for (uint s = kSolverGroupSize / 2u; s > 0u; s >>= 1u) {
         if (t < s) group_sums[t] += group_sums[t + s];
         barrier();
     }
-    if (t == 0u) Vec2Ref(sb().b.partials).v[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = group_sums[0];
+    vec2 total = group_sums[0];
+    barrier();
+    return total;
+}
+/// Stores this group's sum of `value` as its partial; in the group that finished last, returns the sum of
+/// all partials (in group order) in `total` and true.
+bool sum_dispatch(vec2 value, out vec2 total) {
+    vec2 mine = group_sum(value);
+    if (gl_LocalInvocationIndex == 0u) PartialsRef(sb().b.partials).v[group_linear()] = mine;
+    total = vec2(0.0);
+    if (!last_group()) return false;
+    uint t = gl_LocalInvocationIndex;
+    uint width = gl_WorkGroupSize.x * gl_WorkGroupSize.y * gl_WorkGroupSize.z;
+    vec2 sum = vec2(0.0);
+    for (uint g = t; g < group_total(); g += width) sum += PartialsRef(sb().b.partials).v[g];
+    total = group_sum(sum);
+    return true;
 }
 
 /// A cell's six face layers (−x,+x,−y,+y,−z,+z), made once on the CPU.
@@ -169,4 +251,61 @@ ivec4 solid_motion_of(int i, uint flags) {
 
 vec3 motion_velocity(ivec4 m) { return m.w > 0 ? vec3(m.xyz) / (kVelocityScale * float(m.w)) : vec3(0.0); }
 
+// ---- The pressure solve's convergence check -------------------------------------------------------------
+
+/// Run by one thread of the workgroup that finishes a check's pass last (the residual's maximum gathered in
+/// residual_scratch): records the residual and which iterate holds x, and once the residual is within
+/// tolerance of max |b| (or diverged, solve_diverged) marks the solve done, makes that iterate final (α = 0)
+/// and zeroes the live dispatches, so the remaining recorded work does nothing. The reference is max |b|,
+/// not the first residual: a warm start begins with a small residual, and measuring against it would stop
+/// short.
+void convergence_check(uint x_slot) {
+    StateRef st = state();
+    float residual = uintBitsToFloat(st.s.residual_scratch);
+    st.s.residual_scratch = 0u;
+    if (st.s.done != 0u) return;
+    st.s.x_slot = x_slot;
+    float b_max = uintBitsToFloat(st.s.divergence_before);
+    if (st.s.checks == 0u) st.s.first_residual = floatBitsToUint(residual);
+    bool diverged = solve_diverged(residual, uintBitsToFloat(st.s.first_residual), b_max);
+    if (residual <= sb().b.tolerance * b_max || diverged) {
+        st.s.done = 1u;
+        st.s.diverged = diverged ? 1u : 0u;
+        st.s.cg_alpha = 0.0;
+        DispatchRef live = DispatchRef(sb().b.dispatch);
+        for (uint s = 0u; s < kDispatchSlots; ++s) live.v[s] = LevelDispatch(0u, 0u, 0u);
+    } else {
+        st.s.checks += 1u;
+    }
+}
+
 #include "solver_kernels.h"
+
+// ---- What engines read ---------------------------------------------------------------------------------
+
+/// Whether point p (cell units, inside the grid) lies in a solid: in a cell without air, or in a voxel of a
+/// cut cell that is not the cell's air.
+bool in_solid(vec3 p, int cell, uint flags) {
+    if ((flags & kCellNoAir) != 0u) return true;
+    if ((flags & kCellCut) == 0u) return false;
+    ivec3 c = cell_from_index(grid_dims(), cell);
+    int v = int(sb().b.voxels_per_cell);
+    ivec3 voxel = clamp(ivec3(floor((p - vec3(c)) * float(v))), ivec3(0), ivec3(v - 1));
+    return !bits_get(air_of(cell, flags), uint(voxel.x + v * (voxel.y + v * voxel.z)));
+}
+
+/// Velocity at cell i's centre as reported: the air's (the mean of its faces), or in a cell without air
+/// the solid's own.
+vec3 cell_output(int i) {
+    uint flags = flags_at(i);
+    if ((flags & kCellNoAir) != 0u) return motion_velocity(solid_motion_of(i, flags));
+    return cell_velocity(kFieldVelocity, cell_from_index(grid_dims(), i));
+}
+
+layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };
+/// Cell i's texel of the wind texture: cell_output and 1 − solid fraction, as four half floats.
+void store_texel(int i) {
+    vec3 u = cell_output(i);
+    float open = 1.0 - FloatsRef(sb().b.cell_solid).v[i];
+    TexelsRef(sb().b.texels).v[i] = uvec2(packHalf2x16(u.xy), packHalf2x16(vec2(u.z, open)));
+}

@@ -10,6 +10,11 @@
 GUST_NAMESPACE_BEGIN
 
 GUST_CONST uint kSolverGroupSize = 64;
+/// Side of the cubic tile of cells one workgroup of the tile smoother (smooth.comp) owns.
+GUST_CONST uint kTileSide = 8;
+/// Levels of at most this many cells are solved together by one workgroup in shared memory
+/// (coarse_solve.comp), so none of them costs a dispatch of its own.
+GUST_CONST uint kCoarseCells = 4096;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
 /// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3.
@@ -67,10 +72,10 @@ struct LevelDispatch {
 struct SolverState {
     uint divergence_before;           ///< float bits of max |weighted divergence| before projection, 1/s
     uint divergence_after;            ///< float bits of the same after projection
-    uint residual;                    ///< float bits of max |residual| at the last convergence check, 1/s
-    uint residual_scratch;            ///< float bits of max |residual| being gathered
-    uint checks;                      ///< convergence checks run that found the solve unfinished
-    uint done;                        ///< 1 once the residual met the tolerance
+    uint residual;                    ///< float bits of max |b − Lφ| of the step's pressure, 1/s
+    uint residual_scratch;            ///< float bits of max |residual| being gathered by a check
+    uint checks;                      ///< convergence checks that found the solve unfinished
+    uint done;                        ///< 1 once a check found the residual within tolerance
     uint cut_cells;                   ///< cells holding solid voxels
     uint fluid_cells;                 ///< cells with at least one open face
     LevelDispatch fragments_dispatch; ///< over the moving surfaces' fragments
@@ -79,16 +84,20 @@ struct SolverState {
     float cg_alpha;                   ///< step length along the search direction
     float cg_beta;                    ///< weight of the previous search direction
     float warm_scale;                 ///< s of the warm start x0 = s·φ of the last step (0: from zero)
-    uint recorded;                    ///< V-cycles (Jacobi: blocks) this step recorded, from check's push
+    uint recorded;                    ///< V-cycles (Jacobi: blocks) this step recorded
     uint first_residual;              ///< float bits of max |residual| at the solve's first check
     uint diverged;                    ///< 1 when the solve was stopped by solve_diverged (nothing projected)
     uint sealed_cells;                ///< cells with free voxels none of which reach an open side
+    uint x_slot;                      ///< which of the two iterates holds x (0: kCellSolution, 1: ...B)
+    uint p_slot;                      ///< which of the two search directions holds p
+    uint reduce_count;                ///< workgroups done with the current reduction (last_group())
+    uint pad;
 };
 
-/// Slots of the dispatch buffer: one per multigrid level, one per level over one colour of its cells (a
-/// red-black sweep, colour_cell), the coarsest solve, then a full copy that live slots are reset from
-/// (converged solves zero the live ones).
-GUST_CONST uint kColourSlot = kMaxGridLevels; ///< kColourSlot + level
+/// Slots of the dispatch buffer: per multigrid level the level's cells (restriction into it) and its
+/// tiles (smooth.comp), the coarse solve, and a level-0 cell pass; then a full copy that live slots are
+/// reset from (a converged solve zeroes the live ones).
+GUST_CONST uint kTileSlot = kMaxGridLevels; ///< kTileSlot + level
 GUST_CONST uint kCoarseSlot = 2u * kMaxGridLevels;
 GUST_CONST uint kDispatchSlots = 2u * kMaxGridLevels + 1u;
 
@@ -108,28 +117,32 @@ GUST_INLINE uint part_node(uint cell, uint k) {
     return 1u + kCellParts * cell + k;
 }
 
-GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face()
-GUST_CONST uint kFieldTmp = 1u;
-GUST_CONST uint kFieldBack = 2u;
+GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face(): the velocity (SolverPush::swap)
+GUST_CONST uint kFieldTmp = 1u;      ///< the other velocity buffer: a pass writes the next field here
+GUST_CONST uint kFieldBack = 2u;     ///< MacCormack's backward pass
 GUST_CONST uint kFieldSolid = 3u;
-GUST_CONST uint kCellPressure = 0u; ///< cell fields for load_cell()
-GUST_CONST uint kCellRhs = 1u;
-GUST_CONST uint kCellScratch = 2u; ///< level 0 only: the warm start's q = Lφ
-GUST_CONST uint kCellPressureTmp = 3u;
-GUST_CONST uint kCellSolution = 4u;    ///< conjugate gradients: the iterate x
-GUST_CONST uint kCellDirection = 5u;   ///< the search direction p
-GUST_CONST uint kCellTarget = 6u;      ///< the right-hand side b (rhs holds the residual)
-GUST_CONST uint kCellOldResidual = 7u; ///< the residual before this iteration's update
+GUST_CONST uint kCellPressure = 0u;    ///< cell fields for load_cell(): a level's V-cycle value, downward
+GUST_CONST uint kCellRhs = 1u;         ///< a level's V-cycle right-hand side (level 0: the residual r)
+GUST_CONST uint kCellScratch = 2u;     ///< level 0 only: the warm start's q = Lφ
+GUST_CONST uint kCellPressureUp = 3u;  ///< a level's V-cycle value after its coarse correction, upward
+GUST_CONST uint kCellSolution = 4u;    ///< conjugate gradients: the iterate x (and kCellSolutionB)
+GUST_CONST uint kCellDirection = 5u;   ///< the search direction p (and kCellDirectionB)
+GUST_CONST uint kCellTarget = 6u;      ///< the right-hand side b
+GUST_CONST uint kCellOldResidual = 7u; ///< the residual of the iteration before
+GUST_CONST uint kCellSolutionB = 8u;   ///< the other iterate: iteration k reads one and writes the other
+GUST_CONST uint kCellDirectionB = 9u;  ///< the other search direction
+GUST_CONST uint kCellPhi = 10u;        ///< φ, the step's pressure solution (output and next warm start)
+GUST_CONST uint kCellFields = 11u;
 
 /// Addresses and parameters of one step, in a buffer of their own (push constants stay small).
 struct SolverBindings {
-    GUST_ADDRESS velocity;       ///< float[faces]: the air's face-normal velocity (extend_face), m/s
-    GUST_ADDRESS velocity_tmp;   ///< float[faces]: advection output
+    GUST_ADDRESS velocity;       ///< float[faces]: one of the two velocity buffers (SolverPush::swap), m/s
+    GUST_ADDRESS velocity_tmp;   ///< float[faces]: the other
     GUST_ADDRESS velocity_back;  ///< float[faces]: MacCormack's backward pass
     GUST_ADDRESS weights;        ///< float[]: weights of levels 1 on, from index level0_faces
     GUST_ADDRESS solid_velocity; ///< float[faces]: solid's normal velocity per face, m/s
-    GUST_ADDRESS pressure;       ///< float[]: φ = p·dt/ρ per cell, all levels (m^2/s)
-    GUST_ADDRESS pressure_tmp;   ///< float[cells]: Jacobi's second buffer
+    GUST_ADDRESS pressure;       ///< float[]: kCellPressure, all levels
+    GUST_ADDRESS pressure_up;    ///< float[]: kCellPressureUp, all levels
     GUST_ADDRESS rhs;            ///< float[]: right-hand side per cell, all levels (1/s)
     GUST_ADDRESS scratch;        ///< float[cells]: kCellScratch
     GUST_ADDRESS cell_solid;     ///< float[cells]: share of the cell's voxels that are not its air
@@ -177,7 +190,9 @@ struct SolverBindings {
     uint level0_faces;        ///< faces of level 0 (in open_counts); weights holds the levels after
     float pair_share;         ///< pair_share(voxels_per_cell)
     float max_solid_speed;    ///< m/s: fragment velocities are clamped to this length
-    uint pad_bindings[3];
+    uint smoothing;           ///< red-black sweeps per V-cycle level and leg (SolverDesc::smoothing)
+    uint cycles_recorded;     ///< V-cycles (Jacobi: blocks) this step records, for the stats
+    uint pad_bindings;
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -187,12 +202,13 @@ struct SolverPush {
     GUST_ADDRESS bindings; ///< SolverBindings
     float dt;              ///< seconds
     uint level;            ///< multigrid level the pass works on
-    uint parity;           ///< red-black colour, or which field a pass reads
-    uint iterations;       ///< sweeps (coarsest solve) or a pass-specific count
+    uint parity;           ///< the pass's mode, or which field it reads
+    uint iterations;       ///< sweeps, or a pass-specific count
     float param;           ///< pass-specific value
+    uint swap;             ///< 1: kFieldVelocity is velocity_tmp and kFieldTmp velocity (bit 0); the
+                           ///< conjugate-gradient iteration's parity (bit 1: x and p read from their B buffers)
+    ivec3 shift;           ///< scroll: cells the field moves by
     uint pad;
-    ivec3 shift; ///< scroll: cells the field moves by
-    uint pad2;
 };
 
 // ---- Grid indexing ----------------------------------------------------------------------------------
@@ -680,7 +696,7 @@ GUST_NAMESPACE_END
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
-static_assert(sizeof(gust::shaderio::SolverState) == 80);
+static_assert(sizeof(gust::shaderio::SolverState) == 96);
 #endif
 
 #endif

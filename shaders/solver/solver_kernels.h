@@ -8,6 +8,7 @@
 //   float load_weight(int index);              weight array (level offsets included)
 //   float load_cell(uint field, int index);    kCell* arrays (level offsets included)
 //   vec4 load_vorticity(int index);            level-0 cells
+//   float load_phi(int index);                 level-0 cells: the step's pressure solution φ
 //   GridLevel load_level(uint level);
 //   uint emitter_count();  GpuEmitter load_emitter(uint i);
 
@@ -155,16 +156,28 @@ GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
     return epsilon * grid_h() * cross(g / len, vec3(load_vorticity(cell_index(n, c))));
 }
 
-/// Face f after vorticity confinement. The step is limited to the local CFL time (h / speed), so a
-/// large dt cannot make the force overshoot.
-GUST_INLINE float confine_face(uint axis, ivec3 f, float dt, float epsilon) {
+/// Vorticity confinement's change of face f over dt, from the vorticity the last step ended with
+/// (load_vorticity): fusing the force into advection's pass costs that one step of lag, where computing
+/// this step's curl first would cost a pass. The step is limited to the local CFL time (h / speed, the
+/// speed of kFieldVelocity's two cells), so a large dt cannot make the force overshoot; none on the
+/// domain's faces.
+GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon) {
     ivec3 n = grid_dims();
-    float u = load_face(kFieldVelocity, face_index(n, axis, f));
-    if (boundary_side(n, axis, f) != 6u) return u;
+    if (epsilon == 0.0f || boundary_side(n, axis, f) != 6u) return 0.0f;
     ivec3 a = f - axis_unit(axis);
     float speed = max(length(cell_velocity(kFieldVelocity, a)), length(cell_velocity(kFieldVelocity, f)));
     float step = speed > 0.0f ? min(dt, grid_h() / speed) : dt;
-    return u + step * 0.5f * (confinement_force(a, epsilon)[axis] + confinement_force(f, epsilon)[axis]);
+    return step * 0.5f * (confinement_force(a, epsilon)[axis] + confinement_force(f, epsilon)[axis]);
+}
+
+/// Face f of the next field from advection's value `u` there: the emitters (`rate` of the gap each), the
+/// ambient wind on the domain's faces, then vorticity confinement (confinement_change).
+GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
+    if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
+    vec3 x = grid_origin() + face_position(axis, f) * grid_h();
+    for (uint e = 0u; e < emitter_count(); ++e)
+        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
+    return u + confinement_change(axis, f, dt, epsilon);
 }
 
 /// One Jacobi iteration of implicit viscosity (u − α∇²u·h² = u0 with α = ν dt / h^2): face f from the
@@ -296,31 +309,35 @@ GUST_INLINE float restrict_cell(uint l, ivec3 C) {
     return sum / float(k.x * k.y * k.z);
 }
 
-/// Weight of face F (normal to `axis`) of coarse level l: the mean weight of the fine faces it covers.
+/// Weight of face F (normal to `axis`) of coarse level l: the mean open fraction of the level-0 faces it
+/// covers (the mean of the means level by level, so every coarse level comes straight from level 0 in one
+/// pass); level-0 faces past the grid count as closed.
 GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
-    GridLevel fine = load_level(l - 1u);
-    ivec3 k = fine.factor;
+    ivec3 k = ivec3(1);
+    for (uint m = 0u; m < l; ++m)
+        k *= load_level(m).factor;
     ivec3 span = k;
     span[axis] = 1;
-    ivec3 m = fine.dims + axis_unit(axis);
+    ivec3 n0 = grid_dims();
+    ivec3 m = n0 + axis_unit(axis);
     float sum = 0.0f;
     for (int z = 0; z < span.z; ++z)
         for (int y = 0; y < span.y; ++y)
             for (int x = 0; x < span.x; ++x) {
                 ivec3 f = F * k + ivec3(x, y, z);
-                f[axis] = min(F[axis] * k[axis], fine.dims[axis]);
-                if (f.x < m.x && f.y < m.y && f.z < m.z)
-                    sum += load_weight(int(fine.faces) + face_index(fine.dims, axis, f));
+                f[axis] = min(F[axis] * k[axis], n0[axis]);
+                if (f.x < m.x && f.y < m.y && f.z < m.z) sum += load_weight(face_index(n0, axis, f));
             }
     return sum / float(span.x * span.y * span.z);
 }
 
-/// Correction for fine cell c of level l from level l + 1: cell-centred trilinear interpolation (3/4 of
+/// Correction for fine cell c of level l from level l + 1 (its values in `coarse_field`): cell-centred
+/// trilinear interpolation (3/4 of
 /// the parent, 1/4 of its neighbour along each halved axis) through the coarse face between them, in
 /// proportion to its open fraction θ; the closed part acts as a wall (zero gradient: the parent's value).
 /// Past a domain side the neighbour is the boundary: a closed side is a wall, an open side's φ = 0 (half
 /// a level-0 cell out, as face_coupling puts it) is interpolated toward through the side's open part.
-GUST_INLINE float prolong_cell(uint l, ivec3 c) {
+GUST_INLINE float prolong_cell(uint l, ivec3 c, uint coarse_field) {
     GridLevel fine = load_level(l);
     GridLevel coarse = load_level(l + 1u);
     ivec3 k = fine.factor;
@@ -348,8 +365,7 @@ GUST_INLINE float prolong_cell(uint l, ivec3 c) {
         for (uint a = 0u; a < 3u; ++a)
             w *= pick[a] == 0 ? own[a] : across[a];
         if (w == 0.0f) continue;
-        sum +=
-            w * load_cell(kCellPressure, int(coarse.cells) + cell_index(coarse.dims, parent + pick * toward));
+        sum += w * load_cell(coarse_field, int(coarse.cells) + cell_index(coarse.dims, parent + pick * toward));
     }
     return sum;
 }
@@ -365,8 +381,8 @@ GUST_INLINE float project_face(uint axis, ivec3 f, bool gradient) {
     uint side = boundary_side(n, axis, f);
     if (!gradient || (side != 6u && (grid_open_sides() >> side & 1u) == 0u)) return u;
     ivec3 lo = f - axis_unit(axis);
-    float p_lo = inside_cells(n, lo) ? load_cell(kCellPressure, cell_index(n, lo)) : 0.0f;
-    float p_hi = inside_cells(n, f) ? load_cell(kCellPressure, cell_index(n, f)) : 0.0f;
+    float p_lo = inside_cells(n, lo) ? load_phi(cell_index(n, lo)) : 0.0f;
+    float p_hi = inside_cells(n, f) ? load_phi(cell_index(n, f)) : 0.0f;
     return u - (p_hi - p_lo) / grid_h();
 }
 
@@ -390,6 +406,23 @@ GUST_INLINE bool face_has_air(uint axis, ivec3 g, uint layer) {
             if (face_in_lattice(axis, nb) && load_weight(face_index(n, axis, nb)) > 0.0f) return true;
         }
     return false;
+}
+
+/// Face f after the projection and the first extension pass at once (project.comp): an open face its
+/// projected velocity, a closed one the mean of its open lattice neighbours' projected velocities, any
+/// other the solid's (extend_face's layer 1 over project_face's values, each computed where it is read).
+GUST_INLINE float project_extend_face(uint axis, ivec3 f, bool gradient) {
+    ivec3 n = grid_dims();
+    if (face_has_air(axis, f, 0u)) return project_face(axis, f, gradient);
+    float sum = 0.0f, count = 0.0f;
+    for (uint b = 0u; b < 3u; ++b)
+        for (int s = -1; s <= 1; s += 2) {
+            ivec3 nb = f + s * axis_unit(b);
+            if (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, 0u)) continue;
+            sum += project_face(axis, nb, gradient);
+            count += 1.0f;
+        }
+    return count > 0.0f ? sum / count : load_face(kFieldSolid, face_index(n, axis, f));
 }
 
 /// Face f of `field` after extension pass `layer` (1, then 2): a face that holds the air's velocity after

@@ -18,7 +18,7 @@ struct HostKernels {
     std::vector<GpuEmitter> emitters;
     std::vector<float> face[4]; ///< kField*
     std::vector<float> weights;
-    std::vector<float> cell[8]; ///< kCell*
+    std::vector<float> cell[kCellFields]; ///< kCell*
     std::vector<vec4> vorticity;
 
     ivec3 grid_dims() const { return dims; }
@@ -30,6 +30,7 @@ struct HostKernels {
     float load_weight(int index) const { return weights[std::size_t(index)]; }
     float load_cell(uint field, int index) const { return cell[field][std::size_t(index)]; }
     vec4 load_vorticity(int index) const { return vorticity[std::size_t(index)]; }
+    float load_phi(int index) const { return cell[kCellPhi][std::size_t(index)]; }
     GridLevel load_level(uint l) const { return levels[l]; }
     uint emitter_count() const { return uint(emitters.size()); }
     GpuEmitter load_emitter(uint i) const { return emitters[i]; }
@@ -168,7 +169,7 @@ Status CpuWind::scroll(glm::ivec3 cells) {
             inside ? m.k.face[0][std::size_t(shaderio::face_index(m.k.dims, axis, src))] : m.k.ambient[axis];
     });
     m.k.face[0] = std::move(moved);
-    std::vector<float>& phi = m.k.cell[shaderio::kCellPressure];
+    std::vector<float>& phi = m.k.cell[shaderio::kCellPhi];
     std::vector<float> shifted(m.cells());
     m.each_cell(m.k.levels[0], [&](int i, glm::ivec3 c) {
         const glm::ivec3 src = c + cells;
@@ -195,8 +196,8 @@ const std::vector<float>& CpuWind::open_fraction() const {
 }
 std::vector<float> CpuWind::pressure() const {
     const float scale = impl_->last_dt > 0.0f ? detail::kAirDensity / impl_->last_dt : 0.0f;
-    std::vector<float> p(impl_->k.cell[shaderio::kCellPressure].begin(),
-                         impl_->k.cell[shaderio::kCellPressure].begin() + std::ptrdiff_t(impl_->cells()));
+    std::vector<float> p(impl_->k.cell[shaderio::kCellPhi].begin(),
+                         impl_->k.cell[shaderio::kCellPhi].begin() + std::ptrdiff_t(impl_->cells()));
     for (float& v : p)
         v *= scale;
     return p;
@@ -429,26 +430,29 @@ void CpuWind::Impl::v_cycle() {
     for (std::uint32_t l = levels - 1; l-- > 0;) {
         const GridLevel& level = k.levels[l];
         std::vector<float> add(std::size_t(level.dims.x) * level.dims.y * level.dims.z);
-        each_cell(level, [&](int i, glm::ivec3 c) { add[std::size_t(i)] = k.prolong_cell(l, c); });
+        each_cell(level, [&](int i, glm::ivec3 c) {
+            add[std::size_t(i)] = k.prolong_cell(l, c, shaderio::kCellPressure);
+        });
         for (std::size_t i = 0; i < add.size(); ++i)
             phi[level.cells + i] += add[i];
         smooth(l);
     }
 }
 
-// divergence.comp's passes 2 and 3 over b in kCellTarget and φ: the warm start x0 = s·φ (s fitted by
-// warm_scale, 0 when not warm) and its residual r0 = b − s·Lφ, placed as the solver takes them
-// (conjugate gradients: x0 in x, r0 in rhs, φ = 0; otherwise x0 in φ). Returns max |r0|.
+// start.comp's warm start over b in kCellTarget and the last step's φ (kCellPhi): x0 = s·φ (s fitted by
+// warm_scale, 0 when not warm) and its residual r0 = b − s·Lφ, placed as the solver takes them (conjugate
+// gradients: x0 in x, r0 in rhs, the V-cycle's φ = 0; otherwise x0 in the V-cycle's φ). Returns max |r0|.
 float CpuWind::Impl::start_solve(bool warm) {
     using namespace shaderio;
     std::vector<float>& phi = k.cell[kCellPressure];
+    const std::vector<float>& last = k.cell[kCellPhi];
     std::vector<float>& q = k.cell[kCellScratch];
     const std::vector<float>& b = k.cell[kCellTarget];
     float s = 0.0f;
     if (warm) {
         double bq = 0.0, qq = 0.0;
         each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-            const float lap = k.laplacian_cell(0, c, kCellPressure);
+            const float lap = k.laplacian_cell(0, c, kCellPhi);
             q[std::size_t(i)] = lap;
             bq += double(b[std::size_t(i)]) * lap;
             qq += double(lap) * lap;
@@ -458,7 +462,7 @@ float CpuWind::Impl::start_solve(bool warm) {
     const bool pcg = desc.pressure == PressureSolver::MultigridPCG;
     float worst = 0.0f;
     for (std::size_t i = 0; i < cells(); ++i) {
-        const float x0 = s != 0.0f ? s * phi[i] : 0.0f;
+        const float x0 = s != 0.0f ? s * last[i] : 0.0f;
         const float r0 = s != 0.0f ? b[i] - s * q[i] : b[i];
         if (pcg) {
             k.cell[kCellSolution][i] = x0;
@@ -561,20 +565,16 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             tmp = std::move(out);
         }
     }
-    // The forces read advection's output (tmp) and write the velocity, so no copy lies between.
-    const std::uint32_t forced =
-        desc.advection != Advection::None ? shaderio::kFieldTmp : shaderio::kFieldVelocity;
+    // advect.comp's one pass: the advected value (tmp; the velocity itself without advection) with the
+    // emitters, the ambient wind and confinement from the vorticity the last step ended with, while the
+    // velocity still holds the old field (which confinement's step limit reads).
+    const std::vector<float>& advected = desc.advection != Advection::None ? tmp : u;
     const float rate = detail::emitter_rate(dt, desc.emitter_response);
-    m.each_face(
-        [&](int i, std::uint32_t a, glm::ivec3 f) { u[std::size_t(i)] = k.force_face(forced, a, f, rate); });
-    if (desc.vorticity > 0.0f) {
-        m.each_cell(k.levels[0],
-                    [&](int i, glm::ivec3 c) { k.vorticity[std::size_t(i)] = k.cell_vorticity(c); });
-        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
-            tmp[std::size_t(i)] = k.confine_face(a, f, dt, desc.vorticity);
-        });
-        u = tmp;
-    }
+    std::vector<float> forced(m.faces());
+    m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+        forced[std::size_t(i)] = k.forced_face(advected[std::size_t(i)], a, f, rate, dt, desc.vorticity);
+    });
+    u = std::move(forced);
     if (desc.viscosity > 0.0f) {
         const float alpha = desc.viscosity * dt / (desc.cell_size * desc.cell_size);
         std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
@@ -603,7 +603,9 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     });
     // The goal is relative to b, not to the first residual: a warm start that begins near the solution
     // must still reach tolerance · max |b|.
-    float residual = m.start_solve(desc.warm_start && m.has_guess);
+    // The Jacobi baseline starts from zero, as jacobi.comp does.
+    const bool jacobi = desc.pressure == PressureSolver::Jacobi;
+    float residual = m.start_solve(desc.warm_start && m.has_guess && !jacobi);
     Impl::Check check{desc.tolerance * before, residual, before};
     std::uint32_t checks = 0;
     bool done = check.done(residual);
@@ -620,12 +622,12 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         residual = m.conjugate_gradients(check, residual, done, checks);
         stats.cycles = std::min(checks, desc.max_cycles);
     } else {
-        std::vector<float>& other = k.cell[shaderio::kCellPressureTmp];
+        std::vector<float>& other = k.cell[shaderio::kCellSolutionB];
         std::vector<float> next(m.cells());
         const std::uint32_t blocks = (desc.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
         for (std::uint32_t block = 0; block < blocks && !done; ++block) {
             for (std::uint32_t it = 0; it < detail::kJacobiBlock; ++it) {
-                const std::uint32_t from = (it & 1) ? shaderio::kCellPressureTmp : shaderio::kCellPressure;
+                const std::uint32_t from = (it & 1) ? shaderio::kCellSolutionB : shaderio::kCellPressure;
                 std::vector<float>& to = (it & 1) ? phi : other;
                 m.each_cell(k.levels[0],
                             [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
@@ -637,24 +639,32 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         }
         stats.cycles = std::min(checks, blocks) * detail::kJacobiBlock;
     }
-    stats.residual = residual;
-    stats.converged = done && !check.diverged;
     stats.diverged = check.diverged;
     stats.divergence_before = before;
+    // finish.comp's φ (kCellPhi, 0 after a diverged solve), which the projection reads.
+    std::vector<float>& result = k.cell[shaderio::kCellPhi];
+    for (std::size_t i = 0; i < m.cells(); ++i)
+        result[i] = check.diverged ? 0.0f : phi[i];
     std::vector<float> projected(m.faces());
     m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
         projected[std::size_t(i)] = k.project_face(a, f, !check.diverged);
     });
     u = std::move(projected);
     m.extend();
-    if (check.diverged) std::fill_n(phi.begin(), m.cells(), 0.0f);
-    float after = 0.0f;
-    m.each_cell(k.levels[0], [&](int, glm::ivec3 c) {
-        float diag, off;
-        k.cell_operator(0, c, shaderio::kCellPressure, 0.0f, diag, off);
-        if (diag > 0.0f) after = std::max(after, std::abs(k.cell_divergence(c)));
+    // finish.comp: the final residual and divergence, and the vorticity the next step's confinement reads.
+    float after = 0.0f, left = 0.0f;
+    m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        float diag, lap;
+        k.cell_operator(0, c, shaderio::kCellPhi, result[std::size_t(i)], diag, lap);
+        if (diag > 0.0f) {
+            after = std::max(after, std::abs(k.cell_divergence(c)));
+            left = std::max(left, std::abs(k.cell[shaderio::kCellTarget][std::size_t(i)] - lap));
+        }
+        k.vorticity[std::size_t(i)] = k.cell_vorticity(c);
     });
     stats.divergence_after = after;
+    stats.residual = left;
+    stats.converged = !check.diverged && left <= desc.tolerance * before;
     m.last_dt = dt;
     m.has_guess = true;
     return stats;

@@ -18,7 +18,7 @@ static_assert(256 >> (shaderio::kMaxGridLevels - 1) <= 4, "the level cap must no
 
 std::uint32_t cycles_to_record(const WindStats& last, std::uint32_t max_cycles) {
     const std::uint32_t wanted =
-        last.converged ? last.cycles + std::max(4u, last.cycles / 2) : 2 * std::max(last.cycles_recorded, 1u);
+        last.converged ? last.cycles + std::max(8u, last.cycles / 2) : 2 * std::max(last.cycles_recorded, 1u);
     return std::min(wanted, max_cycles);
 }
 
@@ -177,6 +177,7 @@ Status validate(const SolverDesc& desc) {
         return Status::failure("tolerance must be in (0, 1)");
     if (desc.max_cycles < 1 || desc.max_cycles > 1000)
         return Status::failure("max_cycles must be in 1..1000");
+    if (desc.cycles_per_step > 1000) return Status::failure("cycles_per_step must be in 0..1000");
     if (desc.max_iterations < 1 || desc.max_iterations > 1000000)
         return Status::failure("max_iterations must be in 1..1000000");
     if (desc.smoothing < 1 || desc.smoothing > 16) return Status::failure("smoothing must be in 1..16");

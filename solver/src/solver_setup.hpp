@@ -23,7 +23,7 @@ inline constexpr std::uint32_t kJacobiBlock = 8;
 /// Red-black sweeps of the coarsest solve.
 inline constexpr std::uint32_t kCoarseSweeps = 32;
 
-/// V-cycles the steps after one with `last` record: half as many again as it ran (at least 4 more),
+/// V-cycles the steps after one with `last` record: half as many again as it ran (at least 8 more),
 /// or twice what it recorded when it used them all without converging; never above `max_cycles`.
 std::uint32_t cycles_to_record(const WindStats& last, std::uint32_t max_cycles);
 /// Jacobi iterations of implicit viscosity.

@@ -12,29 +12,23 @@ namespace gust {
 namespace {
 #include "gust_shaders/advect_comp.h"
 #include "gust_shaders/cg_comp.h"
-#include "gust_shaders/cg_scalars_comp.h"
-#include "gust_shaders/check_comp.h"
 #include "gust_shaders/coarse_solve_comp.h"
 #include "gust_shaders/coarse_weights_comp.h"
-#include "gust_shaders/confine_comp.h"
 #include "gust_shaders/diffuse_comp.h"
-#include "gust_shaders/divergence_comp.h"
 #include "gust_shaders/extend_comp.h"
 #include "gust_shaders/fill_finish_comp.h"
 #include "gust_shaders/fill_link_comp.h"
-#include "gust_shaders/forces_comp.h"
-#include "gust_shaders/fragment_args_comp.h"
+#include "gust_shaders/finish_comp.h"
+#include "gust_shaders/jacobi_comp.h"
 #include "gust_shaders/project_comp.h"
-#include "gust_shaders/prolong_comp.h"
-#include "gust_shaders/relax_comp.h"
-#include "gust_shaders/residual_comp.h"
 #include "gust_shaders/restrict_comp.h"
 #include "gust_shaders/sample_comp.h"
 #include "gust_shaders/scroll_comp.h"
+#include "gust_shaders/smooth_comp.h"
 #include "gust_shaders/solid_cells_comp.h"
 #include "gust_shaders/solid_faces_comp.h"
 #include "gust_shaders/solid_motion_comp.h"
-#include "gust_shaders/vorticity_comp.h"
+#include "gust_shaders/start_comp.h"
 
 using shaderio::GridLevel;
 using shaderio::kCellWords;
@@ -58,21 +52,39 @@ float from_bits(std::uint32_t bits) {
     return std::bit_cast<float>(bits);
 }
 
+/// Workgroups of smooth.comp over a level: one per 8^3 tile.
+LevelDispatch tiles_for(glm::ivec3 dims) {
+    const auto side = int(shaderio::kTileSide);
+    return {std::uint32_t((dims.x + side / 2 + side - 1) / side),
+            std::uint32_t((dims.y + side / 2 + side - 1) / side),
+            std::uint32_t((dims.z + side / 2 + side - 1) / side)};
+}
+
+std::uint64_t cells_of(glm::ivec3 dims) {
+    return std::uint64_t(dims.x) * dims.y * dims.z;
+}
+
 } // namespace
 
 struct WindSolver::Impl : gpu::HostObject {
     explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
-    gpu::Pipeline solid_cells, fragment_args, solid_motion, fill_link, fill_finish, solid_faces,
-        coarse_weights, advect, forces, vorticity, confine, diffuse, divergence, relax, residual, restrict_,
-        prolong, coarse_solve, check, cg, cg_scalars, project, extend, scroll, sample;
+    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, coarse_weights, advect,
+        diffuse, start, smooth, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
-        pressure_tmp, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
+        pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
         cell_motion, labels, region_motion, vorticity_buf, emitters, state, dispatch, bindings, points,
-        samples;
+        samples, state_readback;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
+    /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.
+    std::uint32_t coarse_level = 0;
     std::uint32_t emitter_count = 0;
     std::array<shaderio::GpuEmitter, shaderio::kMaxEmitters> emitter_data{}; ///< written by each step
+    /// Which of the two velocity buffers holds the velocity (SolverPush::swap bit 0): a pass writes the
+    /// next field into the other, and they trade places instead of being copied.
+    std::uint32_t swap = 0;
+    const gpu::Buffer& current_velocity() const { return swap ? velocity_tmp : velocity; }
+    const gpu::Buffer& other_velocity() const { return swap ? velocity : velocity_tmp; }
     /// Records the bindings `b` into their buffer, between barriers (passes earlier in the command buffer
     /// may still read the old ones).
     void put_bindings(const gpu::Context& ctx, VkCommandBuffer cmd) const {
@@ -113,41 +125,38 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         const char* name;
     };
     const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp), "gust solid_cells"},
-                            {&m.fragment_args, words(fragment_args_comp), "gust fragment_args"},
                             {&m.solid_motion, words(solid_motion_comp), "gust solid_motion"},
                             {&m.fill_link, words(fill_link_comp), "gust fill_link"},
                             {&m.fill_finish, words(fill_finish_comp), "gust fill_finish"},
                             {&m.solid_faces, words(solid_faces_comp), "gust solid_faces"},
                             {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
                             {&m.advect, words(advect_comp), "gust advect"},
-                            {&m.forces, words(forces_comp), "gust forces"},
-                            {&m.vorticity, words(vorticity_comp), "gust vorticity"},
-                            {&m.confine, words(confine_comp), "gust confine"},
                             {&m.diffuse, words(diffuse_comp), "gust diffuse"},
-                            {&m.divergence, words(divergence_comp), "gust divergence"},
-                            {&m.relax, words(relax_comp), "gust relax"},
-                            {&m.residual, words(residual_comp), "gust residual"},
+                            {&m.start, words(start_comp), "gust start"},
+                            {&m.smooth, words(smooth_comp), "gust smooth"},
                             {&m.restrict_, words(restrict_comp), "gust restrict"},
-                            {&m.prolong, words(prolong_comp), "gust prolong"},
                             {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
-                            {&m.check, words(check_comp), "gust check"},
                             {&m.cg, words(cg_comp), "gust cg"},
-                            {&m.cg_scalars, words(cg_scalars_comp), "gust cg_scalars"},
+                            {&m.jacobi, words(jacobi_comp), "gust jacobi"},
                             {&m.project, words(project_comp), "gust project"},
                             {&m.extend, words(extend_comp), "gust extend"},
+                            {&m.finish, words(finish_comp), "gust finish"},
                             {&m.scroll, words(scroll_comp), "gust scroll"},
                             {&m.sample, words(sample_comp), "gust sample"}};
-    // cg_scalars.comp sums every level-0 workgroup's partial in one workgroup: as wide as the device
-    // allows (a power of two, up to 1024), so that each thread adds few of them.
-    const std::uint32_t sum_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, 1024u));
+    // coarse_solve.comp runs in one workgroup as wide as the device allows (a power of two, up to 1024),
+    // so that each thread relaxes few cells of the levels it holds.
+    const std::uint32_t wide_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, 1024u));
     for (const Stage& stage : stages) {
-        const std::uint32_t constants[] = {sum_group};
+        const std::uint32_t constants[] = {wide_group};
         auto pipeline = gpu::Pipeline::compute(
             ctx, stage.name, stage.code, sizeof(SolverPush),
-            stage.pipeline == &m.cg_scalars ? std::span(constants) : std::span<const std::uint32_t>());
+            stage.pipeline == &m.coarse_solve ? std::span(constants) : std::span<const std::uint32_t>());
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
+    m.coarse_level = solver->levels_ - 1;
+    while (m.coarse_level > 0 && cells_of(m.levels[m.coarse_level - 1].dims) <= shaderio::kCoarseCells)
+        --m.coarse_level;
 
     const GridLevel& last = m.levels.back();
     const std::uint64_t all_cells = last.cells + std::uint64_t(last.dims.x) * last.dims.y * last.dims.z;
@@ -156,44 +165,54 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
     const std::uint64_t open_words = shaderio::open_count_words(std::uint32_t(faces));
     const std::uint64_t nodes = 1 + shaderio::kCellParts * cells;
-    const LevelDispatch level0_groups = groups_for(cells);
+    // Partial sums: one per workgroup of the widest reducing pass (level-0 cells or level-0 tiles).
+    const LevelDispatch level0_groups = groups_for(cells), level0_tiles = tiles_for(m.levels[0].dims);
+    const std::uint64_t partials =
+        std::max<std::uint64_t>(std::uint64_t(level0_groups.x) * level0_groups.y,
+                                std::uint64_t(level0_tiles.x) * level0_tiles.y * level0_tiles.z);
     struct Want {
         gpu::Buffer* buffer;
         std::uint64_t bytes;
-        gpu::MemoryUse use;
         VkBufferUsageFlags usage;
+        const char* name;
     };
+    // Everything lives in device-local memory, the state and the indirect arguments too: the host reads
+    // the state through record_readback()'s copy.
+    constexpr VkBufferUsageFlags kIndirect = VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT;
     const Want wants[] = {
-        {&m.velocity, faces * 4, gpu::MemoryUse::Device, 0},
-        {&m.velocity_tmp, faces * 4, gpu::MemoryUse::Device, 0},
-        {&m.velocity_back, faces * 4, gpu::MemoryUse::Device, 0},
-        {&m.open_counts, open_words * 4, gpu::MemoryUse::Device, 0},
-        {&m.weights, std::max<std::uint64_t>(all_faces - faces, 1) * 4, gpu::MemoryUse::Device, 0},
-        {&m.solid_velocity, faces * 4, gpu::MemoryUse::Device, 0},
-        {&m.pressure, all_cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.pressure_tmp, cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.rhs, all_cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.scratch, cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.cg_cells, 4 * cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.partials, std::uint64_t(level0_groups.x) * level0_groups.y * 8, gpu::MemoryUse::Device, 0},
-        {&m.cell_solid, cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.cell_parts, cells * shaderio::kCellParts * words_per_cell * 4, gpu::MemoryUse::Device, 0},
-        {&m.cell_static, cells * words_per_cell * 4, gpu::MemoryUse::Device, 0},
-        {&m.cell_flags, cells * 4, gpu::MemoryUse::Device, 0},
-        {&m.cell_motion, cells * 16, gpu::MemoryUse::Device, 0},
-        {&m.labels, nodes * 4, gpu::MemoryUse::Device, 0},
-        {&m.region_motion, nodes * 16, gpu::MemoryUse::Device, 0},
-        {&m.vorticity_buf, cells * 16, gpu::MemoryUse::Device, 0},
-        {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), gpu::MemoryUse::Device, 0},
-        {&m.state, sizeof(SolverState), gpu::MemoryUse::Readback, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
-        {&m.dispatch, 2 * kDispatchSlots * sizeof(LevelDispatch), gpu::MemoryUse::Upload,
-         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT},
-        {&m.bindings, sizeof(SolverBindings), gpu::MemoryUse::Device, 0}};
+        {&m.velocity, faces * 4, 0, "gust velocity A"},
+        {&m.velocity_tmp, faces * 4, 0, "gust velocity B"},
+        {&m.velocity_back, faces * 4, 0, "gust velocity back"},
+        {&m.open_counts, open_words * 4, 0, "gust open counts"},
+        {&m.weights, std::max<std::uint64_t>(all_faces - faces, 1) * 4, 0, "gust coarse weights"},
+        {&m.solid_velocity, faces * 4, 0, "gust solid velocity"},
+        {&m.pressure, all_cells * 4, 0, "gust v-cycle down"},
+        {&m.pressure_up, all_cells * 4, 0, "gust v-cycle up"},
+        {&m.rhs, all_cells * 4, 0, "gust v-cycle rhs"},
+        {&m.scratch, cells * 4, 0, "gust scratch"},
+        {&m.cg_cells, 7 * cells * 4, 0, "gust solve"},
+        {&m.partials, partials * 8, 0, "gust partial sums"},
+        {&m.cell_solid, cells * 4, 0, "gust solid fraction"},
+        {&m.cell_parts, cells * shaderio::kCellParts * words_per_cell * 4, 0, "gust cell parts"},
+        {&m.cell_static, cells * words_per_cell * 4, 0, "gust cell static voxels"},
+        {&m.cell_flags, cells * 4, 0, "gust cell flags"},
+        {&m.cell_motion, cells * 16, 0, "gust cell motion"},
+        {&m.labels, nodes * 4, 0, "gust fill labels"},
+        {&m.region_motion, nodes * 16, 0, "gust region motion"},
+        {&m.vorticity_buf, cells * 16, 0, "gust vorticity"},
+        {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), 0, "gust emitters"},
+        {&m.state, sizeof(SolverState), kIndirect, "gust solver state"},
+        {&m.dispatch, 2 * kDispatchSlots * sizeof(LevelDispatch), kIndirect, "gust solver dispatch"},
+        {&m.bindings, sizeof(SolverBindings), 0, "gust solver bindings"}};
     for (const Want& want : wants) {
-        auto buffer = gpu::Buffer::create(ctx, want.bytes, want.use, want.usage);
+        auto buffer = gpu::Buffer::create(ctx, want.bytes, gpu::MemoryUse::Device, want.usage, want.name);
         if (!buffer) return buffer.status();
         *want.buffer = std::move(*buffer);
     }
+    auto readback =
+        gpu::Buffer::create(ctx, sizeof(SolverState), gpu::MemoryUse::Readback, 0, "gust solver stats");
+    if (!readback) return readback.status();
+    m.state_readback = std::move(*readback);
     auto profiler = gpu::Profiler::create(ctx, 16);
     if (!profiler) return profiler.status();
     m.profiler = std::move(*profiler);
@@ -201,12 +220,10 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     std::pmr::vector<LevelDispatch> dispatch(2 * kDispatchSlots, LevelDispatch{0, 0, 0}, ctx.memory());
     for (std::size_t l = 0; l < m.levels.size(); ++l) {
         const glm::ivec3 d = m.levels[l].dims;
-        dispatch[kDispatchSlots + l] = groups_for(std::uint64_t(d.x) * d.y * d.z);
-        dispatch[kDispatchSlots + shaderio::kColourSlot + l] =
-            groups_for(std::uint64_t(shaderio::colour_threads(d)));
+        dispatch[kDispatchSlots + l] = groups_for(cells_of(d));
+        dispatch[kDispatchSlots + shaderio::kTileSlot + l] = tiles_for(d);
     }
     dispatch[kDispatchSlots + shaderio::kCoarseSlot] = {1, 1, 1};
-    std::memcpy(m.dispatch.mapped(), dispatch.data(), dispatch.size() * sizeof(LevelDispatch));
 
     SolverBindings& b = m.b;
     b.velocity = m.velocity.address();
@@ -218,12 +235,12 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.pair_share = shaderio::pair_share(desc.voxels_per_cell);
     b.solid_velocity = m.solid_velocity.address();
     b.pressure = m.pressure.address();
-    b.pressure_tmp = m.pressure_tmp.address();
+    b.pressure_up = m.pressure_up.address();
     b.rhs = m.rhs.address();
     b.scratch = m.scratch.address();
     b.cg_cells = m.cg_cells.address();
     b.partials = m.partials.address();
-    b.partial_count = level0_groups.x * level0_groups.y;
+    b.partial_count = std::uint32_t(partials);
     b.cell_solid = m.cell_solid.address();
     b.cell_parts = m.cell_parts.address();
     b.cell_static = m.cell_static.address();
@@ -243,14 +260,19 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.levels = solver->levels_;
     b.tolerance = desc.tolerance;
     b.vorticity_strength = desc.vorticity;
+    b.smoothing = desc.smoothing;
     std::copy(m.levels.begin(), m.levels.end(), b.level);
     detail::face_masks(desc.voxels_per_cell, b.face_mask);
 
     Status cleared = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+        ctx.vk().vkCmdUpdateBuffer(cmd, m.dispatch.handle(), 0, dispatch.size() * sizeof(LevelDispatch),
+                                   dispatch.data());
         // cell_flags, cell_motion and region_motion start clear: each step's solid_cells clears only what
-        // the last step marked.
-        for (gpu::Buffer* buffer : {&m.velocity, &m.solid_velocity, &m.pressure, &m.cell_solid, &m.cell_flags,
-                                    &m.cell_motion, &m.region_motion})
+        // the last step marked. The solve's buffers start at zero so that a term multiplied by zero (a
+        // direction times β = 0) never meets an uninitialised NaN.
+        for (gpu::Buffer* buffer :
+             {&m.velocity, &m.velocity_tmp, &m.solid_velocity, &m.pressure, &m.pressure_up, &m.cg_cells,
+              &m.cell_solid, &m.cell_flags, &m.cell_motion, &m.region_motion, &m.vorticity_buf})
             ctx.vk().vkCmdFillBuffer(cmd, buffer->handle(), 0, VK_WHOLE_SIZE, 0);
         ctx.vk().vkCmdFillBuffer(cmd, m.weights.handle(), 0, VK_WHOLE_SIZE,
                                  std::bit_cast<std::uint32_t>(1.0f));
@@ -267,7 +289,9 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
     if (last_dt_ > 0.0f) return Status{};
     const std::pmr::vector<float> faces =
         detail::uniform_faces(glm::ivec3(desc_.cells), velocity, ctx_.memory());
-    return upload(ctx_, impl_->velocity, faces.data(), faces.size() * sizeof(float));
+    Impl& m = *impl_;
+    return upload(ctx_, const_cast<gpu::Buffer&>(m.current_velocity()), faces.data(),
+                  faces.size() * sizeof(float));
 }
 
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
@@ -284,21 +308,30 @@ Status WindSolver::set_velocity(std::span<const float> faces) {
                                std::to_string(faces.size()));
     for (float v : faces)
         if (!std::isfinite(v)) return Status::failure("face velocities must be finite");
-    if (Status s = upload(ctx_, impl_->velocity, faces.data(), faces.size_bytes()); !s) return s;
-    impl_->has_guess = false;
+    Impl& m = *impl_;
+    if (Status s =
+            upload(ctx_, const_cast<gpu::Buffer&>(m.current_velocity()), faces.data(), faces.size_bytes());
+        !s)
+        return s;
+    m.has_guess = false;
     return Status{};
 }
 
+void WindSolver::bind_texels(const gpu::Buffer& texels) {
+    impl_->b.texels = texels.address();
+}
+
 namespace {
-Result<std::vector<float>> read_floats(gpu::Context& ctx, const gpu::Buffer& buffer, std::size_t count) {
+Result<std::vector<float>> read_floats(gpu::Context& ctx, const gpu::Buffer& buffer, std::size_t count,
+                                       std::size_t offset = 0) {
     std::vector<float> out(count);
-    if (Status s = download(ctx, buffer, out.data(), count * sizeof(float)); !s) return s;
+    if (Status s = download(ctx, buffer, out.data(), count * sizeof(float), offset); !s) return s;
     return out;
 }
 } // namespace
 
 Result<std::vector<float>> WindSolver::read_velocity() const {
-    return read_floats(ctx_, impl_->velocity, face_count());
+    return read_floats(ctx_, impl_->current_velocity(), face_count());
 }
 Result<std::vector<float>> WindSolver::read_open_fraction() const {
     std::vector<std::uint32_t> words(shaderio::open_count_words(std::uint32_t(face_count())));
@@ -316,7 +349,8 @@ Result<std::vector<float>> WindSolver::read_solid_fraction() const {
     return read_floats(ctx_, impl_->cell_solid, cell_count());
 }
 Result<std::vector<float>> WindSolver::read_pressure() const {
-    auto phi = read_floats(ctx_, impl_->pressure, cell_count());
+    // φ is the last of the solve's level-0 arrays (kCellPhi, cg_cells' seventh).
+    auto phi = read_floats(ctx_, impl_->cg_cells, cell_count(), 6 * cell_count() * sizeof(float));
     if (!phi) return phi;
     const float scale = last_dt_ > 0.0f ? detail::kAirDensity / last_dt_ : 0.0f;
     for (float& p : *phi)
@@ -327,7 +361,7 @@ Result<std::vector<float>> WindSolver::read_pressure() const {
 Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     Impl& m = *impl_;
     const std::size_t bytes = cell_count() * sizeof(glm::vec3);
-    auto out_buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Readback);
+    auto out_buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Readback, 0, "gust cell velocity");
     if (!out_buffer) return out_buffer.status();
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.b.origin = origin_;
@@ -336,6 +370,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
         SolverPush push{};
         push.bindings = m.bindings.address();
         push.parity = 2;
+        push.swap = m.swap;
         const LevelDispatch g = groups_for(cell_count());
         m.sample.bind(cmd, &push, sizeof(push));
         m.sample.dispatch(cmd, g.x, g.y, g.z);
@@ -360,7 +395,8 @@ Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3
     if (m.points.size() < bytes) {
         for (auto [buffer, use] : {std::pair(&m.points, gpu::MemoryUse::Upload),
                                    std::pair(&m.samples, gpu::MemoryUse::Readback)}) {
-            auto grown = gpu::Buffer::create(ctx_, std::max<std::size_t>(bytes, 4096), use);
+            auto grown =
+                gpu::Buffer::create(ctx_, std::max<std::size_t>(bytes, 4096), use, 0, "gust query points");
             if (!grown) return grown.status();
             *buffer = std::move(*grown);
         }
@@ -386,6 +422,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.parity = 0;
+    push.swap = m.swap;
     const LevelDispatch g = groups_for(count);
     m.sample.bind(cmd, &push, sizeof(push));
     m.sample.dispatch(cmd, g.x, g.y, g.z);
@@ -407,6 +444,7 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.parity = 1;
+    push.swap = m.swap;
     const LevelDispatch g = groups_for(cell_count());
     m.sample.bind(cmd, &push, sizeof(push));
     m.sample.dispatch(cmd, g.x, g.y, g.z);
@@ -426,23 +464,29 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.shift = cells;
-    const LevelDispatch g = groups_for(face_count());
+    push.swap = m.swap;
+    const LevelDispatch g = groups_for(std::max(face_count(), cell_count()));
     m.scroll.bind(cmd, &push, sizeof(push));
     m.scroll.dispatch(cmd, g.x, g.y, g.z);
     gpu::barrier(ctx_, cmd);
-    const VkBufferCopy face_bytes{0, 0, face_count() * sizeof(float)};
-    ctx_.vk().vkCmdCopyBuffer(cmd, m.velocity_tmp.handle(), m.velocity.handle(), 1, &face_bytes);
-    const VkBufferCopy cell_bytes{0, 0, cell_count() * sizeof(float)};
-    ctx_.vk().vkCmdCopyBuffer(cmd, m.pressure_tmp.handle(), m.pressure.handle(), 1, &cell_bytes);
+    m.swap ^= 1u;
+    // φ was moved into the scratch array; the last step's vorticity would no longer line up, so the next
+    // step's confinement starts from none.
+    const VkBufferCopy phi{0, 6 * cell_count() * sizeof(float), cell_count() * sizeof(float)};
+    ctx_.vk().vkCmdCopyBuffer(cmd, m.scratch.handle(), m.cg_cells.handle(), 1, &phi);
+    ctx_.vk().vkCmdFillBuffer(cmd, m.vorticity_buf.handle(), 0, VK_WHOLE_SIZE, 0);
     gpu::barrier(ctx_, cmd);
     origin_ += glm::vec3(cells) * desc_.cell_size;
 }
 
 Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
     if (Status s = detail::validate_dt(dt); !s) return s;
-    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_passes(cmd, dt, solid); });
+    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        record_passes(cmd, dt, solid);
+        record_readback(cmd, impl_->state_readback.handle(), 0);
+    });
     if (!recorded) return recorded;
-    WindStats stats = stats_from(impl_->state.mapped());
+    WindStats stats = stats_from(impl_->state_readback.mapped());
     stats.ms = impl_->profiler.read();
     return stats;
 }
@@ -459,6 +503,12 @@ std::size_t WindSolver::readback_bytes() {
 
 void WindSolver::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
     gpu::record_readback(ctx_, cmd, impl_->state, sizeof(SolverState), dst, offset);
+}
+
+std::uint32_t WindSolver::cycles_per_step() const {
+    if (desc_.pressure == PressureSolver::Jacobi)
+        return (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
+    return desc_.cycles_per_step > 0 ? std::min(desc_.cycles_per_step, desc_.max_cycles) : cycles_to_record_;
 }
 
 void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource* solid) {
@@ -488,54 +538,28 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         b.fragment_motion = solid->fragment_velocities;
         b.fragment_capacity = std::uint32_t(std::min<std::uint64_t>(solid->fragment_capacity, 0xffffffffu));
     }
-
     const std::uint32_t levels = levels_;
     const bool warm = desc_.warm_start && m.has_guess;
+    const std::uint32_t recorded = cycles_per_step();
+    b.cycles_recorded = recorded;
     const LevelDispatch face_groups = groups_for(face_count());
     const LevelDispatch cell_groups = groups_for(cell_count());
     SolverPush push{};
     push.bindings = m.bindings.address();
     push.dt = dt;
     auto run = [&](const gpu::Pipeline& p, LevelDispatch g) {
+        push.swap = (push.swap & ~1u) | m.swap;
         p.bind(cmd, &push, sizeof(push));
         p.dispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     };
-    // Indirect dispatches are the pressure solve's many small passes, each followed by another
-    // dispatch (or the check, whose run() ends in a full barrier), so a compute barrier suffices.
+    // Indirect dispatches are the pressure solve's passes, each followed by another dispatch (or one whose
+    // run() ends in a full barrier), so a compute barrier suffices.
     auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
+        push.swap = (push.swap & ~1u) | m.swap;
         p.bind(cmd, &push, sizeof(push));
         p.dispatch_indirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
         gpu::compute_barrier(ctx_, cmd);
-    };
-    auto copy = [&](const gpu::Buffer& from, const gpu::Buffer& to) {
-        const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
-        vk.vkCmdCopyBuffer(cmd, from.handle(), to.handle(), 1, &region);
-        gpu::barrier(ctx_, cmd);
-    };
-    auto smooth = [&](std::uint32_t l) {
-        push.level = l;
-        for (std::uint32_t s = 0; s < desc_.smoothing; ++s)
-            for (std::uint32_t colour = 0; colour < 2; ++colour) {
-                push.parity = colour;
-                run_slot(m.relax, shaderio::kColourSlot + l);
-            }
-    };
-    // One V-cycle on rhs at level 0, improving φ there (levels below start from 0).
-    auto v_cycle = [&]() {
-        for (std::uint32_t l = 0; l + 1 < levels; ++l) {
-            smooth(l);
-            push.level = l + 1;
-            run_slot(m.restrict_, l + 1);
-        }
-        push.level = levels - 1;
-        push.iterations = detail::kCoarseSweeps;
-        run_slot(m.coarse_solve, shaderio::kCoarseSlot);
-        for (std::uint32_t l = levels - 1; l-- > 0;) {
-            push.level = l;
-            run_slot(m.prolong, l);
-            smooth(l);
-        }
     };
 
     m.profiler.reset(cmd);
@@ -553,7 +577,6 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     // outside-air fill (fill), the faces' open fractions and solid velocities (faces).
     m.profiler.begin(cmd, "solid");
     run(m.solid_cells, cell_groups);
-    run(m.fragment_args, {1, 1, 1});
     m.solid_motion.bind(cmd, &push, sizeof(push));
     m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
@@ -564,37 +587,27 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.end(cmd);
     m.profiler.begin(cmd, "faces");
     run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
-    for (std::uint32_t l = 1; l < levels; ++l) {
-        push.level = l;
-        const glm::ivec3 d = m.levels[l].dims;
-        run(m.coarse_weights, groups_for(std::uint64_t(shaderio::faces_total(d))));
+    if (levels > 1) {
+        const GridLevel& last = m.levels.back();
+        run(m.coarse_weights,
+            groups_for(last.faces - m.levels[1].faces + std::uint64_t(shaderio::faces_total(last.dims))));
     }
     m.profiler.end(cmd);
 
-    if (desc_.advection != Advection::None) {
-        m.profiler.begin(cmd, "advect");
-        push.parity = 0;
-        run(m.advect, face_groups);
-        if (desc_.advection == Advection::MacCormack) {
-            push.parity = 1;
-            run(m.advect, face_groups);
-            push.parity = 2;
+    // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
+    // then holds the velocity.
+    m.profiler.begin(cmd, "advect");
+    push.param = detail::emitter_rate(dt, desc_.emitter_response);
+    if (desc_.advection == Advection::MacCormack) {
+        for (std::uint32_t mode : {1u, 2u, 3u}) {
+            push.parity = mode;
             run(m.advect, face_groups);
         }
-        m.profiler.end(cmd);
+    } else {
+        push.parity = desc_.advection == Advection::SemiLagrangian ? 0u : 4u;
+        run(m.advect, face_groups);
     }
-
-    m.profiler.begin(cmd, "forces");
-    // From advection's output into the velocity: the forces pass is also advection's copy back.
-    push.parity = desc_.advection != Advection::None ? shaderio::kFieldTmp : shaderio::kFieldVelocity;
-    push.param = detail::emitter_rate(dt, desc_.emitter_response);
-    run(m.forces, face_groups);
-    if (desc_.vorticity > 0.0f) {
-        run(m.vorticity, cell_groups);
-        push.param = desc_.vorticity;
-        run(m.confine, face_groups);
-        copy(m.velocity_tmp, m.velocity);
-    }
+    m.swap ^= 1u;
     m.profiler.end(cmd);
 
     if (desc_.viscosity > 0.0f) {
@@ -608,83 +621,76 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             from = to;
             to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
         }
-        copy(from == shaderio::kFieldTmp ? m.velocity_tmp : m.velocity_back, m.velocity);
+        if (from == shaderio::kFieldBack) {
+            const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
+            vk.vkCmdCopyBuffer(cmd, m.velocity_back.handle(), m.other_velocity().handle(), 1, &region);
+            gpu::barrier(ctx_, cmd);
+        }
+        m.swap ^= 1u;
         m.profiler.end(cmd);
     }
 
     m.profiler.begin(cmd, "pressure");
-    push.level = 0;
     push.parity = 0;
-    run(m.divergence, cell_groups);
-    // The warm start (docs/solver.md): the last step's φ, scaled to fit this step's b, starts the
-    // solve; without it the scale stays 0 (the state was cleared) and the start pass begins from zero.
-    if (warm) {
-        push.parity = 2;
-        run(m.divergence, cell_groups);
-        run(m.cg_scalars, {1, 1, 1});
-    }
-    push.parity = 3;
-    push.iterations = desc_.pressure == PressureSolver::MultigridPCG ? 1 : 0;
-    run(m.divergence, cell_groups);
-    // Only the cycles this step may need are recorded (cycles_to_record_): each one left over after
-    // convergence still costs its empty dispatches and barriers. The check stores the count.
-    const std::uint32_t blocks = (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
-    const std::uint32_t recorded = desc_.pressure == PressureSolver::Jacobi ? blocks : cycles_to_record_;
-    auto check = [&]() {
-        push.iterations = recorded;
-        run(m.check, {1, 1, 1});
-    };
-    check();
-    if (desc_.pressure == PressureSolver::Multigrid) {
-        for (std::uint32_t cycle = 0; cycle < recorded; ++cycle) {
-            v_cycle();
-            run_slot(m.residual, 0);
-            check();
-        }
-    } else if (desc_.pressure == PressureSolver::MultigridPCG) {
-        for (std::uint32_t iteration = 0; iteration < recorded; ++iteration) {
-            v_cycle();
-            push.level = 0;
-            for (std::uint32_t stage = 0; stage < 5; ++stage) {
-                push.parity = stage;
-                run_slot(m.cg, 0);
-                if (stage == 0 || stage == 2) {
-                    push.parity = stage / 2;
-                    run_slot(m.cg_scalars, shaderio::kCoarseSlot);
-                }
-            }
-            check();
-        }
-        const VkBufferCopy solution{0, 0, cell_count() * sizeof(float)};
-        vk.vkCmdCopyBuffer(cmd, m.cg_cells.handle(), m.pressure.handle(), 1, &solution);
+    push.level = 0;
+    push.iterations = warm ? 1u : 0u;
+    run(m.start, cell_groups);
+    const bool cg = desc_.pressure == PressureSolver::MultigridPCG;
+    if (desc_.pressure == PressureSolver::Jacobi) {
+        // The baseline starts from zero (no warm start) and relaxes in blocks, each followed by a check.
+        vk.vkCmdFillBuffer(cmd, m.cg_cells.handle(), 0, 2 * cell_count() * sizeof(float), 0);
         gpu::barrier(ctx_, cmd);
-    } else {
-        push.level = 0;
-        for (std::uint32_t block = 0; block < blocks; ++block) {
+        for (std::uint32_t block = 0; block < recorded; ++block) {
             for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
-                push.parity = 2 + (i & 1);
-                run_slot(m.relax, 0);
+                push.parity = 0;
+                push.swap = (i & 1u) << 1;
+                run_slot(m.jacobi, 0);
             }
-            run_slot(m.residual, 0);
-            check();
+            push.parity = 1;
+            push.swap = 0;
+            run_slot(m.jacobi, 0);
+        }
+    } else {
+        const std::uint32_t coarse = m.coarse_level;
+        for (std::uint32_t k = 0; k < recorded; ++k) {
+            push.swap = (k & 1u) << 1;
+            push.iterations = k;
+            push.level = 0;
+            push.parity = cg ? 0u : 4u;
+            run_slot(m.smooth, shaderio::kTileSlot);
+            for (std::uint32_t l = 0; l < coarse; ++l) {
+                push.level = l + 1;
+                run_slot(m.restrict_, l + 1);
+                if (l + 1 == coarse) break;
+                push.parity = 1;
+                run_slot(m.smooth, shaderio::kTileSlot + l + 1);
+            }
+            push.level = coarse;
+            push.parity = coarse == 0 && cg ? 1u : 0u;
+            push.iterations = detail::kCoarseSweeps;
+            run_slot(m.coarse_solve, shaderio::kCoarseSlot);
+            for (std::uint32_t l = coarse; l-- > 0;) {
+                push.level = l;
+                push.parity = l == 0 && cg ? 3u : 2u;
+                run_slot(m.smooth, shaderio::kTileSlot + l);
+            }
+            if (cg) {
+                push.level = 0;
+                run_slot(m.cg, 0);
+            }
         }
     }
     m.profiler.end(cmd);
 
+    // The gradient and the first pass of the extension, the second, then the cells' end of the step.
     m.profiler.begin(cmd, "project");
-    run(m.project, face_groups);
-    // Two passes extend the air's velocity into closed faces (extend_face): velocity -> tmp -> velocity.
-    push.level = shaderio::kFieldTmp;
-    push.parity = shaderio::kFieldVelocity;
-    push.iterations = 1;
-    run(m.extend, face_groups);
-    push.level = shaderio::kFieldVelocity;
-    push.parity = shaderio::kFieldTmp;
-    push.iterations = 2;
-    run(m.extend, face_groups);
+    push.swap = 0;
     push.level = 0;
-    push.parity = 1;
-    run(m.divergence, cell_groups);
+    run(m.project, face_groups);
+    m.swap ^= 1u;
+    run(m.extend, face_groups);
+    m.swap ^= 1u;
+    run(m.finish, cell_groups);
     m.profiler.end(cmd);
     last_dt_ = dt;
     m.has_guess = true;
@@ -701,17 +707,17 @@ WindStats WindSolver::stats_from(const void* readback) {
     stats.divergence_before = from_bits(st.divergence_before);
     stats.divergence_after = from_bits(st.divergence_after);
     stats.residual = from_bits(st.residual);
-    stats.converged = st.done != 0 && st.diverged == 0;
+    stats.diverged = st.diverged != 0;
+    stats.converged = !stats.diverged && stats.residual <= double(desc_.tolerance) * stats.divergence_before;
     const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
     const std::uint32_t per_check = jacobi ? detail::kJacobiBlock : 1;
-    // The check after the start counts too, so an unfinished solve has one check more than cycles.
     stats.cycles = std::min(st.checks, st.recorded) * per_check;
     stats.cycles_recorded = st.recorded * per_check;
-    if (!jacobi) cycles_to_record_ = detail::cycles_to_record(stats, desc_.max_cycles);
+    if (!jacobi && desc_.cycles_per_step == 0)
+        cycles_to_record_ = detail::cycles_to_record(stats, desc_.max_cycles);
     stats.cut_cells = st.cut_cells;
     stats.fluid_cells = st.fluid_cells;
     stats.sealed_cells = st.sealed_cells;
-    stats.diverged = st.diverged != 0;
     stats.moving_fragments = st.fragments;
     return stats;
 }

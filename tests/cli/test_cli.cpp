@@ -256,7 +256,8 @@ TEST(CliSimulate, framesHoldTheWindGridsOnCellCentresAndStatsTheSolve) {
         const auto j = nlohmann::json::parse(line);
         for (const char* key : {"divergence_before", "divergence_after", "residual", "cycles", "converged"})
             EXPECT_TRUE(j.contains(key)) << key;
-        for (const char* pass : {"wind_solid", "wind_advect", "wind_forces", "wind_pressure", "wind_project"})
+        for (const char* pass :
+             {"wind_solid", "wind_fill", "wind_faces", "wind_advect", "wind_pressure", "wind_project"})
             EXPECT_TRUE(j["ms"].contains(pass)) << pass;
         const double before = j["divergence_before"].get<double>();
         EXPECT_EQ(j["converged"].get<bool>(), j["residual"].get<double>() <= 1e-5 * before);

@@ -61,6 +61,10 @@ struct SolverDesc {
     float tolerance = 1e-5f;
     /// V-cycles (conjugate-gradient iterations) per step at most; docs/solver.md says why 32.
     std::uint32_t max_cycles = 32;
+    /// 0: solve to the tolerance, recording what the last step suggests (tools, tests); N > 0: record N
+    /// V-cycles a step, at most max_cycles, the warm start carrying the rest to the next (a game's frame
+    /// budget). Either way a step stops early once the tolerance is met.
+    std::uint32_t cycles_per_step = 0;
     std::uint32_t max_iterations = 4000; ///< Jacobi iterations per step at most
     std::uint32_t smoothing = 2;         ///< Gauss–Seidel sweeps before and after each coarse correction
     float vorticity = 0.2f;              ///< confinement strength ε (0: off)
@@ -154,6 +158,11 @@ class WindSolver : public gpu::HostObject {
     /// Velocity (m/s, world) at each cell's centre, index x + X·(y + Y·z): the air's (the mean of its
     /// faces) where the cell has air, the solid's own where it has none. Blocks.
     Result<std::vector<glm::vec3>> read_cell_velocity();
+    /// Every step from now on also writes its wind texture's texels into `texels` (as record_texels(),
+    /// within the step's last pass); `texels` is checked by check_texels and outlives the solver.
+    void bind_texels(const gpu::Buffer& texels);
+    /// V-cycles (Jacobi: blocks) the next step records.
+    std::uint32_t cycles_per_step() const;
 
     /// Velocity (m/s, world) at each world point: inside a solid the solid's own, in the air trilinear on
     /// the faces, the ambient wind outside the grid. Points must be finite. Blocks.

@@ -1,0 +1,28 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The Jacobi baseline on the level-0 iterate, from zero. pc.parity 0: one damped sweep from kCellSolution
+// into kCellSolutionB (SolverPush::swap's bit 1 alternates them), against b in kCellRhs. 1: the residual's
+// maximum and, in the workgroup that finishes last, the convergence check (the iterate in buffer A).
+#include "solver_io.h"
+layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
+
+void main() {
+    int i = thread_index();
+    ivec3 n = grid_dims();
+    bool inside = i < n.x * n.y * n.z;
+    if (pc.parity == 0u) {
+        if (inside) store_cell(kCellSolutionB, i, jacobi_cell(cell_from_index(n, i), kCellSolution));
+        return;
+    }
+    group_max_begin();
+    if (inside) {
+        ivec3 c = cell_from_index(n, i);
+        float diag, lap;
+        cell_operator(0u, c, kCellSolution, load_cell(kCellSolution, i), diag, lap);
+        if (diag > 0.0) group_max_add(load_cell(kCellRhs, i) - lap);
+    }
+    uint bits;
+    if (group_max_end(bits) && bits > state().s.residual_scratch) atomicMax(state().s.residual_scratch, bits);
+    if (last_group() && gl_LocalInvocationIndex == 0u) convergence_check(0u);
+}

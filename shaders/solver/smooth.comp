@@ -1,0 +1,136 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The V-cycle's smoothing in shared-memory tiles: a workgroup owns an 8^3 tile of level pc.level's cells,
+// loads it with a one-cell halo, and runs SolverBindings::smoothing red-black Gauss–Seidel sweeps on the
+// tile with the halo held at its loaded values (block Gauss–Seidel: exact inside a tile, Jacobi-like
+// across tiles), so a level's smoothing costs one dispatch, not one per half-sweep. pc.parity:
+//   0, 4 (level 0, first pass of an iteration): the iterate x_k = x_{k-1} + α p_{k-1} (k = pc.iterations;
+//     x_0 = s φ, the warm start; 4 is plain multigrid, where p is last iteration's z and α = 1), written to
+//     the other iterate, and its residual r = b − L x_k computed exactly (the last residual kept as r_old),
+//     with the convergence check in the workgroup that finishes last; then smoothing from zero against r.
+//   1 (a level between): smoothing from zero against the level's right-hand side (kCellPressure).
+//   2 (upward): the level's downward values plus the coarser level's correction (prolong_cell from
+//     kCellPressureUp), smoothed against the right-hand side, into kCellPressureUp.
+//   3 (level 0 upward, conjugate gradients): as 2, then the sums z·r and z·r_old, which the workgroup that
+//     finishes last turns into β.
+#include "solver_io.h"
+layout(local_size_x = kTileSide, local_size_y = kTileSide, local_size_z = kTileSide) in;
+#include "solver_common.glsl"
+
+const int kSide = int(kTileSide);
+const int kSpan = kSide + 2;
+shared float tile[kSpan * kSpan * kSpan];
+
+int slot_of(ivec3 local) { return (local.x + 1) + kSpan * ((local.y + 1) + kSpan * (local.z + 1)); }
+
+/// Value of level-0 cell c of the iterate x_k.
+float iterate(ivec3 c, bool plain) {
+    int i = cell_index(grid_dims(), c);
+    if (pc.iterations == 0u) {
+        float s = state().s.warm_scale;
+        return s != 0.0 ? s * load_cell(kCellPhi, i) : 0.0;
+    }
+    float alpha = plain ? 1.0 : state().s.cg_alpha;
+    return load_cell(kCellSolution, i) + alpha * load_cell(plain ? kCellPressureUp : kCellDirection, i);
+}
+
+void main() {
+    uint l = pc.level;
+    uint mode = pc.parity;
+    GridLevel level = load_level(l);
+    ivec3 local = ivec3(gl_LocalInvocationID);
+    bool up = mode == 2u || mode == 3u;
+    ivec3 origin = ivec3(gl_WorkGroupID) * kSide - (up ? ivec3(kSide / 2) : ivec3(0));
+    ivec3 c = origin + local;
+    bool mine = all(greaterThanEqual(c, ivec3(0))) && all(lessThan(c, level.dims));
+    int i = mine ? int(level.cells) + cell_index(level.dims, c) : 0;
+    uint open = grid_open_sides();
+    bool first = mode == 0u || mode == 4u;
+
+    // The cell's six couplings (cell_operator's faces): weight, and where the neighbour's value lives.
+    float w[6];
+    int nb_slot[6]; // tile slot, or -1 for an open side's φ = 0
+    float diag = 0.0;
+    if (mine) {
+        for (uint a = 0u; a < 3u; ++a)
+            for (uint s = 0u; s < 2u; ++s) {
+                int nb;
+                w[2u * a + s] = face_coupling(level, open, c, a, s, nb);
+                diag += w[2u * a + s];
+                nb_slot[2u * a + s] = nb >= 0 ? slot_of(local + (s == 0u ? -1 : 1) * axis_unit(a)) : -1;
+            }
+    }
+
+    // The right-hand side the tile smooths against.
+    float rhs = 0.0;
+    if (first) {
+        group_max_begin();
+        if (mine) {
+            bool plain = mode == 4u;
+            float x = iterate(c, plain);
+            float lap = 0.0;
+            for (uint a = 0u; a < 3u; ++a)
+                for (uint s = 0u; s < 2u; ++s) {
+                    float wf = w[2u * a + s];
+                    if (wf == 0.0) continue;
+                    ivec3 n = c + (s == 0u ? -1 : 1) * axis_unit(a);
+                    lap += wf * ((nb_slot[2u * a + s] >= 0 ? iterate(n, plain) : 0.0) - x);
+                }
+            rhs = diag > 0.0 ? load_cell(kCellTarget, i) - lap : 0.0;
+            store_cell(kCellSolutionB, i, x);
+            store_cell(kCellOldResidual, i, load_cell(kCellRhs, i));
+            store_cell(kCellRhs, i, rhs);
+            group_max_add(rhs);
+        }
+        uint bits;
+        if (group_max_end(bits) && bits > state().s.residual_scratch) atomicMax(state().s.residual_scratch, bits);
+        // The iterate just written is x_k; in absolute terms kCellSolutionB is buffer B on even iterations.
+        if (last_group() && gl_LocalInvocationIndex == 0u) convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
+    } else if (mine) {
+        rhs = load_cell(kCellRhs, i);
+    }
+
+    // Load the tile and its halo: zero going down; going up, the downward values plus the correction.
+    for (int e = int(gl_LocalInvocationIndex); e < kSpan * kSpan * kSpan; e += kSide * kSide * kSide) {
+        ivec3 t = ivec3(e % kSpan, (e / kSpan) % kSpan, e / (kSpan * kSpan)) - ivec3(1);
+        ivec3 cell = origin + t;
+        float value = 0.0;
+        if (up && all(greaterThanEqual(cell, ivec3(0))) && all(lessThan(cell, level.dims))) {
+            int j = int(level.cells) + cell_index(level.dims, cell);
+            value = load_cell(kCellPressure, j) + prolong_cell(l, cell, kCellPressureUp);
+        }
+        tile[e] = value;
+    }
+    barrier();
+
+    int self = slot_of(local);
+    uint colour = uint(c.x + c.y + c.z) & 1u;
+    for (uint half_sweep = 0u; half_sweep < 2u * sb().b.smoothing; ++half_sweep) {
+        if (mine && colour == (half_sweep & 1u) && diag > 0.0) {
+            float phi = tile[self];
+            float off = 0.0;
+            for (uint f = 0u; f < 6u; ++f) {
+                if (w[f] == 0.0) continue;
+                off += w[f] * ((nb_slot[f] >= 0 ? tile[nb_slot[f]] : 0.0) - phi);
+            }
+            tile[self] = phi + (off - rhs) / diag;
+        }
+        barrier();
+    }
+    float z = mine && diag > 0.0 ? tile[self] : 0.0;
+    if (mine) store_cell(up ? kCellPressureUp : kCellPressure, i, z);
+
+    if (mode == 2u && l == 0u && gl_WorkGroupID == uvec3(0) && gl_LocalInvocationIndex == 0u) {
+        // Plain multigrid: the next iterate adds this z whole.
+        state().s.p_slot = 2u;
+        state().s.cg_alpha = 1.0;
+    }
+    if (mode != 3u) return;
+    vec2 sums = mine ? z * vec2(rhs, load_cell(kCellOldResidual, i)) : vec2(0.0);
+    vec2 total;
+    if (sum_dispatch(sums, total) && gl_LocalInvocationIndex == 0u) {
+        StateRef st = state();
+        st.s.cg_beta = cg_beta(total.x, total.y, st.s.cg_rz);
+        st.s.cg_rz = total.x;
+    }
+}

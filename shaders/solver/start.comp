@@ -1,0 +1,48 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per cell, the pressure solve's start: the solver's divergence as the right-hand side b (kCellTarget, and
+// the level-0 residual kCellRhs, which the Jacobi baseline relaxes against), its maximum and the fluid
+// cells. With pc.iterations 1 (the warm start, docs/solver.md) also q = Lφ of the last step's φ (kCellScratch)
+// and the sums b·q and q·q, which the workgroup that finishes last turns into the scale s of x0 = s·φ
+// (warm_scale; 0 without the warm start).
+#include "solver_io.h"
+layout(local_size_x = kSolverGroupSize) in;
+#include "solver_common.glsl"
+
+shared uint group_fluid;
+
+void main() {
+    int i = thread_index();
+    ivec3 n = sb().b.dims;
+    bool inside = i < n.x * n.y * n.z;
+    ivec3 c = inside ? cell_from_index(n, i) : ivec3(0);
+    group_max_begin();
+    if (gl_LocalInvocationIndex == 0u) group_fluid = 0u;
+    barrier();
+    vec2 sums = vec2(0.0);
+    if (inside) {
+        float diag, off;
+        cell_operator(0u, c, kCellPhi, 0.0, diag, off);
+        float d = diag > 0.0 ? cell_divergence(c) : 0.0;
+        group_max_add(d);
+        store_cell(kCellTarget, i, d);
+        store_cell(kCellRhs, i, d);
+        if (diag > 0.0) atomicAdd(group_fluid, 1u);
+        if (pc.iterations != 0u) {
+            float q = laplacian_cell(0u, c, kCellPhi);
+            store_cell(kCellScratch, i, q);
+            sums = q * vec2(d, q);
+        }
+    }
+    // One global atomic per group, and none where an earlier group already left a larger maximum.
+    uint bits;
+    if (group_max_end(bits)) {
+        StateRef st = state();
+        if (bits > st.s.divergence_before) atomicMax(st.s.divergence_before, bits);
+        if (group_fluid > 0u) atomicAdd(st.s.fluid_cells, group_fluid);
+        if (gl_WorkGroupID.x + gl_WorkGroupID.y == 0u) st.s.recorded = sb().b.cycles_recorded;
+    }
+    if (pc.iterations == 0u) return;
+    vec2 total;
+    if (sum_dispatch(sums, total) && gl_LocalInvocationIndex == 0u) state().s.warm_scale = warm_scale(total.x, total.y);
+}
