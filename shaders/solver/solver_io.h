@@ -205,9 +205,10 @@ struct SolverPush {
     uint parity;           ///< the pass's mode, or which field it reads
     uint iterations;       ///< sweeps, or a pass-specific count
     float param;           ///< pass-specific value
-    uint swap;             ///< 1: kFieldVelocity is velocity_tmp and kFieldTmp velocity (bit 0); the
-                           ///< conjugate-gradient iteration's parity (bit 1: x and p read from their B buffers)
-    ivec3 shift;           ///< scroll: cells the field moves by
+    /// Bit 0: kFieldVelocity is velocity_tmp and kFieldTmp velocity; bit 1: the conjugate-gradient
+    /// iteration's parity (x and p read from their B buffers).
+    uint swap;
+    ivec3 shift; ///< scroll: cells the field moves by
     uint pad;
 };
 

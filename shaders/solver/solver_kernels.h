@@ -365,7 +365,8 @@ GUST_INLINE float prolong_cell(uint l, ivec3 c, uint coarse_field) {
         for (uint a = 0u; a < 3u; ++a)
             w *= pick[a] == 0 ? own[a] : across[a];
         if (w == 0.0f) continue;
-        sum += w * load_cell(coarse_field, int(coarse.cells) + cell_index(coarse.dims, parent + pick * toward));
+        sum +=
+            w * load_cell(coarse_field, int(coarse.cells) + cell_index(coarse.dims, parent + pick * toward));
     }
     return sum;
 }

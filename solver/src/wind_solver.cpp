@@ -144,8 +144,10 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                             {&m.scroll, words(scroll_comp), "gust scroll"},
                             {&m.sample, words(sample_comp), "gust sample"}};
     // coarse_solve.comp runs in one workgroup as wide as the device allows (a power of two, up to 1024),
-    // so that each thread relaxes few cells of the levels it holds.
-    const std::uint32_t wide_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, 1024u));
+    // so that each thread relaxes few cells of the levels it holds. A CPU device runs a workgroup's
+    // invocations one after another between barriers, so there width buys nothing and costs each barrier.
+    const std::uint32_t widest = ctx.info().type == "cpu" ? shaderio::kSolverGroupSize : 1024u;
+    const std::uint32_t wide_group = std::bit_floor(std::clamp(ctx.info().max_workgroup_size, 64u, widest));
     for (const Stage& stage : stages) {
         const std::uint32_t constants[] = {wide_group};
         auto pipeline = gpu::Pipeline::compute(
