@@ -330,23 +330,26 @@ gust_wind_domain to_c(const gust::WindDomain& d) {
 // The advection is passed on unchecked: System::create rejects unknown ones.
 gust::WindSettings to_cpp(const gust_wind_settings& c) {
     gust::WindSettings out;
-    auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed] = out;
+    auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step] = out;
     tolerance = c.tolerance;
     max_cycles = c.max_cycles;
     vorticity = c.vorticity;
     viscosity = c.viscosity;
     advection = to_cpp_enum<gust::WindAdvection>(c.advection);
     max_solid_speed = c.max_solid_speed;
+    cycles_per_step = c.cycles_per_step;
     return out;
 }
 gust_wind_settings to_c(const gust::WindSettings& w) {
-    const auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed] = w;
+    const auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step] =
+        w;
     return {.tolerance = tolerance,
             .max_cycles = max_cycles,
             .vorticity = vorticity,
             .viscosity = viscosity,
             .advection = static_cast<gust_advection>(static_cast<std::int32_t>(advection)),
-            .max_solid_speed = max_solid_speed};
+            .max_solid_speed = max_solid_speed,
+            .cycles_per_step = cycles_per_step};
 }
 
 // `host_device` is the converted c.host (or null); the hooks trampoline into `hooks_in_handle`.

@@ -268,6 +268,7 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
     out.voxels_per_cell = d.voxels_per_cell;
     out.tolerance = desc.wind.tolerance;
     out.max_cycles = desc.wind.max_cycles;
+    out.cycles_per_step = desc.wind.cycles_per_step;
     out.vorticity = desc.wind.vorticity;
     out.viscosity = desc.wind.viscosity;
     out.max_solid_speed = desc.wind.max_solid_speed;

@@ -22,6 +22,7 @@ SolverDesc solver_desc(const SceneDesc& scene) {
                                                 : PressureSolver::MultigridPCG;
     desc.tolerance = s.tolerance;
     desc.max_cycles = s.max_cycles;
+    desc.cycles_per_step = s.cycles_per_step;
     desc.max_iterations = s.max_iterations;
     desc.vorticity = s.vorticity;
     desc.viscosity = s.viscosity;

@@ -505,7 +505,7 @@ SolverSettings read_solver(const json& value, const std::string& at) {
     object(value, at);
     allow_keys(value, at,
                {"advection", "pressure", "tolerance", "max_cycles", "max_iterations", "vorticity",
-                "viscosity", "max_solid_speed"});
+                "viscosity", "max_solid_speed", "cycles_per_step"});
     SolverSettings solver;
     if (const json* v = member(value, "advection")) {
         const std::string advection_at = key_path(at, "advection");
@@ -530,6 +530,8 @@ SolverSettings read_solver(const json& value, const std::string& at) {
     }
     if (const json* v = member(value, "max_cycles"))
         solver.max_cycles = integer(*v, key_path(at, "max_cycles"), 1, 1000);
+    if (const json* v = member(value, "cycles_per_step"))
+        solver.cycles_per_step = integer(*v, key_path(at, "cycles_per_step"), 0, 1000);
     if (const json* v = member(value, "max_iterations"))
         solver.max_iterations = integer(*v, key_path(at, "max_iterations"), 1, 1000000);
     if (const json* v = member(value, "vorticity")) {

@@ -50,6 +50,8 @@ inline SystemDesc small_desc(Watch& watch) {
     desc.domain.voxels_per_cell = 2;
     desc.domain.focus = {0.0f, 4.0f, 0.0f};
     desc.hooks = watching(watch);
+    // The tests check converged solves; the API's default fixed budget has a test of its own.
+    desc.wind.cycles_per_step = 0;
     return desc;
 }
 

@@ -230,7 +230,8 @@ static void fills_the_documented_defaults(void) {
     CHECK(desc.domain.focus.x == 0.0f && desc.domain.focus.y == 0.0f && desc.domain.focus.z == 0.0f);
     CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 32);
     CHECK(desc.wind.vorticity == 0.2f && desc.wind.viscosity == 0.0f);
-    CHECK(desc.wind.advection == GUST_ADVECTION_MACCORMACK && desc.wind.max_solid_speed == 50.0f);
+    CHECK(desc.wind.advection == GUST_ADVECTION_MACCORMACK && desc.wind.max_solid_speed == 50.0f &&
+          desc.wind.cycles_per_step == 2);
     CHECK(desc.hooks.user == NULL && desc.hooks.allocate == NULL && desc.hooks.free == NULL &&
           desc.hooks.log == NULL && desc.hooks.assert_failed == NULL);
     /* The inline gust_system_desc_defaults calls gust_system_desc_init, whose name the message carries. */

@@ -29,6 +29,32 @@ TEST_F(SystemTest, stepsASceneAndReportsTheTreeAndTheSolve) {
     EXPECT_GT(watch_.allocations, 0) << "the allocation hook was not used";
 }
 
+// The API's default is a game's fixed budget (WindSettings::cycles_per_step = 2): every step runs at most
+// two V-cycles whatever the scene asks, reports honestly whether that met the tolerance, and the warm start
+// carries the rest, so the divergence left falls from step to step while nothing changes.
+TEST_F(SystemTest, theDefaultIsAFixedBudgetOfTwoVCyclesAStep) {
+    ASSERT_EQ(WindSettings{}.cycles_per_step, 2u);
+    SystemDesc desc = small_desc(watch_);
+    desc.wind = WindSettings{};
+    desc.wind.tolerance = 1e-7f; // tighter than two cycles reach, so the budget binds
+    std::unique_ptr<System> budget;
+    ASSERT_TRUE(System::create(desc, budget));
+    MeshId mesh = 0;
+    ASSERT_TRUE(budget->create_mesh(box_.desc(), mesh));
+    InstanceId fixed = 0;
+    ASSERT_TRUE(budget->create_instance(mesh, translation(-1.0f, 2.0f, 0.0f), false, fixed));
+    ASSERT_TRUE(budget->set_ambient({3.0f, 0.0f, 0.0f}));
+    std::vector<float> left;
+    for (int f = 0; f < 6; ++f) {
+        ASSERT_TRUE(budget->step(0.05f));
+        const FrameStats& s = budget->stats();
+        EXPECT_LE(s.cycles, 2u) << "frame " << f;
+        EXPECT_EQ(s.converged, s.residual <= desc.wind.tolerance * s.divergence_before) << "frame " << f;
+        left.push_back(s.divergence_after);
+    }
+    EXPECT_LT(left.back(), 0.5f * left[1]) << "the warm start carries what each step left";
+}
+
 TEST_F(SystemTest, pointsOutsideTheDomainGetTheAmbientWindExactly) {
     run_scene(*system_, 2);
     const Vec3 points[] = {{100.0f, 4.0f, 0.0f}, {0.0f, -50.0f, 0.0f}, {0.0f, 4.0f, 1e6f}};

@@ -314,6 +314,12 @@ TEST_F(SceneFile, readsTeleportKeysAndTheSolidSpeedLimit) {
     EXPECT_EQ(gust::solver_desc(load_ok("{}")).advection, gust::Advection::MacCormack);
 }
 
+// Scene files are for tools: the solve runs to the tolerance unless the file names a budget.
+TEST_F(SceneFile, readsAFixedBudgetOfVCyclesAndDefaultsToTheTolerance) {
+    EXPECT_EQ(gust::solver_desc(load_ok(R"({"solver": {"cycles_per_step": 3}})")).cycles_per_step, 3u);
+    EXPECT_EQ(gust::solver_desc(load_ok("{}")).cycles_per_step, 0u);
+}
+
 // A "teleport" key holds its predecessor's placement until its own time, then jumps: no frame sees the
 // move as motion.
 TEST(ObjectMatrix, aTeleportKeyHoldsThePreviousKeyUntilItsTime) {
@@ -530,6 +536,7 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "solver.pressure: unknown pressure solver 'cg' (expected mgpcg, multigrid or jacobi)"},
     BadScene{"ToleranceOfOne", R"({"solver": {"tolerance": 1}})", "solver.tolerance: must be less than 1 (found 1.0)"},
     BadScene{"ZeroCycles", R"({"solver": {"max_cycles": 0}})", "solver.max_cycles: must be an integer from 1 to 1000 (found 0.0)"},
+    BadScene{"BudgetTooLarge", R"({"solver": {"cycles_per_step": 1001}})", "solver.cycles_per_step: must be an integer from 0 to 1000 (found 1001.0)"},
     BadScene{"NegativeViscosity", R"({"solver": {"viscosity": -1}})", "solver.viscosity: must not be negative (found -1.0)"},
     BadScene{"NineVoxelsPerCell", R"({"domain": {"voxels_per_cell": 9}})",
              "domain.voxels_per_cell: must be an integer from 1 to 8 (found 9.0)"}),

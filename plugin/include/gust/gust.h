@@ -143,6 +143,7 @@ typedef struct gust_wind_settings {
     float viscosity;          ///< m^2/s (0: off)
     gust_advection advection; ///< GUST_ADVECTION_MACCORMACK by default
     float max_solid_speed;    ///< m/s, in (0, 256]: the fastest a moving surface pushes air (default 50)
+    uint32_t cycles_per_step; ///< V-cycles every step runs (default 2); 0: until the tolerance
 } gust_wind_settings;
 
 /// How a system's GPU work reaches a queue.

@@ -139,6 +139,10 @@ struct WindSettings {
     /// m/s, in (0, 256]: the fastest a moving surface pushes air; faster surface motion is clamped to it
     /// (docs/solver.md "Motion"). A jump meant as a teleport should say so (set_transform's `teleport`).
     float max_solid_speed = 50.0f;
+    /// V-cycles every step runs, a game's fixed per-frame budget: the warm start carries what a step leaves
+    /// into the next (docs/solver.md "Per-frame budget"). 0: each step runs until `tolerance` (at most
+    /// `max_cycles`), as tools and tests want.
+    std::uint32_t cycles_per_step = 2;
 };
 
 /// How a System's GPU work reaches a queue.

@@ -74,6 +74,7 @@ struct SolverSettings {
     std::string pressure = "mgpcg";       ///< "mgpcg", "multigrid" or "jacobi"
     float tolerance = 1e-5f;              ///< relative residual, in (0, 1)
     std::uint32_t max_cycles = 32;        ///< multigrid V-cycles per step, 1..1000
+    std::uint32_t cycles_per_step = 0;    ///< V-cycles every step runs, 0..1000 (0: until the tolerance)
     std::uint32_t max_iterations = 4000;  ///< Jacobi iterations per step, 1..1000000
     float vorticity = 0.2f;               ///< confinement strength, 0..10
     float viscosity = 0.0f;               ///< m^2/s, >= 0
