@@ -26,7 +26,7 @@ Detail preset(Quality quality) {
         // Measured on lavapipe (docs/sample.md): the grid and grass of the old defaults, with voxels of
         // 0.44 m instead of 0.875 m so that the characters are more than one block; a bigger grid costs
         // lavapipe more in per-dispatch overhead than finer voxels do.
-        return {{16, 8, 16}, 1.75f, 4, 20000, 4};
+        return {{16, 8, 16}, 1.75f, 4, 20000, 8};
     case Quality::High:
         // About 0.5 m cells and 0.125 m voxels over 32 m x 12 m x 32 m: the fox is six voxels tall.
         return {{64, 24, 64}, 0.5f, 4, 200000, 16};
