@@ -15,6 +15,7 @@ struct SimulateArgs {
     std::string method = "auto";
     std::string device;
     bool validation = false;
+    bool no_pipeline_cache = false; ///< run without the pipeline cache file (pipeline_cache.hpp)
 };
 
 /// Runs the command; returns the process exit code, printing errors to stderr.
