@@ -153,7 +153,7 @@ typedef enum gust_submission {
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
 typedef enum gust_voxelize_path {
-    GUST_VOXELIZE_AUTO = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    GUST_VOXELIZE_AUTO = 0,    ///< per instance, the path a cost model predicts faster (docs/cli.md)
     GUST_VOXELIZE_RASTER = 1,  ///< the hardware rasterizer
     GUST_VOXELIZE_COMPUTE = 2, ///< a thread per triangle
 } gust_voxelize_path;

@@ -149,7 +149,7 @@ enum class Submission : std::int32_t {
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
 enum class VoxelizePath : std::int32_t {
-    Auto = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    Auto = 0,    ///< per instance, the path a cost model predicts faster on this device (docs/cli.md)
     Raster = 1,  ///< the hardware rasterizer
     Compute = 2, ///< a thread per triangle
 };
