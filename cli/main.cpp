@@ -39,6 +39,23 @@ bool parse_vec3(const std::string& text, glm::vec3& out) {
     return in.eof() && std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.z);
 }
 
+/// Sorts packed voxel keys (30 bits) ascending and removes duplicates: a least-significant-digit radix sort,
+/// three passes of 10 bits, since a fragment list holds millions of keys (several per voxel).
+void sort_unique_keys(std::vector<std::uint32_t>& keys) {
+    std::vector<std::uint32_t> scratch(keys.size());
+    for (unsigned shift = 0; shift < 30; shift += 10) {
+        std::vector<std::size_t> start(1025, 0);
+        for (std::uint32_t key : keys)
+            ++start[((key >> shift) & 1023u) + 1];
+        for (std::size_t d = 1; d < start.size(); ++d)
+            start[d] += start[d - 1];
+        for (std::uint32_t key : keys)
+            scratch[start[(key >> shift) & 1023u]++] = key;
+        keys.swap(scratch);
+    }
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
 std::unique_ptr<gust::gpu::Context> make_context(const std::string& device, bool validation,
                                                  const std::string& pipeline_cache, std::string& error) {
     gust::gpu::ContextDesc desc;
@@ -127,8 +144,7 @@ int run_voxelize(const VoxelizeArgs& args) {
     ms["readback"] = ms_since(start);
     start = Clock::now();
     std::vector<std::uint32_t>& keys = *fragments;
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    sort_unique_keys(keys);
     ms["unique"] = ms_since(start);
 
     start = Clock::now();
