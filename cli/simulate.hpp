@@ -6,7 +6,7 @@
 
 namespace gust::cli {
 
-/// Options of `gust simulate` (DESIGN.md "Interfaces").
+/// Options of `gust simulate` (docs/design.md "Interfaces").
 struct SimulateArgs {
     std::string scene;        ///< scene file (JSON)
     std::uint32_t frames = 0; ///< frames to run, >= 1

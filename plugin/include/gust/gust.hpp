@@ -371,7 +371,7 @@ class System {
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
-    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; DESIGN.md layout);
+    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; docs/design.md layout);
     /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).
     Outcome export_vdb(const char* path);
 

@@ -1,4 +1,4 @@
-// GPU conservative surface voxelization of triangle meshes into a fragment list (DESIGN.md "Voxelizer").
+// GPU conservative surface voxelization of triangle meshes into a fragment list (docs/design.md "Voxelizer").
 #pragma once
 
 #include <cstdint>
@@ -193,7 +193,7 @@ class Voxelizer : public gpu::HostObject {
 /// Checks a grid: res in [kMinRes, kMaxRes], finite origin, finite voxel size > 0.
 Status validate_grid(const GridDesc& grid);
 
-/// The grid DESIGN.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
+/// The grid docs/design.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
 /// by one voxel on every side (an empty or flat box gets a 1-unit edge).
 GridDesc grid_around(glm::vec3 lo, glm::vec3 hi, std::uint32_t res);
 
