@@ -183,7 +183,8 @@ std::uint64_t fnv1a(const std::string& bytes) {
 }
 
 TEST(PipelineCacheFile, isWrittenWholeIntoItsFolderAndGivenToTheNextContext) {
-    const fs::path file = fresh_folder("cache_written") / "gust" / "pipelines.bin";
+    const fs::path folder = fresh_folder("cache_written");
+    const fs::path file = folder / "gust" / "pipelines.bin";
     auto first = context_with_cache(file);
     ASSERT_TRUE(first);
     EXPECT_FALSE(first->pipeline_cache_loaded()) << "there was no file yet";
@@ -196,10 +197,12 @@ TEST(PipelineCacheFile, isWrittenWholeIntoItsFolderAndGivenToTheNextContext) {
     ASSERT_TRUE(second);
     EXPECT_TRUE(second->pipeline_cache_loaded());
     EXPECT_EQ(second->validation_messages(), 0u);
+    fs::remove_all(folder);
 }
 
 TEST(PipelineCacheFile, cutShortDamagedOrForeignIsIgnoredAndThenReplaced) {
-    const fs::path file = fresh_folder("cache_damaged") / "pipelines.bin";
+    const fs::path folder = fresh_folder("cache_damaged");
+    const fs::path file = folder / "pipelines.bin";
     {
         auto ctx = context_with_cache(file);
         ASSERT_TRUE(ctx);
@@ -236,6 +239,7 @@ TEST(PipelineCacheFile, cutShortDamagedOrForeignIsIgnoredAndThenReplaced) {
         ASSERT_TRUE(ctx->save_pipeline_cache()) << name;
         EXPECT_EQ(read_bytes(file), good) << name << " is replaced by this device's cache";
     }
+    fs::remove_all(folder);
 }
 
 TEST(PipelineCacheFile, thatCannotBeWrittenFailsNamingIt) {
@@ -248,6 +252,7 @@ TEST(PipelineCacheFile, thatCannotBeWrittenFailsNamingIt) {
     const Status saved = ctx->save_pipeline_cache();
     ASSERT_FALSE(saved);
     EXPECT_NE(saved.message().find("a_file"), std::string::npos) << saved.message();
+    fs::remove_all(folder);
 }
 
 } // namespace
