@@ -1,4 +1,4 @@
-// Measures the wind solver (DESIGN.md "Wind solver"): GPU time per pass of one step at God of War's
+// Measures the wind solver (docs/design.md "Wind solver"): GPU time per pass of one step at God of War's
 // 32x16x32 grid and larger ones, the three pressure solvers (multigrid-preconditioned conjugate gradients,
 // plain multigrid and the Jacobi baseline) to the same tolerance, and the bytes each pass moves against the
 // device's copy bandwidth.

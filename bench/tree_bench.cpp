@@ -1,6 +1,6 @@
 // Reproduces the seed's second and third tables (sparse-tree build time against depth at 512^3, and the
 // bytes each representation of the same voxels takes) on the full Stanford dragon, and measures the
-// incremental frame DESIGN.md asks for (dynamic voxelize + tree update) against rebuilding everything.
+// incremental frame docs/design.md asks for (dynamic voxelize + tree update) against rebuilding everything.
 #include "bench_common.hpp"
 
 #include <CLI/CLI.hpp>

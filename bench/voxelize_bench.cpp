@@ -197,7 +197,8 @@ GustTiming time_gust(gust::Voxelizer& voxelizer, std::span<const gust::GpuInstan
 }
 
 /// Best of `runs` OpenVDB unsigned distance fields with a one-voxel band, on the grid gust uses: voxel
-/// size h and index (i,j,k) at the voxel centre origin + (i + 0.5) h, as DESIGN.md's .vdb export maps it.
+/// size h and index (i,j,k) at the voxel centre origin + (i + 0.5) h, as docs/design.md's .vdb export maps
+/// it.
 VdbTiming time_openvdb(const WorldMesh& world, const gust::GridDesc& grid, int runs) {
     VdbTiming timing;
     try {

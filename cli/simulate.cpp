@@ -1,5 +1,6 @@
 #include "simulate.hpp"
 
+#include "pipeline_cache.hpp"
 #include "vdb_writer.hpp"
 
 #include <chrono>
@@ -75,6 +76,7 @@ int run_simulate(const SimulateArgs& args) {
     gpu::ContextDesc ctx_desc;
     ctx_desc.device = args.device;
     ctx_desc.validation = args.validation;
+    ctx_desc.pipeline_cache = pipeline_cache_file(args.no_pipeline_cache);
     ctx_desc.on_message = [](gpu::Severity severity, const std::string& message) {
         if (severity != gpu::Severity::Info) std::cerr << "gust: vulkan: " << message << "\n";
     };
@@ -217,6 +219,8 @@ int run_simulate(const SimulateArgs& args) {
     if ((*ctx)->validation_messages() > 0)
         return fail(std::to_string((*ctx)->validation_messages()) +
                     " Vulkan validation messages; last: " + (*ctx)->last_validation_message());
+    // The cache only saves time: failing to write it does not fail the run.
+    static_cast<void>((*ctx)->save_pipeline_cache());
     return 0;
 }
 

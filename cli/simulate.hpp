@@ -6,7 +6,7 @@
 
 namespace gust::cli {
 
-/// Options of `gust simulate` (DESIGN.md "Interfaces").
+/// Options of `gust simulate` (docs/design.md "Interfaces").
 struct SimulateArgs {
     std::string scene;        ///< scene file (JSON)
     std::uint32_t frames = 0; ///< frames to run, >= 1
@@ -15,6 +15,7 @@ struct SimulateArgs {
     std::string method = "auto";
     std::string device;
     bool validation = false;
+    bool no_pipeline_cache = false; ///< run without the pipeline cache file (pipeline_cache.hpp)
 };
 
 /// Runs the command; returns the process exit code, printing errors to stderr.

@@ -1,4 +1,4 @@
-// OpenVDB output in the layout DESIGN.md fixes: a BoolGrid "occupancy" whose index (i,j,k) maps to
+// OpenVDB output in the layout docs/design.md fixes: a BoolGrid "occupancy" whose index (i,j,k) maps to
 // the voxel centre origin + (i + 0.5) h, and for simulated frames the wind grids "solid", "velocity"
 // and "pressure" whose index (i,j,k) maps to the wind cell's centre.
 #pragma once
@@ -16,10 +16,10 @@ namespace gust::vdb {
 struct WindGrids {
     glm::uvec3 cells{0};
     float cell_size = 1.0f;
-    glm::vec3 origin{0.0f};             ///< world position of the grid's min corner, m
-    std::span<const float> solid;       ///< solid fraction per cell, 0..1
+    glm::vec3 origin{0.0f};              ///< world position of the grid's min corner, m
+    std::span<const float> solid;        ///< solid fraction per cell, 0..1
     std::span<const glm::vec3> velocity; ///< m/s, world space
-    std::span<const float> pressure;    ///< Pa
+    std::span<const float> pressure;     ///< Pa
 };
 
 /// Writes the packed voxel keys (any order, duplicates allowed) as grid "occupancy" to `path`.

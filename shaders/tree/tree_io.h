@@ -1,4 +1,4 @@
-// Layouts shared by the sparse-tree shaders and tree/src/tree.cpp (DESIGN.md "Sparse tree").
+// Layouts shared by the sparse-tree shaders and tree/src/tree.cpp (docs/design.md "Sparse tree").
 //
 // Nodes live in blocks of b^3 (all children of one parent). A node is (child, touched): `child` is the
 // index of its child block (internal levels) or of its leaf mask block (last level), 0 when none;

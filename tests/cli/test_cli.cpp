@@ -27,10 +27,12 @@ struct CliRun {
     std::string err; ///< stderr
 };
 
-/// Runs the gust binary with `args` (already shell-quoted), capturing stdout and stderr.
-CliRun gust(const std::string& args) {
+/// Runs the gust binary with `args` (already shell-quoted), capturing stdout and stderr; `env` (arguments
+/// of env(1): assignments, `-u NAME`) changes its environment.
+CliRun gust(const std::string& args, const std::string& env = "") {
     const fs::path err_file = fs::temp_directory_path() / ("gust_cli_err_" + std::to_string(::getpid()));
-    const std::string command = std::string(GUST_CLI_PATH) + " " + args + " 2>" + err_file.string();
+    const std::string command = (env.empty() ? std::string() : "env " + env + " ") +
+                                std::string(GUST_CLI_PATH) + " " + args + " 2>" + err_file.string();
     CliRun run;
     FILE* pipe = popen(command.c_str(), "r");
     if (!pipe) return run;
@@ -386,6 +388,140 @@ TEST(CliInfo, printsTheDeviceAndAMeshsCounts) {
     EXPECT_FALSE(info["device"].get<std::string>().empty());
     EXPECT_EQ(info["mesh"]["triangles"], 3674);
     EXPECT_EQ(info["mesh"]["vertices"], 1839);
+}
+
+/// An empty folder of this test process's own under the temp directory.
+fs::path fresh_dir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("gust_cli_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// `gust voxelize` of the bunny at 24^3 with the validation layer on, in an environment of `env` without
+/// GUST_PIPELINE_CACHE unless `env` sets it.
+CliRun voxelize_bunny(const std::string& env, const std::string& options = "") {
+    return gust("voxelize " + asset("scans/bunny.ply") + " --res 24 --validation --out " +
+                    temp_vdb("cache").string() + " " + options,
+                "-u GUST_PIPELINE_CACHE " + env);
+}
+
+void write_bytes(const fs::path& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+TEST(CliPipelineCache, isWrittenUnderXdgCacheHomeAndReadByTheNextRun) {
+    const fs::path dir = fresh_dir("xdg");
+    const fs::path file = dir / "gust" / "pipelines.bin";
+    const CliRun first = voxelize_bunny("XDG_CACHE_HOME=" + dir.string());
+    ASSERT_EQ(first.code, 0) << first.err;
+    const auto stats = nlohmann::json::parse(first.out);
+    EXPECT_EQ(stats["pipeline_cache"]["file"], file.string());
+    EXPECT_EQ(stats["pipeline_cache"]["loaded"], false);
+    EXPECT_EQ(stats["pipeline_cache"]["saved"], true);
+    EXPECT_TRUE(fs::is_regular_file(file));
+    const CliRun second = voxelize_bunny("XDG_CACHE_HOME=" + dir.string());
+    ASSERT_EQ(second.code, 0) << second.err;
+    const auto again = nlohmann::json::parse(second.out);
+    EXPECT_EQ(again["pipeline_cache"]["loaded"], true);
+    EXPECT_EQ(again["voxels"], stats["voxels"]);
+    fs::remove_all(dir);
+}
+
+TEST(CliPipelineCache, fallsBackToTheHomeCacheFolderWithoutAnAbsoluteXdgCacheHome) {
+    const fs::path home = fresh_dir("home");
+    // Relative to the working directory (where Mesa may keep its own shader cache).
+    const std::string relative = "gust_cli_relative_xdg_" + std::to_string(::getpid());
+    for (const std::string& xdg : {std::string("-u XDG_CACHE_HOME"), "XDG_CACHE_HOME=" + relative}) {
+        const CliRun run = voxelize_bunny(xdg + " HOME=" + home.string());
+        ASSERT_EQ(run.code, 0) << run.err;
+        const fs::path file = home / ".cache" / "gust" / "pipelines.bin";
+        EXPECT_EQ(nlohmann::json::parse(run.out)["pipeline_cache"]["file"], file.string()) << xdg;
+        EXPECT_TRUE(fs::is_regular_file(file)) << xdg;
+        EXPECT_FALSE(fs::exists(fs::path(relative) / "gust")) << "a relative XDG_CACHE_HOME is ignored";
+        fs::remove_all(home / ".cache");
+    }
+    fs::remove_all(relative);
+    fs::remove_all(home);
+}
+
+TEST(CliPipelineCache, aFileCutShortOrOfGarbageIsIgnoredAndTheRunIsTheSame) {
+    const fs::path dir = fresh_dir("damaged");
+    const std::string env = "XDG_CACHE_HOME=" + dir.string();
+    const fs::path file = dir / "gust" / "pipelines.bin";
+    const CliRun good = voxelize_bunny(env);
+    ASSERT_EQ(good.code, 0) << good.err;
+    const auto expected = nlohmann::json::parse(good.out);
+    std::ifstream in(file, std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_FALSE(bytes.empty());
+    const std::pair<const char*, std::string> cases[] = {
+        {"cut in half", bytes.substr(0, bytes.size() / 2)},
+        {"cut by one byte", bytes.substr(0, bytes.size() - 1)},
+        {"garbage", std::string(3000, '\x5a')},
+        {"empty", ""}};
+    for (const auto& [name, damaged] : cases) {
+        write_bytes(file, damaged);
+        const CliRun run = voxelize_bunny(env);
+        ASSERT_EQ(run.code, 0) << name << ": " << run.err;
+        const auto stats = nlohmann::json::parse(run.out);
+        EXPECT_EQ(stats["pipeline_cache"]["loaded"], false) << name;
+        EXPECT_EQ(stats["voxels"], expected["voxels"]) << name;
+        EXPECT_EQ(stats["fragments"], expected["fragments"]) << name;
+        EXPECT_EQ(run.err.find("vulkan"), std::string::npos) << name << ": " << run.err;
+        const CliRun next = voxelize_bunny(env);
+        ASSERT_EQ(next.code, 0) << next.err;
+        EXPECT_EQ(nlohmann::json::parse(next.out)["pipeline_cache"]["loaded"], true)
+            << "the run after " << name << " reads the file that run wrote";
+    }
+    fs::remove_all(dir);
+}
+
+TEST(CliPipelineCache, isLeftAloneWithTheFlagOrTheVariableOffAndMovedByTheVariable) {
+    const fs::path dir = fresh_dir("off");
+    const std::string xdg = "XDG_CACHE_HOME=" + dir.string();
+    for (const auto& [env, options] :
+         {std::pair<std::string, std::string>{xdg, "--no-pipeline-cache"},
+          std::pair<std::string, std::string>{xdg + " GUST_PIPELINE_CACHE=off", ""}}) {
+        const CliRun run = voxelize_bunny(env, options);
+        ASSERT_EQ(run.code, 0) << run.err;
+        EXPECT_TRUE(nlohmann::json::parse(run.out)["pipeline_cache"].is_null()) << env << " " << options;
+        EXPECT_FALSE(fs::exists(dir / "gust")) << env << " " << options;
+    }
+    const fs::path custom = dir / "elsewhere" / "mine.bin";
+    const CliRun moved = voxelize_bunny(xdg + " GUST_PIPELINE_CACHE=" + custom.string());
+    ASSERT_EQ(moved.code, 0) << moved.err;
+    EXPECT_EQ(nlohmann::json::parse(moved.out)["pipeline_cache"]["file"], custom.string());
+    EXPECT_TRUE(fs::is_regular_file(custom));
+    EXPECT_FALSE(fs::exists(dir / "gust"));
+    fs::remove_all(dir);
+}
+
+TEST(CliPipelineCache, withNoFolderToWriteTheRunGoesOnWithoutAFileAndWithoutAWord) {
+    const fs::path dir = fresh_dir("nowhere");
+    write_bytes(dir / "home", "a file, not a folder");
+    const CliRun run = voxelize_bunny("-u XDG_CACHE_HOME HOME=" + (dir / "home").string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_TRUE(nlohmann::json::parse(run.out)["pipeline_cache"].is_null());
+    EXPECT_EQ(run.err.find("cache"), std::string::npos) << run.err;
+    fs::remove_all(dir);
+}
+
+TEST(CliSimulate, keepsItsPipelinesInTheSameCache) {
+    // GUST_PIPELINE_CACHE rather than XDG_CACHE_HOME, which would also move Mesa's shader cache and make
+    // lavapipe compile every solver shader afresh.
+    const fs::path dir = fresh_dir("simulate_cache");
+    const std::string args = "simulate " + asset("scenes/fox_bunnies.json") + " --frames 1 --out ";
+    const CliRun run =
+        gust(args + (dir / "out").string(), "GUST_PIPELINE_CACHE=" + (dir / "on.bin").string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_TRUE(fs::is_regular_file(dir / "on.bin"));
+    const CliRun off = gust(args + (dir / "out_off").string() + " --no-pipeline-cache",
+                            "GUST_PIPELINE_CACHE=" + (dir / "off.bin").string());
+    ASSERT_EQ(off.code, 0) << off.err;
+    EXPECT_FALSE(fs::exists(dir / "off.bin"));
+    fs::remove_all(dir);
 }
 
 } // namespace

@@ -1,11 +1,15 @@
 #include "support/gpu_env.hpp"
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <gtest/gtest.h>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/image.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <numeric>
+#include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace gust::test {
@@ -136,6 +140,119 @@ TEST_F(ImageTest, rejectsZeroExtent) {
     gpu::ImageDesc desc;
     desc.extent = {4, 0, 1};
     EXPECT_FALSE(gpu::Image::create(ctx(), desc));
+}
+
+namespace fs = std::filesystem;
+
+/// An empty folder of this test process's own under the temp directory.
+fs::path fresh_folder(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("gust_gpu_" + name + "_" + std::to_string(getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string read_bytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const fs::path& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+/// A validated Context whose pipeline cache lives in `file`.
+std::unique_ptr<gpu::Context> context_with_cache(const fs::path& file) {
+    gpu::ContextDesc desc;
+    desc.validation = true;
+    desc.pipeline_cache = file.string();
+    auto ctx = gpu::Context::create(desc);
+    EXPECT_TRUE(ctx) << ctx.message();
+    return ctx ? std::move(*ctx) : nullptr;
+}
+
+/// FNV-1a over 64 bits, as the cache file's header states its blob's checksum (docs/cli.md).
+std::uint64_t fnv1a(const std::string& bytes) {
+    std::uint64_t hash = 14695981039346656037ull;
+    for (char c : bytes) {
+        hash ^= static_cast<unsigned char>(c);
+        hash *= 1099511628211ull;
+    }
+    return hash;
+}
+
+TEST(PipelineCacheFile, isWrittenWholeIntoItsFolderAndGivenToTheNextContext) {
+    const fs::path folder = fresh_folder("cache_written");
+    const fs::path file = folder / "gust" / "pipelines.bin";
+    auto first = context_with_cache(file);
+    ASSERT_TRUE(first);
+    EXPECT_FALSE(first->pipeline_cache_loaded()) << "there was no file yet";
+    ASSERT_TRUE(first->save_pipeline_cache());
+    // gust's header (8-byte tag, size, checksum), then at least Vulkan's 32-byte header.
+    EXPECT_GE(fs::file_size(file), 24u + 32u);
+    EXPECT_EQ(std::distance(fs::directory_iterator(file.parent_path()), fs::directory_iterator()), 1)
+        << "the file is written under another name and renamed: nothing else is left beside it";
+    auto second = context_with_cache(file);
+    ASSERT_TRUE(second);
+    EXPECT_TRUE(second->pipeline_cache_loaded());
+    EXPECT_EQ(second->validation_messages(), 0u);
+    fs::remove_all(folder);
+}
+
+TEST(PipelineCacheFile, cutShortDamagedOrForeignIsIgnoredAndThenReplaced) {
+    const fs::path folder = fresh_folder("cache_damaged");
+    const fs::path file = folder / "pipelines.bin";
+    {
+        auto ctx = context_with_cache(file);
+        ASSERT_TRUE(ctx);
+        ASSERT_TRUE(ctx->save_pipeline_cache());
+    }
+    const std::string good = read_bytes(file);
+    ASSERT_GE(good.size(), 24u + 32u);
+    std::string flipped = good;
+    flipped[good.size() - 1] = char(flipped[good.size() - 1] ^ 0x10);
+    std::string garbage(4096, '\0');
+    for (std::size_t i = 0; i < garbage.size(); ++i)
+        garbage[i] = char((i * 2654435761u) >> 13);
+    // Whole and well formed, but Vulkan's header names another vendor (offset 8 of the blob).
+    std::string foreign = good.substr(24);
+    foreign[8] = char(foreign[8] ^ 0x5a);
+    std::string foreign_file = good.substr(0, 8);
+    const std::uint64_t words[2] = {foreign.size(), fnv1a(foreign)};
+    foreign_file.append(reinterpret_cast<const char*>(words), sizeof(words));
+    foreign_file += foreign;
+    const std::pair<const char*, std::string> cases[] = {{"empty", ""},
+                                                         {"shorter than the header", good.substr(0, 10)},
+                                                         {"cut by one byte", good.substr(0, good.size() - 1)},
+                                                         {"cut in half", good.substr(0, good.size() / 2)},
+                                                         {"one bit flipped", flipped},
+                                                         {"garbage", garbage},
+                                                         {"Vulkan's blob alone", good.substr(24)},
+                                                         {"another device's", foreign_file}};
+    for (const auto& [name, bytes] : cases) {
+        write_bytes(file, bytes);
+        auto ctx = context_with_cache(file);
+        ASSERT_TRUE(ctx) << name;
+        EXPECT_FALSE(ctx->pipeline_cache_loaded()) << name;
+        EXPECT_EQ(ctx->validation_messages(), 0u) << name << ": " << ctx->last_validation_message();
+        ASSERT_TRUE(ctx->save_pipeline_cache()) << name;
+        EXPECT_EQ(read_bytes(file), good) << name << " is replaced by this device's cache";
+    }
+    fs::remove_all(folder);
+}
+
+TEST(PipelineCacheFile, thatCannotBeWrittenFailsNamingIt) {
+    const fs::path folder = fresh_folder("cache_unwritable");
+    write_bytes(folder / "a_file", "not a folder");
+    const fs::path file = folder / "a_file" / "pipelines.bin";
+    auto ctx = context_with_cache(file);
+    ASSERT_TRUE(ctx) << "a cache that cannot be read is no reason to fail";
+    EXPECT_FALSE(ctx->pipeline_cache_loaded());
+    const Status saved = ctx->save_pipeline_cache();
+    ASSERT_FALSE(saved);
+    EXPECT_NE(saved.message().find("a_file"), std::string::npos) << saved.message();
+    fs::remove_all(folder);
 }
 
 } // namespace

@@ -203,7 +203,8 @@ static void reports_its_version_and_device_requirements(void) {
         CHECK(requirements.optional_extensions[i] && requirements.optional_extensions[i][0] != '\0');
     CHECK_FREE_RESULT(gust_get_device_requirements(NULL), GUST_ERROR_INVALID_ARGUMENT);
 
-    /* DESIGN.md: shaders take buffers by device address, so bufferDeviceAddress is among the features. */
+    /* docs/design.md: shaders take buffers by device address, so bufferDeviceAddress is among the features.
+     */
     VkPhysicalDeviceVulkan13Features features13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     VkPhysicalDeviceVulkan12Features features12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     features12.pNext = &features13;
@@ -621,7 +622,7 @@ static void simulates_a_small_world(void) {
     CHECK(sample.speed == 4.0f && equal3(sample.direction, vec3(1.0f, 0.0f, 0.0f)));
     CHECK(sample.gust <= 1e-5f); /* the neighbours' mean is 6 * (4 / 6) m/s, rounded */
 
-    /* DESIGN.md: the domain's min corner is centre - cells * cell_size / 2. */
+    /* docs/design.md: the domain's min corner is centre - cells * cell_size / 2. */
     gust_vec3 origin;
     CHECK_RESULT(system, gust_system_domain_origin(system, &origin), GUST_OK);
     CHECK(equal3(origin, vec3(-8.0f, 0.0f, -8.0f)));

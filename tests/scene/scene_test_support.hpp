@@ -145,7 +145,7 @@ class TempDir {
     std::filesystem::path path_;
 };
 
-// DESIGN.md, "Interfaces that others rely on", verbatim: this core must keep reading as written.
+// docs/design.md, "Interfaces that others rely on", verbatim: this core must keep reading as written.
 inline constexpr const char* kDesignExample = R"({
   "dt": 0.02,
   "domain": { "center": [0, 8, 0], "cells": [32, 16, 32], "cell_size": 1.0,

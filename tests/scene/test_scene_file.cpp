@@ -1,4 +1,4 @@
-// Scene files: DESIGN.md's core example, the documented extensions and defaults, transform and
+// Scene files: docs/design.md's core example, the documented extensions and defaults, transform and
 // keyframe math, and every kind of bad file failing with its file, key path and reason.
 #include "gust/scene/domain_grid.hpp"
 #include "gust/scene/scene_file.hpp"

@@ -171,7 +171,8 @@ INSTANTIATE_TEST_SUITE_P(Meshes, AgreesWithOpenVdb,
 using VoxelizerTest = GpuTest;
 
 TEST_F(VoxelizerTest, tinyInitialCapacityStillYieldsTheFullSet) {
-    // Huge triangles emit thousands of voxels each, far beyond any per-triangle first guess.
+    // Huge triangles emit thousands of voxels each within the grid, but their bounding box lies almost
+    // all outside it, so the first guess from their sizes (voxelize_work) falls far short.
     const GridDesc g = exact_grid(64);
     const TestMesh soup = huge_triangles(g);
     for (VoxelizeMethod method : {VoxelizeMethod::Raster, VoxelizeMethod::Compute}) {
@@ -332,7 +333,7 @@ TEST_F(VoxelizerTest, rejectsBadGrids) {
     EXPECT_NE(r.message().find("origin"), std::string::npos);
 }
 
-TEST_F(VoxelizerTest, autoPicksAMeasuredMethodAndMatches) {
+TEST_F(VoxelizerTest, autoPicksOnePathAndMatches) {
     const GridDesc g = exact_grid(64);
     const TestMesh soup = random_soup(3, 1000, g);
     auto voxelizer = Voxelizer::create(ctx());
@@ -345,7 +346,7 @@ TEST_F(VoxelizerTest, autoPicksAMeasuredMethodAndMatches) {
     EXPECT_NE(stats->method, VoxelizeMethod::Auto);
     auto again = (*voxelizer)->voxelize({&inst, 1}, g, VoxelizeMethod::Auto);
     ASSERT_TRUE(again);
-    EXPECT_EQ(again->method, stats->method) << "the choice is measured once per mesh and resolution";
+    EXPECT_EQ(again->method, stats->method) << "the choice depends on the mesh, grid and device only";
     const InstanceDesc cpu{soup.view(), glm::mat4(1.0f)};
     const VoxelDiff diff =
         diff_voxels(sorted_unique(*(*voxelizer)->read_fragments()), voxelize_reference({&cpu, 1}, g).voxels);

@@ -1,7 +1,6 @@
 #include "voxelizer/voxelize_io.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -25,8 +24,11 @@ using shaderio::VoxelizeCounters;
 using shaderio::VoxelizeInstance;
 using shaderio::VoxelizePush;
 
-/// Fragments per triangle assumed when sizing the list before the first pass.
-constexpr std::uint64_t kFragmentsPerTriangleGuess = 6;
+/// Headroom over the expected fragment count when sizing the list before a pass: the expectation is a
+/// mean over sub-voxel offsets (faces on voxel planes touch 11% more), and a pass that overflows is
+/// redone. The slack keeps small meshes clear of it too.
+constexpr double kFragmentHeadroom = 1.15;
+constexpr std::uint64_t kFragmentSlack = 4096;
 
 /// Large-triangle work items allocated before the first pass (each is one tile of a large triangle).
 constexpr std::uint64_t kInitialLargeItems = 4096;
@@ -258,6 +260,7 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
     out.triangles_ = std::uint32_t(mesh.index_count / 3);
     out.vertices_ = std::uint32_t(mesh.vertex_count);
     if (out.triangles_ == 0) return out;
+    out.sizes_ = measure_mesh(mesh);
 
     std::pmr::vector<float> packed(3 * mesh.vertex_count, ctx_.memory());
     for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
@@ -287,12 +290,18 @@ Result<std::pmr::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuI
     inv_dt_ = dt > 0.0f ? 1.0f / dt : 0.0f;
     for (const GpuInstance& inst : instances)
         if (!inst.mesh) return Methods::failure("an instance has no mesh");
-    if (method == VoxelizeMethod::Auto)
-        if (Status s = choose_methods(instances, grid); !s) return s;
     std::pmr::vector<VoxelizeMethod> methods(ctx_.memory());
     methods.reserve(instances.size());
-    for (const GpuInstance& inst : instances)
-        methods.push_back(method == VoxelizeMethod::Auto ? inst.mesh->measured_.at(grid.res) : method);
+    const CostModel& model = cost_model(ctx_.info());
+    for (const GpuInstance& inst : instances) {
+        if (method != VoxelizeMethod::Auto) {
+            methods.push_back(method);
+            continue;
+        }
+        const PathCosts costs = model.predict(voxelize_work(inst.mesh->sizes_, inst.model, grid));
+        methods.push_back(costs.raster_ms < costs.compute_ms ? VoxelizeMethod::Raster
+                                                             : VoxelizeMethod::Compute);
+    }
     return methods;
 }
 
@@ -309,7 +318,7 @@ Status Voxelizer::record(VkCommandBuffer cmd, std::span<const GpuInstance> insta
                          VoxelizeMethod method, float dt) {
     auto methods = prepare(instances, grid, method, dt);
     if (!methods) return methods.status();
-    if (Status s = ensure_pass(instances); !s) return s;
+    if (Status s = ensure_pass(instances, grid); !s) return s;
     record_pass(cmd, instances, *methods, grid);
     method_ = methods->empty() ? method_ : methods->back();
     return {};
@@ -368,41 +377,16 @@ Status Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t 
     return {};
 }
 
-Status Voxelizer::choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid) {
-    for (const GpuInstance& inst : instances) {
-        if (inst.mesh->measured_.count(grid.res)) continue;
-        double best_ms = 0.0;
-        VoxelizeMethod best = VoxelizeMethod::Raster;
-        for (VoxelizeMethod m : {VoxelizeMethod::Raster, VoxelizeMethod::Compute}) {
-            const VoxelizeMethod one[] = {m};
-            const auto start = std::chrono::steady_clock::now();
-            auto stats = run({&inst, 1}, one, grid);
-            if (!stats) return stats.status();
-            double ms =
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-            if (!stats->ms.empty()) {
-                ms = 0.0;
-                for (const auto& pass : stats->ms)
-                    ms += pass.second;
-            }
-            if (m == VoxelizeMethod::Raster || ms < best_ms) {
-                best_ms = ms;
-                best = m;
-            }
-        }
-        const_cast<GpuMesh*>(inst.mesh)->measured_[grid.res] = best;
-    }
-    return {};
-}
-
-Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances) {
-    // First guess so a pass rarely overflows: small triangles emit a few voxels each (4.2 per triangle
-    // for the full dragon at 512^3). Big triangles still grow the list after the pass.
-    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
-    if (Status s = ensure_capacity(
-            std::min<std::uint64_t>(limit, kFragmentsPerTriangleGuess * triangles_of(instances)));
-        !s)
-        return s;
+Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances, const GridDesc& grid) {
+    // A first guess from the triangles' sizes so that a pass rarely overflows (a redone pass costs as
+    // much as the first); one that does still grows the list and is redone.
+    VoxelizeWork work;
+    for (const GpuInstance& inst : instances)
+        work += voxelize_work(inst.mesh->sizes_, inst.model, grid);
+    const double limit =
+        double(std::min<std::uint64_t>(ctx_.info().max_allocation_size / sizeof(std::uint32_t), UINT32_MAX));
+    const double guess = std::min(limit, kFragmentHeadroom * work.fragments + double(kFragmentSlack));
+    if (Status s = ensure_capacity(std::uint64_t(guess)); !s) return s;
     if (inv_dt_ > 0.0f)
         if (Status s = ensure_velocity_capacity(); !s) return s;
     return ensure_instances(instances.size());
@@ -413,7 +397,7 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
     VoxelizeStats stats(ctx_.memory());
     stats.triangles = triangles_of(instances);
     for (;;) {
-        if (Status s = ensure_pass(instances); !s) return s;
+        if (Status s = ensure_pass(instances, grid); !s) return s;
         const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
         Status recorded =
             ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_pass(cmd, instances, methods, grid); });

@@ -154,7 +154,7 @@ typedef enum gust_submission {
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
 typedef enum gust_voxelize_path {
-    GUST_VOXELIZE_AUTO = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    GUST_VOXELIZE_AUTO = 0,    ///< per instance, the path a cost model predicts faster (docs/cli.md)
     GUST_VOXELIZE_RASTER = 1,  ///< the hardware rasterizer
     GUST_VOXELIZE_COMPUTE = 2, ///< a thread per triangle
 } gust_voxelize_path;
@@ -413,8 +413,8 @@ gust_result gust_system_stats_pass(gust_system system, uint32_t index, const cha
 /// `*origin` receives the domain's min corner (world m) after the last step.
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
 
-/// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; DESIGN.md layout);
-/// GUST_ERROR_UNSUPPORTED when built without OpenVDB (GUST_WITH_OPENVDB=OFF).
+/// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; docs/design.md
+/// layout); GUST_ERROR_UNSUPPORTED when built without OpenVDB (GUST_WITH_OPENVDB=OFF).
 gust_result gust_system_export_vdb(gust_system system, const char* path);
 
 /* Debug views of the solid boundary as of the last step, for tools and samples that draw it. The lists

@@ -153,7 +153,7 @@ enum class Submission : std::int32_t {
 
 /// Which voxelizer path turns triangles into voxels (docs/architecture.md compares them).
 enum class VoxelizePath : std::int32_t {
-    Auto = 0,    ///< per mesh, whichever measured faster (the choice can differ between runs)
+    Auto = 0,    ///< per instance, the path a cost model predicts faster on this device (docs/cli.md)
     Raster = 1,  ///< the hardware rasterizer
     Compute = 2, ///< a thread per triangle
 };
@@ -375,7 +375,7 @@ class System {
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
-    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; DESIGN.md layout);
+    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; docs/design.md layout);
     /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).
     Outcome export_vdb(const char* path);
 

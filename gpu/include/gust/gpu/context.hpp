@@ -37,9 +37,10 @@ struct ContextDesc {
     /// Host memory for the Context, the modules created on it and Vulkan's host allocations; null is
     /// new/delete (and the driver's own allocator). Must outlive the Context.
     std::pmr::memory_resource* memory = nullptr;
-    /// A file the pipeline cache is read from (when it holds this device's cache) and written to by
-    /// Context::save_pipeline_cache(); empty keeps the cache in memory only. Tools that run once per
-    /// call (gust voxelize) create their pipelines from it instead of compiling them.
+    /// A file the pipeline cache is read from (when it is whole and holds this device's cache; any other
+    /// file, a missing one included, is ignored) and written to by Context::save_pipeline_cache(); empty
+    /// keeps the cache in memory only. Tools that run once per call (gust voxelize) create their
+    /// pipelines from it instead of compiling them.
     std::string pipeline_cache;
 };
 
@@ -176,8 +177,11 @@ class Context : public HostObject {
     /// The pipeline cache every pipeline is created through (ContextDesc::pipeline_cache).
     VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
     /// Writes the pipeline cache to ContextDesc::pipeline_cache (nothing when none was named), so the
-    /// next process creates its pipelines from it instead of compiling them.
+    /// next process creates its pipelines from it instead of compiling them. Creates the file's folder;
+    /// replaces the file whole (written under another name, then renamed), never in part.
     Status save_pipeline_cache() const;
+    /// Whether ContextDesc::pipeline_cache named a file that held this device's cache, given to Vulkan.
+    bool pipeline_cache_loaded() const { return pipeline_cache_loaded_; }
 
     /// Whether VK_EXT_debug_utils is on, so that names and labels reach capture tools.
     bool debug_utils() const { return vk_.vkSetDebugUtilsObjectNameEXT != nullptr; }
@@ -254,6 +258,7 @@ class Context : public HostObject {
     VkFence fence_ = VK_NULL_HANDLE;
     VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;
     std::pmr::string pipeline_cache_path_;
+    bool pipeline_cache_loaded_ = false;
     VkPhysicalDeviceMemoryProperties memory_{};
     DeviceInfo info_;
     std::pmr::vector<std::pmr::string> device_names_;

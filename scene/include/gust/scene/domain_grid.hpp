@@ -1,4 +1,4 @@
-// The wind grid and voxel grid of a scene's domain (DESIGN.md "Interfaces": voxels are cell_size /
+// The wind grid and voxel grid of a scene's domain (docs/design.md "Interfaces": voxels are cell_size /
 // voxels_per_cell wide and indexed from the domain's min corner, wind cells likewise).
 #pragma once
 

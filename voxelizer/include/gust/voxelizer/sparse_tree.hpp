@@ -1,5 +1,5 @@
 // A sparse voxel tree of branching b per axis, kept on the GPU from frame to frame: refined where
-// fragments arrive, coarsened where they have been gone for K frames (DESIGN.md "Sparse tree").
+// fragments arrive, coarsened where they have been gone for K frames (docs/design.md "Sparse tree").
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// One frame of DESIGN.md's steps 2 and 3: voxelize what changed and keep the sparse tree current.
+// One frame of docs/design.md's steps 3 and 4: voxelize what changed and keep the sparse tree current.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// GPU conservative surface voxelization of triangle meshes into a fragment list (DESIGN.md "Voxelizer").
+// GPU conservative surface voxelization of triangle meshes into a fragment list (docs/design.md "Voxelizer").
 #pragma once
 
 #include <cstdint>
@@ -7,7 +7,7 @@
 #include <gust/gpu/pipeline.hpp>
 #include <gust/gpu/profiler.hpp>
 #include <gust/voxelizer/grid.hpp>
-#include <map>
+#include <gust/voxelizer/voxelize_cost.hpp>
 #include <memory>
 #include <memory_resource>
 #include <optional>
@@ -26,7 +26,7 @@ struct VoxelizeCounters;
 enum class VoxelizeMethod {
     Raster,  ///< hardware rasterizer: dominant-axis projection, dilation, exact per-voxel test
     Compute, ///< a thread per triangle (a workgroup per large triangle), exact per-voxel test
-    Auto     ///< per mesh, whichever measured faster on this device and resolution (measured once)
+    Auto     ///< per instance, the path the cost model predicts faster on this device (voxelize_cost.hpp)
 };
 
 /// "raster", "compute" or "auto".
@@ -40,16 +40,18 @@ class GpuMesh {
     GpuMesh() = default;
     std::uint32_t triangle_count() const { return triangles_; }
     std::uint32_t vertex_count() const { return vertices_; }
+    /// Triangle sizes measured at upload (the positions given then), for the cost model and list sizing.
+    const MeshSizes& sizes() const { return sizes_; }
 
   private:
     friend class Voxelizer;
-    explicit GpuMesh(std::pmr::memory_resource* memory) : measured_(memory), staged_(memory) {}
+    explicit GpuMesh(std::pmr::memory_resource* memory) : staged_(memory) {}
     gpu::Buffer positions_;      ///< float[3 * vertices], this frame
     gpu::Buffer prev_positions_; ///< float[3 * vertices], last frame (only once positions were updated)
     gpu::Buffer indices_;        ///< uint[3 * triangles]
     std::uint32_t triangles_ = 0;
     std::uint32_t vertices_ = 0;
-    std::pmr::map<std::uint32_t, VoxelizeMethod> measured_; ///< res -> faster path, filled by Auto
+    MeshSizes sizes_;
     // Frames in flight: positions set since the last recorded frame, written into positions_ by the next
     // frame's commands (a write now could race the frames still running). Mutable: the positions are
     // already set; the staging only says when they reach the GPU.
@@ -157,12 +159,12 @@ class Voxelizer : public gpu::HostObject {
     Status ensure_instances(std::size_t count);
     Result<VoxelizeStats> run(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
                               const GridDesc& grid);
-    Status choose_methods(std::span<const GpuInstance> instances, const GridDesc& grid);
     /// Validates a call and picks each instance's path.
     Result<std::pmr::vector<VoxelizeMethod>> prepare(std::span<const GpuInstance> instances,
                                                      const GridDesc& grid, VoxelizeMethod method, float dt);
-    /// Sizes the fragment list (first guess), the instance and the velocity buffers for a pass.
-    Status ensure_pass(std::span<const GpuInstance> instances);
+    /// Sizes the fragment list (first guess: the expected fragments of voxelize_work), the instance and
+    /// the velocity buffers for a pass.
+    Status ensure_pass(std::span<const GpuInstance> instances, const GridDesc& grid);
     /// Records one pass (instance records, staged positions, the passes) into `cmd`.
     void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
                      std::span<const VoxelizeMethod> methods, const GridDesc& grid);
@@ -191,7 +193,7 @@ class Voxelizer : public gpu::HostObject {
 /// Checks a grid: res in [kMinRes, kMaxRes], finite origin, finite voxel size > 0.
 Status validate_grid(const GridDesc& grid);
 
-/// The grid DESIGN.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
+/// The grid docs/design.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
 /// by one voxel on every side (an empty or flat box gets a 1-unit edge).
 GridDesc grid_around(glm::vec3 lo, glm::vec3 hi, std::uint32_t res);
 
