@@ -1,5 +1,5 @@
-// gust::System: one frame of DESIGN.md ("One frame") over the voxel world and the wind solver, behind the
-// engine-facing API of include/gust/gust.hpp.
+// gust::System: one frame of docs/design.md ("One frame") over the voxel world and the wind solver, behind
+// the engine-facing API of include/gust/gust.hpp.
 #include "tree/tree_io.h"
 #if GUST_WITH_OPENVDB
 #include "vdb_writer.hpp"

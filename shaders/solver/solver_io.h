@@ -1,4 +1,4 @@
-// Layouts and pure per-cell functions shared by the wind-solver shaders and solver/ (DESIGN.md
+// Layouts and pure per-cell functions shared by the wind-solver shaders and solver/ (docs/design.md
 // "Wind solver"). The grid is a MAC grid of dims.x x dims.y x dims.z cells of size h: pressure at cell
 // centres, velocity component a on the faces normal to axis a. All face values of one field live in
 // one array: the x faces ((nx+1)·ny·nz, x fastest), then the y faces, then the z faces.

@@ -1,5 +1,5 @@
 // The wind: Stam's stable fluids on a MAC grid around a focus point, with the sparse voxel tree as
-// its solid boundary (DESIGN.md "Wind solver", docs/solver.md).
+// its solid boundary (docs/design.md "Wind solver", docs/solver.md).
 #pragma once
 
 #include <cstdint>
