@@ -634,30 +634,22 @@ Traffic faces_traffic(const Workload& w) {
     return t;
 }
 
-/// The "advect" pass: semi-Lagrangian, or MacCormack's forward, backward and clamped correction. The
-/// forces pass reads its output, so no copy follows.
+/// The "advect" pass: semi-Lagrangian, or MacCormack's forward, backward and clamped correction; the pass
+/// that writes the velocity (the only one, or MacCormack's last) also adds the emitters, the ambient
+/// domain faces and vorticity confinement from the last step's vorticity (two forces of seven vec4
+/// vorticities each).
 Traffic advect_traffic(const Workload& w) {
     Traffic t;
-    const double F = w.faces(0);
-    // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
-    const double trace = 2 * 3 * 8 * 4;
-    t.add(F * (trace + 8 * 4 + 4), 8 * F); // velocity -> tmp
-    if (w.advection != gust::Advection::MacCormack) return t;
-    t.add(F * (trace + 8 * 4 + 4), 12 * F);         // tmp -> back, tracing with the velocity
-    t.add(F * (3 * 4 + trace + 8 * 4 + 4), 16 * F); // tmp, velocity, back -> tmp, clamped to 8 values
-    return t;
-}
-
-/// The "forces" pass: emitters and ambient, then vorticity and confinement (vorticity is on by default).
-Traffic forces_traffic(const Workload& w) {
-    Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    t.add(8 * F, 8 * F); // forces: advection's output -> velocity
-    t.add(C * (3 * 2 * 6 * 4 + 16),
-          4 * F + 16 * C); // vorticity: six cell velocities (6 faces each), vec4 out
-    // confine: the face, two cell velocities, two forces of seven vec4 vorticities each, the store.
-    t.add(F * (4 + 2 * 6 * 4 + 2 * 7 * 16 + 4), 8 * F + 16 * C);
-    t.add(8 * F, 8 * F); // vkCmdCopyBuffer tmp -> velocity
+    // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
+    const double trace = 2 * 3 * 8 * 4, confine = 2 * 7 * 16;
+    if (w.advection != gust::Advection::MacCormack) {
+        t.add(F * (trace + 8 * 4 + confine + 4), 8 * F + 16 * C); // velocity -> tmp
+        return t;
+    }
+    t.add(F * (trace + 8 * 4 + 4), 8 * F);  // velocity -> tmp
+    t.add(F * (trace + 8 * 4 + 4), 12 * F); // tmp -> back, tracing with the velocity
+    t.add(F * (3 * 4 + trace + 8 * 4 + confine + 4), 16 * F + 16 * C); // -> tmp, clamped to 8 values
     return t;
 }
 
@@ -714,15 +706,16 @@ Traffic project_traffic(const Workload& w) {
     // extend_face: the face's weight, value and store; the closed faces' neighbours are left out.
     for (int layer = 0; layer < 2; ++layer)
         t.add(F * 12, W + 8 * F);
-    t.add(C * (12 * 4 + 6 * 3 * 4), W + 8 * F + 4 * C);
+    // finish: φ, the final residual, the divergence after and the vorticity (six cell velocities, vec4 out).
+    t.add(C * (12 * 4 + 6 * 3 * 4 + 3 * 2 * 6 * 4 + 16), W + 8 * F + 24 * C);
     return t;
 }
 
 /// The byte model of one step, per pass in the order the solver runs them.
 std::vector<std::pair<std::string, Traffic>> step_traffic(const Workload& w) {
-    return {{"solid", solid_traffic(w)},    {"fill", fill_traffic(w)},     {"faces", faces_traffic(w)},
-            {"advect", advect_traffic(w)},  {"forces", forces_traffic(w)}, {"pressure", pressure_traffic(w)},
-            {"project", project_traffic(w)}};
+    return {{"solid", solid_traffic(w)},       {"fill", fill_traffic(w)},
+            {"faces", faces_traffic(w)},       {"advect", advect_traffic(w)},
+            {"pressure", pressure_traffic(w)}, {"project", project_traffic(w)}};
 }
 
 /// The workload of a step-time row.
@@ -755,7 +748,7 @@ std::string fmt_mb(double bytes) {
 }
 
 /// The passes the step-time table shows, in the solver's order.
-constexpr const char* kPasses[] = {"solid", "fill", "faces", "advect", "forces", "pressure", "project"};
+constexpr const char* kPasses[] = {"solid", "fill", "faces", "advect", "pressure", "project"};
 
 void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
                   const Options& options, std::vector<std::string>& notes) {
