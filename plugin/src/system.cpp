@@ -98,7 +98,7 @@ struct System::Impl {
         : hooks(h), memory(h), meshes(&memory), instances(&memory),
           queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
                                   .ms = FrameStats::Timings(&memory)},
-          slots(&memory) {}
+          slots(&memory), blocking(&memory) {}
 
     Hooks hooks;
     HookResource memory;
@@ -184,7 +184,7 @@ struct System::Impl {
     /// Stats from a finished frame.
     void take_stats(const WorldFrame& frame, const WindStats& wind, const gpu::WorkCounts& work);
 
-    /// HostCommands: per frame in flight, where its counters and async answers come back.
+    /// A recorded frame's counters and async answers come back here (HostCommands: one per frame in flight).
     struct Slot {
         explicit Slot(std::pmr::memory_resource* memory) : asked(memory) {}
         gpu::Buffer readback; ///< world counters, solver counters, then answers at answers_offset()
@@ -195,9 +195,14 @@ struct System::Impl {
         std::uint64_t dispatches = 0; ///< dispatches and draws the frame recorded
     };
     std::pmr::vector<Slot> slots;
+    Slot blocking; ///< OwnQueue: the frame step(dt) records, submits and waits for
     static std::size_t answers_offset();
-    /// Reads a completed frame's slot: stats, async answers, growth for later frames.
-    Outcome collect(Slot& slot);
+    /// Records a whole frame into `commands` (scroll by `shift`, uploads, voxelize, tree, solid, wind,
+    /// texture, async queries, the counters' readback into `slot`): the one path both kinds of step take.
+    Outcome record_frame(VkCommandBuffer commands, float dt, glm::ivec3 shift, Slot& slot);
+    /// Reads a completed frame's slot: stats (with `work`, the frame's GPU work), async answers, growth
+    /// for later frames.
+    Outcome collect(Slot& slot, const gpu::WorkCounts& work);
 
     /// The mesh `id`, or null with `error` set.
     Mesh* find_mesh(MeshId id, Outcome& error) {
@@ -679,41 +684,19 @@ Outcome System::step(float dt) {
         const gpu::WorkCounts before = m.ctx->work();
         glm::ivec3 shift;
         if (Outcome o = m.scroll_cells(shift); !o) return o;
-        if (shift != glm::ivec3(0)) {
-            if (Status s = m.solver->scroll(shift); !s) return device_failure(s);
-            if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
-        }
-        const std::pmr::vector<GpuInstance> dynamic = m.frame_instances();
-        auto frame = m.world->step(dynamic, dt);
-        if (!frame) return device_failure(frame.status());
-        const SolidSource solid = solid_source(*m.world);
-        auto wind = m.solver->step(dt, &solid);
-        if (!wind) return device_failure(wind.status());
-        ++m.frame;
-        if (Outcome o = m.refresh_texture(); !o) return o;
-
-        std::pmr::vector<glm::vec3> points(&m.memory);
-        for (const auto& [id, pending] : m.queries)
-            if (!pending.ready) points.insert(points.end(), pending.points.begin(), pending.points.end());
-        if (!points.empty()) {
-            auto answers = m.solver->sample(points);
-            if (!answers) return device_failure(answers.status());
-            std::size_t at = 0;
-            for (auto& [id, pending] : m.queries)
-                if (!pending.ready) {
-                    pending.answer.assign(answers->begin() + std::ptrdiff_t(at),
-                                          answers->begin() + std::ptrdiff_t(at + pending.points.size()));
-                    pending.ready = true;
-                    at += pending.points.size();
-                }
-            if (Outcome o = m.check(at == answers->size(), "every queued point answered", __LINE__); !o)
-                return o;
-        }
+        // The frame as a host's command buffer would hold it: recorded, one submission, one wait. Buffers
+        // replaced while recording are released once it completes (Context::retire).
+        const std::uint64_t n = m.frame;
+        m.ctx->begin_frame(n);
+        Outcome recorded;
+        const Status ran = m.ctx->submit_and_wait(
+            [&](VkCommandBuffer cmd) { recorded = m.record_frame(cmd, dt, shift, m.blocking); });
+        if (!recorded) return recorded;
+        if (!ran) return device_failure(ran);
+        m.ctx->retire(n);
         const gpu::WorkCounts& after = m.ctx->work();
-        m.take_stats(*frame, *wind,
-                     {after.dispatches - before.dispatches, after.submissions - before.submissions,
-                      after.waits - before.waits});
-        return {};
+        return m.collect(m.blocking, {after.dispatches - before.dispatches,
+                                      after.submissions - before.submissions, after.waits - before.waits});
     });
 }
 
@@ -722,7 +705,7 @@ std::size_t System::Impl::answers_offset() {
     return (counters + 15) / 16 * 16;
 }
 
-Outcome System::Impl::collect(Slot& slot) {
+Outcome System::Impl::collect(Slot& slot, const gpu::WorkCounts& work) {
     const auto* bytes = static_cast<const unsigned char*>(slot.readback.mapped());
     auto done = world->collect(bytes);
     if (!done) return device_failure(done.status());
@@ -738,7 +721,7 @@ Outcome System::Impl::collect(Slot& slot) {
     }
     slot.asked.clear();
     slot.used = false;
-    take_stats(*done, wind, {slot.dispatches, 0, 0});
+    take_stats(*done, wind, work);
     return {};
 }
 
@@ -755,75 +738,77 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         const std::uint64_t n = m.frame;
         Impl::Slot& slot = m.slots[n % m.slots.size()];
         if (slot.used)
-            if (Outcome o = m.collect(slot); !o) return o;
+            if (Outcome o = m.collect(slot, {slot.dispatches, 0, 0}); !o) return o;
         if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
         m.ctx->begin_frame(n);
 
-        std::pmr::vector<glm::vec3> points(&m.memory);
-        std::pmr::vector<QueryId> asked(&m.memory);
-        for (const auto& [id, pending] : m.queries)
-            if (!pending.asked) {
-                points.insert(points.end(), pending.points.begin(), pending.points.end());
-                asked.push_back(id);
-            }
-        const std::size_t readback =
-            Impl::answers_offset() + std::max<std::size_t>(points.size(), 1) * sizeof(glm::vec3);
-        if (!slot.readback || slot.readback.size() < readback) {
-            auto grown = gpu::Buffer::create(*m.ctx, readback, gpu::MemoryUse::Readback);
-            if (!grown) return device_failure(grown.status());
-            slot.readback = std::move(*grown);
-        }
-        if (!points.empty() && slot.points.size() < points.size() * sizeof(glm::vec3)) {
-            auto grown =
-                gpu::Buffer::create(*m.ctx, points.size() * sizeof(glm::vec3), gpu::MemoryUse::Upload);
-            if (!grown) return device_failure(grown.status());
-            slot.points = std::move(*grown);
-        }
-
-        // Whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
-        // comes before this frame's work.
-        const std::uint64_t dispatched = m.ctx->work().dispatches;
-        gpu::barrier(*m.ctx, commands);
-        if (shift != glm::ivec3(0)) {
-            m.solver->record_scroll(commands, shift);
-            if (Status s = m.world->move_grid(m.solver->origin()); !s) return device_failure(s);
-        }
-        const std::pmr::vector<GpuInstance> dynamic = m.frame_instances();
-        if (Status s = m.world->record(commands, dynamic, dt); !s) return device_failure(s);
-        const SolidSource solid = solid_source(*m.world);
-        if (Status s = m.solver->record_step(commands, dt, &solid); !s) return device_failure(s);
-        m.solver->record_texels(commands, m.texels);
-        m.record_texture_copy(commands);
-        if (!points.empty()) {
-            std::memcpy(slot.points.mapped(), points.data(), points.size() * sizeof(glm::vec3));
-            m.solver->record_sample(commands, slot.points.address(),
-                                    slot.readback.address() + Impl::answers_offset(),
-                                    std::uint32_t(points.size()));
-        }
-        m.world->record_readback(commands, slot.readback.handle(), 0);
-        m.solver->record_readback(commands, slot.readback.handle(), VoxelWorld::readback_bytes());
-        // The readback copies reach the host once the frame completes; the host's later commands (its
-        // shaders sampling the wind texture) see every write of this frame.
-        VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-        barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        barrier.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
-        barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_2_HOST_BIT;
-        barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT;
-        VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-        dependency.memoryBarrierCount = 1;
-        dependency.pMemoryBarriers = &barrier;
-        m.ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
-        // Only a frame recorded whole answers its queries; after an error they wait for the next one.
-        for (QueryId id : asked)
-            m.queries.at(id).asked = true;
-        slot.asked = std::move(asked);
-        slot.used = true;
-        slot.frame = n;
-        slot.dispatches = m.ctx->work().dispatches - dispatched;
-        ++m.frame;
-        m.publish_texture();
-        return {};
+        return m.record_frame(commands, dt, shift, slot);
     });
+}
+
+Outcome System::Impl::record_frame(VkCommandBuffer commands, float dt, glm::ivec3 shift, Slot& slot) {
+    std::pmr::vector<glm::vec3> points(&memory);
+    std::pmr::vector<QueryId> asked(&memory);
+    for (const auto& [id, pending] : queries)
+        if (!pending.asked) {
+            points.insert(points.end(), pending.points.begin(), pending.points.end());
+            asked.push_back(id);
+        }
+    const std::size_t readback =
+        Impl::answers_offset() + std::max<std::size_t>(points.size(), 1) * sizeof(glm::vec3);
+    if (!slot.readback || slot.readback.size() < readback) {
+        auto grown = gpu::Buffer::create(*ctx, readback, gpu::MemoryUse::Readback);
+        if (!grown) return device_failure(grown.status());
+        slot.readback = std::move(*grown);
+    }
+    if (!points.empty() && slot.points.size() < points.size() * sizeof(glm::vec3)) {
+        auto grown = gpu::Buffer::create(*ctx, points.size() * sizeof(glm::vec3), gpu::MemoryUse::Upload);
+        if (!grown) return device_failure(grown.status());
+        slot.points = std::move(*grown);
+    }
+
+    // Whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
+    // comes before this frame's work.
+    const std::uint64_t dispatched = ctx->work().dispatches;
+    gpu::barrier(*ctx, commands);
+    if (shift != glm::ivec3(0)) {
+        solver->record_scroll(commands, shift);
+        if (Status s = world->move_grid(solver->origin()); !s) return device_failure(s);
+    }
+    const std::pmr::vector<GpuInstance> dynamic = frame_instances();
+    if (Status s = world->record(commands, dynamic, dt); !s) return device_failure(s);
+    const SolidSource solid = solid_source(*world);
+    if (Status s = solver->record_step(commands, dt, &solid); !s) return device_failure(s);
+    solver->record_texels(commands, texels);
+    record_texture_copy(commands);
+    if (!points.empty()) {
+        std::memcpy(slot.points.mapped(), points.data(), points.size() * sizeof(glm::vec3));
+        solver->record_sample(commands, slot.points.address(),
+                              slot.readback.address() + Impl::answers_offset(), std::uint32_t(points.size()));
+    }
+    world->record_readback(commands, slot.readback.handle(), 0);
+    solver->record_readback(commands, slot.readback.handle(), VoxelWorld::readback_bytes());
+    // The readback copies reach the host once the frame completes; the host's later commands (its
+    // shaders sampling the wind texture) see every write of this frame.
+    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+    barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    barrier.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
+    barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_2_HOST_BIT;
+    barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT;
+    VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dependency.memoryBarrierCount = 1;
+    dependency.pMemoryBarriers = &barrier;
+    ctx->vk().vkCmdPipelineBarrier2(commands, &dependency);
+    // Only a frame recorded whole answers its queries; after an error they wait for the next one.
+    for (QueryId id : asked)
+        queries.at(id).asked = true;
+    slot.asked = std::move(asked);
+    slot.used = true;
+    slot.frame = ctx->recording_frame();
+    slot.dispatches = ctx->work().dispatches - dispatched;
+    ++frame;
+    publish_texture();
+    return {};
 }
 
 namespace {

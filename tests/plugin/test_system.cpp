@@ -29,6 +29,18 @@ TEST_F(SystemTest, stepsASceneAndReportsTheTreeAndTheSolve) {
     EXPECT_GT(watch_.allocations, 0) << "the allocation hook was not used";
 }
 
+// A blocking step is the frame a host's command buffer would hold: recorded once, one submission and one
+// wait, the static set's first voxelization and the moving box's every frame included.
+TEST_F(SystemTest, aBlockingStepIsOneSubmissionAndOneWait) {
+    run_scene(*system_, 4);
+    const FrameStats& stats = system_->stats();
+    EXPECT_EQ(stats.submissions, 1u);
+    EXPECT_EQ(stats.waits, 1u);
+    EXPECT_GT(stats.dispatches, 10u);
+    EXPECT_GT(stats.voxels, 0u);
+    EXPECT_TRUE(stats.converged);
+}
+
 // The API's default is a game's fixed budget (WindSettings::cycles_per_step = 2): every step runs at most
 // two V-cycles whatever the scene asks, reports honestly whether that met the tolerance, and the warm start
 // carries the rest, so the divergence left falls from step to step while nothing changes.
