@@ -64,6 +64,7 @@ void flush_voxels() {
 /// Queues one voxel and its surface velocity for the fragment list (call flush_voxels() before the
 /// invocation ends).
 void emit_voxel(uvec3 ijk, vec3 velocity) {
+    if (any(greaterThanEqual(ijk, pc.keep))) return;
     pending[pending_count] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
     if (kVelocities)
         pending_velocity[pending_count] = uvec2(packHalf2x16(velocity.xy), packHalf2x16(vec2(velocity.z, 0.0)));
@@ -91,7 +92,8 @@ bool setup_triangle(vec3 g0, vec3 g1, vec3 g2, out Setup s) {
     vec3 lo = min(s.a, min(s.b, s.c));
     vec3 hi = max(s.a, max(s.b, s.c));
     float res = float(pc.res);
-    if (any(greaterThan(lo, vec3(res))) || any(lessThan(hi, vec3(0.0)))) return false;
+    vec3 keep = swizzle_to_projection(vec3(pc.keep), s.axis);
+    if (any(greaterThan(lo, keep)) || any(lessThan(hi, vec3(0.0)))) return false;
     s.w_min = lo.z;
     s.w_max = hi.z;
     // Column x meets [lo, hi] when x <= hi and x + 1 >= lo.

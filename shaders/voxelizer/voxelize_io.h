@@ -58,13 +58,14 @@ struct VoxelizePush {
     uint triangle_count;     ///< triangles in this draw or dispatch
     uint first_triangle;     ///< compute path: offset of this dispatch's first triangle
     uint large_capacity;     ///< items the large list holds
-    uint pad;
+    uvec3 keep; ///< voxels kept per axis from the grid's origin (the wind domain); the rest dropped
 };
 
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gust::shaderio::VoxelizePush) == 64, "push constants must match the GLSL layout");
+static_assert(sizeof(gust::shaderio::VoxelizePush) == 72, "push constants must match the GLSL layout");
+static_assert(offsetof(gust::shaderio::VoxelizePush, keep) == 60);
 static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 40);
 static_assert(sizeof(gust::shaderio::VoxelizeInstance) == 224);
 static_assert(offsetof(gust::shaderio::VoxelizeInstance, positions) == 192);

@@ -145,6 +145,8 @@ Result<GridDesc> voxel_grid(const SolverDesc& desc, std::uint32_t branching) {
     grid.res = res;
     grid.voxel_size = desc.cell_size / float(desc.voxels_per_cell);
     grid.origin = desc.origin;
+    // Only what the wind reads: the domain's voxels, not the rest of the power-of-b grid.
+    grid.keep = desc.cells * desc.voxels_per_cell;
     return grid;
 }
 

@@ -41,6 +41,23 @@ TEST_F(SystemTest, aBlockingStepIsOneSubmissionAndOneWait) {
     EXPECT_TRUE(stats.converged);
 }
 
+// Only what the wind reads is voxelized and kept in the tree: a box above the domain's top (y 0..8 m), inside
+// the tree's power-of-b grid (64 voxels of 0.5 m from y = 0), adds no fragment and no voxel; moved into the
+// domain it adds its surface.
+TEST_F(SystemTest, surfaceBeyondTheWindDomainIsNotVoxelized) {
+    MeshId mesh = 0;
+    ASSERT_TRUE(system_->create_mesh(box_.desc(), mesh));
+    InstanceId box = 0;
+    ASSERT_TRUE(system_->create_instance(mesh, translation(0.0f, 12.0f, 0.0f), true, box));
+    ASSERT_TRUE(system_->step(0.05f));
+    EXPECT_EQ(system_->stats().fragments, 0u);
+    EXPECT_EQ(system_->stats().voxels, 0u);
+    ASSERT_TRUE(system_->set_transform(box, translation(0.0f, 4.0f, 0.0f), true));
+    ASSERT_TRUE(system_->step(0.05f));
+    EXPECT_GT(system_->stats().fragments, 0u);
+    EXPECT_GT(system_->stats().voxels, 0u);
+}
+
 // The API's default is a game's fixed budget (WindSettings::cycles_per_step = 2): every step runs at most
 // two V-cycles whatever the scene asks, reports honestly whether that met the tolerance, and the warm start
 // carries the rest, so the divergence left falls from step to step while nothing changes.

@@ -439,6 +439,8 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
     push.large_list = large_list_.address();
     push.large_capacity = std::uint32_t(large_capacity_);
     push.res = grid.res;
+    for (int a = 0; a < 3; ++a)
+        push.keep[a] = grid.keep[a] == 0 ? grid.res : std::min(grid.keep[a], grid.res);
     push.capacity = std::uint32_t(capacity_);
 
     profiler_.reset(cmd);

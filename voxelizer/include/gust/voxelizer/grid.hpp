@@ -12,6 +12,9 @@ struct GridDesc {
     glm::vec3 origin{0.0f};  ///< world-space min corner, metres
     float voxel_size = 1.0f; ///< h, metres, > 0
     std::uint32_t res = 64;  ///< voxels per axis, 8..1024
+    /// Voxels kept per axis from the origin (a wind domain inside the power-of-b grid): surface beyond
+    /// them is not voxelized; 0 keeps all `res`.
+    glm::uvec3 keep{0};
 };
 
 /// Largest and smallest resolution any voxelizer path accepts.
