@@ -41,6 +41,50 @@ TEST_F(SystemTest, aBlockingStepIsOneSubmissionAndOneWait) {
     EXPECT_TRUE(stats.converged);
 }
 
+// Growth after an overflow without extra waits: two slabs across a 16 m x 16 m domain need about 8,192 leaf
+// bricks where the tree starts with 4,096. The blocking step's frame then runs out, says so (a warning), and
+// grows the pools for the next frames, each still one submission and one wait; within a few frames the tree
+// holds both slabs whole, and keeps them.
+TEST(SystemGrowth, aTreePoolThatRunsOutGrowsForTheNextFramesWithoutExtraWaits) {
+    Watch watch;
+    SystemDesc desc = small_desc(watch);
+    desc.domain.cells[0] = 64;
+    desc.domain.cells[1] = 8;
+    desc.domain.cells[2] = 64;
+    desc.domain.cell_size = 0.25f;
+    desc.domain.voxels_per_cell = 4;
+    desc.domain.focus = {0.0f, 1.0f, 0.0f};
+    std::unique_ptr<System> system;
+    ASSERT_TRUE(System::create(desc, system));
+    const Box box(1.0f);
+    MeshId mesh = 0;
+    ASSERT_TRUE(system->create_mesh(box.desc(), mesh));
+    for (const float y : {0.5f, 1.5f}) {
+        Mat4 slab = translation(0.0f, y, 0.0f);
+        slab.m[0] = 7.9f;
+        slab.m[5] = 0.02f;
+        slab.m[10] = 7.9f;
+        InstanceId id = 0;
+        ASSERT_TRUE(system->create_instance(mesh, slab, false, id));
+    }
+    std::vector<std::uint64_t> voxels;
+    std::vector<std::uint32_t> exhausted;
+    for (int f = 0; f < 5; ++f) {
+        ASSERT_TRUE(system->step(0.05f));
+        const FrameStats& st = system->stats();
+        EXPECT_EQ(st.submissions, 1u) << "frame " << f;
+        EXPECT_EQ(st.waits, 1u) << "frame " << f;
+        voxels.push_back(st.voxels);
+        exhausted.push_back(st.exhausted);
+    }
+    EXPECT_GT(exhausted.front(), 0u) << "the first frame needs more than the initial pools";
+    EXPECT_GE(watch.warnings, 1) << "a partial frame is reported";
+    EXPECT_EQ(exhausted.back(), 0u);
+    EXPECT_EQ(voxels[3], voxels[4]) << "once grown, every frame holds the same slabs";
+    EXPECT_GT(voxels[4], voxels[0]) << "the grown tree holds what the first frame lost";
+    EXPECT_GT(voxels[4], 2u * 250u * 250u) << "both slabs, about 256 x 256 voxels each";
+}
+
 // Only what the wind reads is voxelized and kept in the tree: a box above the domain's top (y 0..8 m), inside
 // the tree's power-of-b grid (64 voxels of 0.5 m from y = 0), adds no fragment and no voxel; moved into the
 // domain it adds its surface.
