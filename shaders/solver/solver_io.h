@@ -263,20 +263,6 @@ GUST_INLINE ivec3 cell_from_index(ivec3 n, int index) {
     return ivec3(index % n.x, (index / n.x) % n.y, index / (n.x * n.y));
 }
 
-/// Threads of a red-black sweep over one colour: ceil(n.x / 2) per row of cells.
-GUST_INLINE int colour_threads(ivec3 n) {
-    return (n.x + 1) / 2 * n.y * n.z;
-}
-
-/// Cell of thread `index` of a sweep over `colour` ((x + y + z) % 2); x = n.x where the row has one
-/// cell of that colour fewer.
-GUST_INLINE ivec3 colour_cell(ivec3 n, uint colour, int index) {
-    int half_row = (n.x + 1) / 2;
-    int row = index / half_row;
-    int y = row % n.y, z = row / n.y;
-    return ivec3(2 * (index % half_row) + int((uint(y + z) + colour) & 1u), y, z);
-}
-
 /// Side bit (−x,+x,−y,+y,−z,+z) of boundary face f, or 6 for an interior face.
 GUST_INLINE uint boundary_side(ivec3 n, uint axis, ivec3 f) {
     int k = f[axis];

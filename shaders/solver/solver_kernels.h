@@ -102,17 +102,6 @@ GUST_INLINE float maccormack_face(uint axis, ivec3 f, float dt) {
 
 // ---- Forces -----------------------------------------------------------------------------------------------
 
-/// Face f of `field` after the emitters (closing `rate` of the gap each) and, on the domain's faces, the
-/// ambient wind (which the projection then keeps on inflow sides and corrects on open ones).
-GUST_INLINE float force_face(uint field, uint axis, ivec3 f, float rate) {
-    if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
-    float u = load_face(field, face_index(grid_dims(), axis, f));
-    vec3 x = grid_origin() + face_position(axis, f) * grid_h();
-    for (uint e = 0u; e < emitter_count(); ++e)
-        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
-    return u;
-}
-
 GUST_INLINE vec3 cell_velocity(uint field, ivec3 c) {
     ivec3 n = grid_dims();
     vec3 v = vec3(0.0f);

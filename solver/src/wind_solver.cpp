@@ -92,6 +92,20 @@ struct WindSolver::Impl : gpu::HostObject {
         gpu::update(ctx, cmd, bindings, &b, sizeof(b));
         gpu::barrier(ctx, cmd);
     }
+    /// Records sample.comp in `mode` (0 query points, 1 the texture's texels, 2 cell-centre velocities) over
+    /// `count` threads, after the bindings `b` the caller set.
+    void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
+                            std::uint64_t count) {
+        put_bindings(ctx, cmd);
+        SolverPush push{};
+        push.bindings = bindings.address();
+        push.parity = mode;
+        push.swap = swap;
+        const LevelDispatch g = groups_for(count);
+        sample.bind(cmd, &push, sizeof(push));
+        sample.dispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx, cmd);
+    }
     /// φ holds the last solve of this field's history, so the next solve may start from it (the warm
     /// start); false before the first step and after set_velocity replaced the field.
     bool has_guess = false;
@@ -368,15 +382,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.b.origin = origin_;
         m.b.samples = out_buffer->address();
-        m.put_bindings(ctx_, cmd);
-        SolverPush push{};
-        push.bindings = m.bindings.address();
-        push.parity = 2;
-        push.swap = m.swap;
-        const LevelDispatch g = groups_for(cell_count());
-        m.sample.bind(cmd, &push, sizeof(push));
-        m.sample.dispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx_, cmd);
+        m.record_sample_pass(ctx_, cmd, 2, cell_count());
     });
     if (!s) return s;
     std::vector<glm::vec3> out(cell_count());
@@ -420,15 +426,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     m.b.points = points;
     m.b.samples = samples;
     m.b.point_count = count;
-    m.put_bindings(ctx_, cmd);
-    SolverPush push{};
-    push.bindings = m.bindings.address();
-    push.parity = 0;
-    push.swap = m.swap;
-    const LevelDispatch g = groups_for(count);
-    m.sample.bind(cmd, &push, sizeof(push));
-    m.sample.dispatch(cmd, g.x, g.y, g.z);
-    gpu::barrier(ctx_, cmd);
+    m.record_sample_pass(ctx_, cmd, 0, count);
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {
@@ -442,15 +440,7 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     Impl& m = *impl_;
     m.b.origin = origin_;
     m.b.texels = texels.address();
-    m.put_bindings(ctx_, cmd);
-    SolverPush push{};
-    push.bindings = m.bindings.address();
-    push.parity = 1;
-    push.swap = m.swap;
-    const LevelDispatch g = groups_for(cell_count());
-    m.sample.bind(cmd, &push, sizeof(push));
-    m.sample.dispatch(cmd, g.x, g.y, g.z);
-    gpu::barrier(ctx_, cmd);
+    m.record_sample_pass(ctx_, cmd, 1, cell_count());
 }
 
 Status WindSolver::scroll(glm::ivec3 cells) {

@@ -54,7 +54,8 @@ class Physics : public ::testing::Test {
         system_.reset();
         EXPECT_EQ(watch_.errors, 0) << watch_.last;
     }
-    MeshId mesh(const TestMesh& m, bool deforming = false) {
+    /// A gust mesh of `m`'s positions and indices (a TestMesh, or a loaded Mesh).
+    template <class Triangles> MeshId mesh(const Triangles& m, bool deforming = false) {
         MeshDesc desc;
         desc.positions = &m.positions[0].x;
         desc.vertex_count = std::uint32_t(m.positions.size());
@@ -298,15 +299,8 @@ TEST_F(Physics, aSkinnedCharacterWalksAThousandFramesWithABoundedResidual) {
     create({24, 12, 24}, 0.5f, glm::vec3(0.0f, 2.0f, 0.0f), 2);
     auto walker = AnimatedMesh::load(GUST_ASSETS_DIR "/characters/CesiumMan.glb");
     ASSERT_TRUE(walker) << walker.message();
-    const Mesh& bind = walker->bind_pose();
-    MeshDesc desc;
-    desc.positions = &bind.positions[0].x;
-    desc.vertex_count = std::uint32_t(bind.positions.size());
-    desc.indices = bind.indices.data();
-    desc.index_count = std::uint32_t(bind.indices.size());
-    desc.deforming = true;
-    MeshId body = 0;
-    ASSERT_TRUE(system_->create_mesh(desc, body));
+    const MeshId body = mesh(walker->bind_pose(), true);
+    ASSERT_NE(body, 0u);
     InstanceId instance = 0;
     ASSERT_TRUE(system_->create_instance(body, {}, true, instance));
     place(box({-8.0f, -1.0f, -8.0f}, {8.0f, 0.0f, 8.0f}));

@@ -114,27 +114,6 @@ TEST(CellKernels, faceFractionCountsVoxelPairsOpenOnBothSides) {
     EXPECT_EQ(face_open_fraction(low, all, 0, 4, faces), 1.0f) << "x faces of the cell are untouched";
 }
 
-TEST(CellKernels, aColourSweepsThreadsCoverEachCellOfItsColourOnce) {
-    for (const glm::ivec3 n :
-         {glm::ivec3(4, 2, 2), glm::ivec3(5, 3, 2), glm::ivec3(1, 3, 3), glm::ivec3(7, 1, 4)})
-        for (std::uint32_t colour = 0; colour < 2; ++colour) {
-            std::vector<int> hits(std::size_t(n.x * n.y * n.z), 0);
-            for (int i = 0; i < colour_threads(n); ++i) {
-                const glm::ivec3 c = colour_cell(n, colour, i);
-                if (c.x >= n.x) continue;
-                ASSERT_TRUE(inside_cells(n, c)) << "thread " << i;
-                ASSERT_EQ(std::uint32_t(c.x + c.y + c.z) % 2, colour) << "thread " << i;
-                ++hits[std::size_t(cell_index(n, c))];
-            }
-            for (int i = 0; i < n.x * n.y * n.z; ++i) {
-                const glm::ivec3 c = cell_from_index(n, i);
-                EXPECT_EQ(hits[std::size_t(i)], std::uint32_t(c.x + c.y + c.z) % 2 == colour ? 1 : 0)
-                    << "cell " << c.x << "," << c.y << "," << c.z << " of " << n.x << "x" << n.y << "x"
-                    << n.z;
-            }
-        }
-}
-
 TEST(CellKernels, emitterProfilesPointWhereTheirTypeSays) {
     GpuEmitter e{};
     e.position = vec3(0.0f);
