@@ -10,8 +10,9 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (i >= faces_total(n)) return;
     uint axis;
     ivec3 f = face_from_index(n, i, axis);

@@ -11,8 +11,9 @@ layout(local_size_x = kSolverGroupSize) in;
 float direction(int i, float beta) { return load_cell(kCellPressureUp, i) + beta * load_cell(kCellDirection, i); }
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     bool inside = i < n.x * n.y * n.z;
     float beta = state().s.cg_beta;
     float sum = 0.0;

@@ -30,13 +30,14 @@ void smooth_level(uint l, uint sweeps) {
         for (uint i = gl_LocalInvocationIndex; i < count; i += gl_WorkGroupSize.x) {
             ivec3 c = cell_from_index(level.dims, int(i));
             if ((uint(c.x + c.y + c.z) & 1u) == (half_sweep & 1u))
-                coarse_phi[level.cells - coarse_base + i] = relax_cell(l, c, kCellPressure);
+                coarse_phi[level.cells - coarse_base + i] = relax_cell(level, c, kCellPressure);
         }
         barrier();
     }
 }
 
 void main() {
+    load_bindings();
     uint top = pc.level;
     uint levels = sb().b.levels;
     uint smoothing = sb().b.smoothing;
@@ -50,18 +51,18 @@ void main() {
 
     for (uint l = top; l + 1u < levels; ++l) {
         smooth_level(l, smoothing);
-        GridLevel coarse = load_level(l + 1u);
+        GridLevel fine = load_level(l), coarse = load_level(l + 1u);
         for (uint i = gl_LocalInvocationIndex; i < cells_of(coarse); i += gl_WorkGroupSize.x)
             coarse_rhs[coarse.cells - coarse_base - coarse_rhs_from + i] =
-                restrict_cell(l + 1u, cell_from_index(coarse.dims, int(i)));
+                restrict_cell(fine, cell_from_index(coarse.dims, int(i)));
         barrier();
     }
     smooth_level(levels - 1u, pc.iterations);
     for (uint l = levels - 1u; l-- > top;) {
-        GridLevel level = load_level(l);
+        GridLevel level = load_level(l), coarse = load_level(l + 1u);
         for (uint i = gl_LocalInvocationIndex; i < cells_of(level); i += gl_WorkGroupSize.x)
             coarse_phi[level.cells - coarse_base + i] +=
-                prolong_cell(l, cell_from_index(level.dims, int(i)), kCellPressure);
+                prolong_cell(level, coarse, cell_from_index(level.dims, int(i)), kCellPressure);
         barrier();
         smooth_level(l, smoothing);
     }

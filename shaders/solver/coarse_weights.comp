@@ -7,9 +7,10 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
     uint levels = sb().b.levels;
-    uint first = sb().b.level0_faces;
+    uint first = uint(hot.level0_faces);
     GridLevel last = load_level(levels - 1u);
     int total = int(last.faces - first) + faces_total(last.dims);
     if (levels < 2u || i >= total) return;
@@ -19,5 +20,5 @@ void main() {
     GridLevel level = load_level(l);
     uint axis;
     ivec3 f = face_from_index(level.dims, int(face - level.faces), axis);
-    FloatsRef(sb().b.weights).v[i] = coarse_weight(l, axis, f);
+    FloatsRef(hot.weights).v[i] = coarse_weight(l, axis, f);
 }

@@ -12,12 +12,13 @@ layout(local_size_x = kSolverGroupSize) in;
 shared uint group_sealed;
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (gl_LocalInvocationIndex == 0u) group_sealed = 0u;
     barrier();
     if (i < n.x * n.y * n.z) {
-        uint v = sb().b.voxels_per_cell;
+        uint v = hot.voxels_per_cell;
         uint flags = flags_at(i);
         uint counts[2];
         uint roots[2];
@@ -27,7 +28,7 @@ void main() {
             uint node = part_node(uint(i), k);
             roots[k] = counts[k] != 0u ? uf_find(node) : node;
             // Later passes read a label only to find a sealed part's region (solid_motion_of).
-            if (roots[k] != kOutsideNode && roots[k] != node) atomicMin(LabelsRef(sb().b.labels).v[node], roots[k]);
+            if (roots[k] != kOutsideNode && roots[k] != node) atomicMin(LabelsRef(hot.labels).v[node], roots[k]);
         }
         uint add = 0u, air = 0u;
         if (counts[0] != 0u && roots[0] == kOutsideNode) {
@@ -39,7 +40,7 @@ void main() {
             add = kCellNoAir;
             if (counts[0] != 0u) atomicAdd(group_sealed, 1u);
         }
-        FloatsRef(sb().b.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
+        FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
         if ((flags & kCellMoving) != 0u) {
             ivec4 m = IVec4Ref(sb().b.cell_motion).v[i];
             ivec4 mean = ivec4(m.xyz / m.w, 1);
@@ -51,10 +52,10 @@ void main() {
                 atomicAdd(region.v[roots[k]].z, mean.z);
                 atomicAdd(region.v[roots[k]].w, mean.w);
                 uint root_cell = (roots[k] - 1u) / kCellParts, root_part = (roots[k] - 1u) % kCellParts;
-                atomicOr(WordsRef(sb().b.cell_flags).v[root_cell], kCellRegion << root_part);
+                atomicOr(WordsRef(hot.cell_flags).v[root_cell], kCellRegion << root_part);
             }
         }
-        if (add != 0u) atomicOr(WordsRef(sb().b.cell_flags).v[i], add);
+        if (add != 0u) atomicOr(WordsRef(hot.cell_flags).v[i], add);
     }
     barrier();
     if (gl_LocalInvocationIndex == 0u && group_sealed > 0u) atomicAdd(state().s.sealed_cells, group_sealed);

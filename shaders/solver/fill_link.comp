@@ -9,14 +9,15 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (i >= n.x * n.y * n.z) return;
     ivec3 c = cell_from_index(n, i);
-    uint v = sb().b.voxels_per_cell;
+    uint v = hot.voxels_per_cell;
     uint flags = flags_at(i);
     bool cut = (flags & kCellCut) != 0u;
-    uint open = sb().b.open_sides;
+    uint open = hot.open_sides;
     CellBits faces[6];
     CellBits parts[2];
     if (cut) {

@@ -11,8 +11,9 @@ layout(local_size_x = kSolverGroupSize) in;
 shared uint group_residual;
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     bool inside = i < n.x * n.y * n.z;
     group_max_begin();
     if (gl_LocalInvocationIndex == 0u) group_residual = 0u;
@@ -36,7 +37,7 @@ void main() {
             group_max_add(cell_divergence(c));
             atomicMax(group_residual, floatBitsToUint(abs(load_cell(kCellTarget, i) - lap)));
         }
-        Vec4Ref(sb().b.vorticity).v[i] = cell_vorticity(c);
+        Vec4Ref(hot.vorticity).v[i] = cell_vorticity(c);
         if (sb().b.texels != 0ul) store_texel(i);
     }
     uint bits;

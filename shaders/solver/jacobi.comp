@@ -8,18 +8,20 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
     ivec3 n = grid_dims();
     bool inside = i < n.x * n.y * n.z;
+    GridLevel level0 = load_level(0u);
     if (pc.parity == 0u) {
-        if (inside) store_cell(kCellSolutionB, i, jacobi_cell(cell_from_index(n, i), kCellSolution));
+        if (inside) store_cell(kCellSolutionB, i, jacobi_cell(level0, cell_from_index(n, i), kCellSolution));
         return;
     }
     group_max_begin();
     if (inside) {
         ivec3 c = cell_from_index(n, i);
         float diag, lap;
-        cell_operator(0u, c, kCellSolution, load_cell(kCellSolution, i), diag, lap);
+        cell_operator(level0, c, kCellSolution, load_cell(kCellSolution, i), diag, lap);
         if (diag > 0.0) group_max_add(load_cell(kCellRhs, i) - lap);
     }
     uint bits;

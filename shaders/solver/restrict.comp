@@ -7,8 +7,9 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    GridLevel level = load_level(pc.level);
+    GridLevel level = load_level(pc.level), fine = load_level(pc.level - 1u);
     if (i >= level.dims.x * level.dims.y * level.dims.z) return;
-    store_cell(kCellRhs, int(level.cells) + i, restrict_cell(pc.level, cell_from_index(level.dims, i)));
+    store_cell(kCellRhs, int(level.cells) + i, restrict_cell(fine, cell_from_index(level.dims, i)));
 }

@@ -13,6 +13,7 @@ layout(buffer_reference, scalar) readonly buffer PointsRef { vec3 v[]; };
 layout(buffer_reference, scalar) writeonly buffer SamplesRef { vec3 v[]; };
 
 void main() {
+    load_bindings();
     int i = thread_index();
     ivec3 n = grid_dims();
     if (pc.parity == 0u) {

@@ -8,8 +8,9 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (i < n.x * n.y * n.z) {
         ivec3 src = cell_from_index(n, i) + pc.shift;
         store_cell(kCellScratch, i, inside_cells(n, src) ? load_cell(kCellPhi, cell_index(n, src)) : 0.0);

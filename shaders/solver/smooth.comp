@@ -35,11 +35,14 @@ float iterate(ivec3 c, bool plain) {
 }
 
 void main() {
+    load_bindings();
     uint l = pc.level;
     uint mode = pc.parity;
     GridLevel level = load_level(l);
     ivec3 local = ivec3(gl_LocalInvocationID);
     bool up = mode == 2u || mode == 3u;
+    // Only the upward leg prolongs from the next level.
+    GridLevel coarse = up ? load_level(l + 1u) : level;
     ivec3 origin = ivec3(gl_WorkGroupID) * kSide - (up ? ivec3(kSide / 2) : ivec3(0));
     ivec3 c = origin + local;
     bool mine = all(greaterThanEqual(c, ivec3(0))) && all(lessThan(c, level.dims));
@@ -97,7 +100,7 @@ void main() {
         float value = 0.0;
         if (up && all(greaterThanEqual(cell, ivec3(0))) && all(lessThan(cell, level.dims))) {
             int j = int(level.cells) + cell_index(level.dims, cell);
-            value = load_cell(kCellPressure, j) + prolong_cell(l, cell, kCellPressureUp);
+            value = load_cell(kCellPressure, j) + prolong_cell(level, coarse, cell, kCellPressureUp);
         }
         tile[e] = value;
     }

@@ -8,16 +8,28 @@
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
-uint b_log2() { return sb().b.tree_log2_branching; }
+// The tree's bindings, loaded once per invocation (as load_bindings does for the others).
+uint64_t tree_nodes, tree_masks;
+uint tree_levels, tree_log2;
+ivec3 voxel_offset;
+void load_tree_bindings() {
+    tree_nodes = sb().b.tree_nodes;
+    tree_masks = sb().b.tree_masks;
+    tree_levels = sb().b.tree_levels;
+    tree_log2 = sb().b.tree_log2_branching;
+    voxel_offset = sb().b.voxel_offset;
+}
+
+uint b_log2() { return tree_log2; }
 
 /// Node of `level` holding tree voxel v, or kNone when the path stops earlier.
 const uint kNone = 0xffffffffu;
 uint node_at(ivec3 v, uint level) {
-    uint levels = sb().b.tree_levels;
+    uint levels = tree_levels;
     uint children = 1u << (3u * b_log2());
     uint node = 0u;
     for (uint l = 0u; l < level; ++l) {
-        uint block = NodesRef(sb().b.tree_nodes).v[node].x;
+        uint block = NodesRef(tree_nodes).v[node].x;
         if (block == 0u) return kNone;
         node = block * children + child_slot(uvec3(v), l, levels, b_log2());
     }
@@ -25,23 +37,25 @@ uint node_at(ivec3 v, uint level) {
 }
 
 bool in_tree(ivec3 v) {
-    int res = 1 << int(sb().b.tree_levels * b_log2());
+    int res = 1 << int(tree_levels * b_log2());
     return all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, ivec3(res)));
 }
 
 void main() {
+    load_bindings();
+    load_tree_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (i >= n.x * n.y * n.z) return;
     ivec3 c = cell_from_index(n, i);
-    uint v = sb().b.voxels_per_cell;
-    uint levels = sb().b.tree_levels;
-    WordsRef flags = WordsRef(sb().b.cell_flags);
+    uint v = hot.voxels_per_cell;
+    uint levels = tree_levels;
+    WordsRef flags = WordsRef(hot.cell_flags);
     // The last step's moving fragments and region sums kept here (kCellMoving, kCellRegion): clear them,
     // so only the cells that held some are written, not the whole arrays.
     uint old = flags.v[i];
     if ((old & kCellMoving) != 0u) IVec4Ref(sb().b.cell_motion).v[i] = ivec4(0);
-    LabelsRef labels = LabelsRef(sb().b.labels);
+    LabelsRef labels = LabelsRef(hot.labels);
     for (uint k = 0u; k < kCellParts; ++k) {
         uint node = part_node(uint(i), k);
         if ((old & (kCellRegion << k)) != 0u) IVec4Ref(sb().b.region_motion).v[node] = ivec4(0);
@@ -57,7 +71,7 @@ void main() {
     }
     flags.v[i] = 0u;
     if (levels == 0u) return;
-    ivec3 lo = sb().b.voxel_offset + c * int(v);
+    ivec3 lo = voxel_offset + c * int(v);
     // Cheap exit: the shallowest level whose nodes are at least a cell wide; the cell lies in at most
     // two such nodes along each axis (one where its first and last voxels share a node), and when none
     // exists the cell is empty. Only the corners in distinct nodes are looked up.
@@ -72,7 +86,7 @@ void main() {
         if (any(greaterThan(side, spans))) continue;
         ivec3 corner = lo + side * int(v - 1u);
         uint node = in_tree(corner) ? node_at(corner, coarse) : kNone;
-        any_node = node != kNone && NodesRef(sb().b.tree_nodes).v[node].x != 0u;
+        any_node = node != kNone && NodesRef(tree_nodes).v[node].x != 0u;
     }
     if (!any_node) return;
 
@@ -90,13 +104,13 @@ void main() {
                 if (brick != cached_brick) {
                     cached_brick = brick;
                     uint node = node_at(voxel, levels - 1u);
-                    block = node == kNone ? 0u : NodesRef(sb().b.tree_nodes).v[node].x;
+                    block = node == kNone ? 0u : NodesRef(tree_nodes).v[node].x;
                 }
                 if (block == 0u) continue;
                 uint bit = child_slot(uvec3(voxel), levels - 1u, levels, b_log2());
                 uint base = block * stride + bit / 32u;
-                uint static_word = WordsRef(sb().b.tree_masks).v[base];
-                uint word = static_word | WordsRef(sb().b.tree_masks).v[base + words];
+                uint static_word = WordsRef(tree_masks).v[base];
+                uint word = static_word | WordsRef(tree_masks).v[base + words];
                 uint j = x + v * (y + v * z);
                 if ((word >> (bit % 32u) & 1u) != 0u) occupied.w[j / 32u] |= 1u << (j % 32u);
                 if ((static_word >> (bit % 32u) & 1u) != 0u) held.w[j / 32u] |= 1u << (j % 32u);
@@ -106,9 +120,9 @@ void main() {
     load_face_masks(faces);
     CellBits parts[2];
     cell_parts(occupied, v, faces, parts[0], parts[1]);
-    uint cw = sb().b.cell_words;
+    uint cw = hot.cell_words;
     for (uint k = 0u; k < kCellParts; ++k)
-        for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
+        for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
     uint cut = kCellCut;
     if (bits_count(held) != 0u) {
         for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_static).v[uint(i) * cw + w] = held.w[w];

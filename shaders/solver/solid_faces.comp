@@ -10,36 +10,37 @@ layout(local_size_x = kSolverGroupSize) in;
 
 /// The cell's kCell* flags, none beyond the domain.
 uint flags_of(ivec3 c) {
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     return inside_cells(n, c) ? flags_at(cell_index(n, c)) : 0u;
 }
 
 ivec4 motion_of(ivec3 c, uint flags) {
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     return inside_cells(n, c) ? solid_motion_of(cell_index(n, c), flags) : ivec4(0);
 }
 
 CellBits static_at(ivec3 c, uint flags) {
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     if (!inside_cells(n, c) || (flags & kCellStatic) == 0u) return bits_none();
     CellBits b = bits_none();
-    uint cw = sb().b.cell_words;
+    uint cw = hot.cell_words;
     int i = cell_index(n, c);
     for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(sb().b.cell_static).v[uint(i) * cw + w];
     return b;
 }
 
 CellBits air_at(ivec3 c, uint flags) {
-    ivec3 n = sb().b.dims;
-    return inside_cells(n, c) ? air_of(cell_index(n, c), flags) : bits_all(sb().b.voxels_per_cell);
+    ivec3 n = hot.dims;
+    return inside_cells(n, c) ? air_of(cell_index(n, c), flags) : bits_all(hot.voxels_per_cell);
 }
 
 void main() {
+    load_bindings();
     int t = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     int total = faces_total(n);
     if (uint(t) >= open_count_words(uint(total))) return;
-    uint v = sb().b.voxels_per_cell;
+    uint v = hot.voxels_per_cell;
     uint counts = 0u;
     // The face layers are loaded once, by the first face that compares voxel sets.
     CellBits faces[6];
@@ -66,7 +67,7 @@ void main() {
             masks = true;
             share = moving_share(v * v - open, face_any_count(static_at(lo, flags_lo), static_at(f, flags_hi), axis, v, faces));
         }
-        FloatsRef(sb().b.solid_velocity).v[i] = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
+        FloatsRef(hot.solid_velocity).v[i] = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
     }
-    WordsRef(sb().b.open_counts).v[t] = counts;
+    WordsRef(hot.open_counts).v[t] = counts;
 }

@@ -8,20 +8,21 @@ layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 void main() {
+    load_bindings();
     int i = thread_index();
     if (uint(i) >= state().s.fragments) return;
     uint key = WordsRef(sb().b.fragments).v[i];
     ivec3 voxel = ivec3(key & 1023u, (key >> 10) & 1023u, (key >> 20) & 1023u) - sb().b.voxel_offset;
     if (any(lessThan(voxel, ivec3(0)))) return;
-    ivec3 c = voxel / int(sb().b.voxels_per_cell);
-    if (!inside_cells(sb().b.dims, c)) return;
+    ivec3 c = voxel / int(hot.voxels_per_cell);
+    if (!inside_cells(hot.dims, c)) return;
     uvec2 packed = UVec2Ref(sb().b.fragment_motion).v[i];
     vec3 velocity = vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x);
     ivec3 fixed_point = ivec3(round(clamp_speed(velocity, sb().b.max_solid_speed) * kVelocityScale));
-    int cell = cell_index(sb().b.dims, c);
+    int cell = cell_index(hot.dims, c);
     IVec4Ref motion = IVec4Ref(sb().b.cell_motion);
     atomicAdd(motion.v[cell].x, fixed_point.x);
     atomicAdd(motion.v[cell].y, fixed_point.y);
     atomicAdd(motion.v[cell].z, fixed_point.z);
-    if (atomicAdd(motion.v[cell].w, 1) == 0) atomicOr(WordsRef(sb().b.cell_flags).v[cell], kCellMoving);
+    if (atomicAdd(motion.v[cell].w, 1) == 0) atomicOr(WordsRef(hot.cell_flags).v[cell], kCellMoving);
 }

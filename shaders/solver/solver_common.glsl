@@ -28,42 +28,92 @@ int thread_index() {
     return int((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kSolverGroupSize + gl_LocalInvocationID.x);
 }
 
-ivec3 grid_dims() { return sb().b.dims; }
-float grid_h() { return sb().b.h; }
-vec3 grid_origin() { return sb().b.origin; }
-vec3 grid_ambient() { return sb().b.ambient; }
-uint grid_open_sides() { return sb().b.open_sides; }
+// What the accessors below read at every call, loaded once per invocation: every pass's main() begins with
+// load_bindings(). Mesa 22's llvmpipe turns each buffer-reference load into a loop over the SIMD lanes, so
+// reading these through sb() at every access cost more than the data itself; a GPU keeps them in scalar
+// registers either way.
+struct HotBindings {
+    uint64_t velocity, velocity_tmp, velocity_back, solid_velocity, weights, open_counts;
+    uint64_t pressure, pressure_up, rhs, scratch, cg_cells;
+    uint64_t vorticity, emitters, cell_flags, cell_parts, cell_solid, labels;
+    ivec3 dims;
+    float h;
+    vec3 origin;
+    uint open_sides;
+    vec3 ambient;
+    int level0_faces;
+    float pair_share;
+    uint voxels_per_cell;
+    uint cell_words;
+    uint emitter_count;
+};
+HotBindings hot;
+void load_bindings() {
+    BindingsRef r = sb();
+    hot.velocity = r.b.velocity;
+    hot.velocity_tmp = r.b.velocity_tmp;
+    hot.velocity_back = r.b.velocity_back;
+    hot.solid_velocity = r.b.solid_velocity;
+    hot.weights = r.b.weights;
+    hot.open_counts = r.b.open_counts;
+    hot.pressure = r.b.pressure;
+    hot.pressure_up = r.b.pressure_up;
+    hot.rhs = r.b.rhs;
+    hot.scratch = r.b.scratch;
+    hot.cg_cells = r.b.cg_cells;
+    hot.vorticity = r.b.vorticity;
+    hot.emitters = r.b.emitters;
+    hot.cell_flags = r.b.cell_flags;
+    hot.cell_parts = r.b.cell_parts;
+    hot.cell_solid = r.b.cell_solid;
+    hot.labels = r.b.labels;
+    hot.dims = r.b.dims;
+    hot.h = r.b.h;
+    hot.origin = r.b.origin;
+    hot.open_sides = r.b.open_sides;
+    hot.ambient = r.b.ambient;
+    hot.level0_faces = int(r.b.level0_faces);
+    hot.pair_share = r.b.pair_share;
+    hot.voxels_per_cell = r.b.voxels_per_cell;
+    hot.cell_words = r.b.cell_words;
+    hot.emitter_count = r.b.emitter_count;
+}
+
+ivec3 grid_dims() { return hot.dims; }
+float grid_h() { return hot.h; }
+vec3 grid_origin() { return hot.origin; }
+vec3 grid_ambient() { return hot.ambient; }
+uint grid_open_sides() { return hot.open_sides; }
 GridLevel load_level(uint l) { return sb().b.level[l]; }
-uint emitter_count() { return sb().b.emitter_count; }
-GpuEmitter load_emitter(uint i) { return EmittersRef(sb().b.emitters).v[i]; }
+uint emitter_count() { return hot.emitter_count; }
+GpuEmitter load_emitter(uint i) { return EmittersRef(hot.emitters).v[i]; }
 
 uint64_t face_field(uint field) {
     bool swapped = (pc.swap & 1u) != 0u;
-    if (field == kFieldVelocity) return swapped ? sb().b.velocity_tmp : sb().b.velocity;
-    if (field == kFieldTmp) return swapped ? sb().b.velocity : sb().b.velocity_tmp;
-    if (field == kFieldBack) return sb().b.velocity_back;
-    return sb().b.solid_velocity;
+    if (field == kFieldVelocity) return swapped ? hot.velocity_tmp : hot.velocity;
+    if (field == kFieldTmp) return swapped ? hot.velocity : hot.velocity_tmp;
+    if (field == kFieldBack) return hot.velocity_back;
+    return hot.solid_velocity;
 }
 uint64_t cell_field(uint field) {
-    if (field == kCellPressure) return sb().b.pressure;
-    if (field == kCellRhs) return sb().b.rhs;
-    if (field == kCellScratch) return sb().b.scratch;
-    if (field == kCellPressureUp) return sb().b.pressure_up;
-    ivec3 n = sb().b.dims;
+    if (field == kCellPressure) return hot.pressure;
+    if (field == kCellRhs) return hot.rhs;
+    if (field == kCellScratch) return hot.scratch;
+    if (field == kCellPressureUp) return hot.pressure_up;
+    ivec3 n = hot.dims;
     // The conjugate-gradient iteration's parity (swap bit 1) says which of each pair is current.
     bool odd = (pc.swap & 2u) != 0u;
     if (odd && (field == kCellSolution || field == kCellDirection)) field += 4u;
     else if (odd && (field == kCellSolutionB || field == kCellDirectionB)) field -= 4u;
     uint slot = field <= kCellOldResidual ? field - kCellSolution : field - kCellSolutionB + 4u;
-    return sb().b.cg_cells + uint64_t(slot) * uint64_t(n.x * n.y * n.z) * 4ul;
+    return hot.cg_cells + uint64_t(slot) * uint64_t(n.x * n.y * n.z) * 4ul;
 }
 float load_face(uint field, int index) { return FloatsRef(face_field(field)).v[index]; }
 /// Level 0's open fraction from its byte count, coarser levels' weights from their floats.
 float load_weight(int index) {
-    int level0 = int(sb().b.level0_faces);
-    if (index >= level0) return FloatsRef(sb().b.weights).v[index - level0];
-    uint word = WordsRef(sb().b.open_counts).v[index >> 2];
-    return open_fraction_of(open_count_in(word, uint(index)), sb().b.pair_share);
+    if (index >= hot.level0_faces) return FloatsRef(hot.weights).v[index - hot.level0_faces];
+    uint word = WordsRef(hot.open_counts).v[index >> 2];
+    return open_fraction_of(open_count_in(word, uint(index)), hot.pair_share);
 }
 #ifdef GUST_COARSE_SHARED
 // coarse_solve.comp keeps the levels it solves in shared memory (coarse_phi, coarse_rhs, from global cell
@@ -79,7 +129,7 @@ float load_cell(uint field, int index) {
 #else
 float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
 #endif
-vec4 load_vorticity(int index) { return Vec4Ref(sb().b.vorticity).v[index]; }
+vec4 load_vorticity(int index) { return Vec4Ref(hot.vorticity).v[index]; }
 /// The step's pressure solution at level-0 cell `index` as the solve left it: x + α p (or + z for plain
 /// multigrid) of the iterate and direction the state names, 0 after a diverged solve.
 float load_phi(int index) {
@@ -182,16 +232,16 @@ void load_face_masks(out CellBits faces[6]) {
 
 // ---- Cell parts, the outside-air fill and the solid's motion (solver_io.h, "cell_flags") -----------------
 
-uint flags_at(int i) { return WordsRef(sb().b.cell_flags).v[i]; }
+uint flags_at(int i) { return WordsRef(hot.cell_flags).v[i]; }
 
 /// Part k of level-0 cell i: from cell_parts for a cut cell; a cell without solid voxels is one whole part.
 CellBits part_of(int i, uint flags, uint k) {
-    uint v = sb().b.voxels_per_cell;
+    uint v = hot.voxels_per_cell;
     if ((flags & kCellCut) == 0u) return k == 0u ? bits_all(v) : bits_none();
     CellBits b = bits_none();
-    uint cw = sb().b.cell_words;
+    uint cw = hot.cell_words;
     uint base = (kCellParts * uint(i) + k) * cw;
-    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(sb().b.cell_parts).v[base + w];
+    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(hot.cell_parts).v[base + w];
     return b;
 }
 
@@ -208,7 +258,7 @@ CellBits air_of(int i, uint flags) {
 layout(buffer_reference, scalar) buffer LabelsRef { uint v[]; };
 
 uint uf_find(uint x) {
-    LabelsRef labels = LabelsRef(sb().b.labels);
+    LabelsRef labels = LabelsRef(hot.labels);
     uint parent = labels.v[x];
     while (parent != x) {
         uint grand = labels.v[parent];
@@ -220,7 +270,7 @@ uint uf_find(uint x) {
 }
 
 void uf_unite(uint a, uint b) {
-    LabelsRef labels = LabelsRef(sb().b.labels);
+    LabelsRef labels = LabelsRef(hot.labels);
     for (;;) {
         a = uf_find(a);
         b = uf_find(b);
@@ -242,7 +292,7 @@ void uf_unite(uint a, uint b) {
 ivec4 solid_motion_of(int i, uint flags) {
     if ((flags & kCellMoving) != 0u) return IVec4Ref(sb().b.cell_motion).v[i];
     if ((flags & kCellNoAir) == 0u) return ivec4(0);
-    uint root = LabelsRef(sb().b.labels).v[part_node(uint(i), 0u)];
+    uint root = LabelsRef(hot.labels).v[part_node(uint(i), 0u)];
     if (root == kOutsideNode) return ivec4(0);
     uint part = (root - 1u) % kCellParts;
     if ((flags_at(int((root - 1u) / kCellParts)) & (kCellRegion << part)) == 0u) return ivec4(0);
@@ -289,7 +339,7 @@ bool in_solid(vec3 p, int cell, uint flags) {
     if ((flags & kCellNoAir) != 0u) return true;
     if ((flags & kCellCut) == 0u) return false;
     ivec3 c = cell_from_index(grid_dims(), cell);
-    int v = int(sb().b.voxels_per_cell);
+    int v = int(hot.voxels_per_cell);
     ivec3 voxel = clamp(ivec3(floor((p - vec3(c)) * float(v))), ivec3(0), ivec3(v - 1));
     return !bits_get(air_of(cell, flags), uint(voxel.x + v * (voxel.y + v * voxel.z)));
 }
@@ -306,6 +356,6 @@ layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };
 /// Cell i's texel of the wind texture: cell_output and 1 − solid fraction, as four half floats.
 void store_texel(int i) {
     vec3 u = cell_output(i);
-    float open = 1.0 - FloatsRef(sb().b.cell_solid).v[i];
+    float open = 1.0 - FloatsRef(hot.cell_solid).v[i];
     TexelsRef(sb().b.texels).v[i] = uvec2(packHalf2x16(u.xy), packHalf2x16(vec2(u.z, open)));
 }

@@ -224,14 +224,13 @@ GUST_INLINE float face_coupling(GridLevel level, uint open, ivec3 c, uint a, uin
     return h_level > 1.5f * grid_h() ? w * (2.0f * h_level / (h_level + grid_h())) : w;
 }
 
-/// The weighted Laplacian at cell c of level l: diag = Σ w over the open faces, off = Σ w·(φ_nb − centre)
+/// The weighted Laplacian at cell c of `level`: diag = Σ w over the open faces, off = Σ w·(φ_nb − centre)
 /// (φ = 0 beyond open domain sides; inflow sides add nothing), so (Lφ)_c = off − diag·(φ_c − centre).
 /// With centre = φ_c, off is (Lφ)_c itself, summed from differences: off − diag·φ_c would cancel the
 /// digits that matter once φ is large beside its gradient (float keeps ~7), and stall the solve above
 /// its tolerance. Relaxation likewise adds a small correction to φ_c rather than recomputing it.
-GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, float centre, GUST_OUT(float) diag,
+GUST_INLINE void cell_operator(GridLevel level, ivec3 c, uint field, float centre, GUST_OUT(float) diag,
                                GUST_OUT(float) off) {
-    GridLevel level = load_level(l);
     uint open = grid_open_sides();
     diag = 0.0f;
     off = 0.0f;
@@ -248,52 +247,48 @@ GUST_INLINE void cell_operator(uint l, ivec3 c, uint field, float centre, GUST_O
         }
 }
 
-/// (Lφ)_c at cell c of level l for φ in `field`; 0 where no face is open.
-GUST_INLINE float laplacian_cell(uint l, ivec3 c, uint field) {
-    GridLevel level = load_level(l);
+/// (Lφ)_c at cell c of `level` for φ in `field`; 0 where no face is open.
+GUST_INLINE float laplacian_cell(GridLevel level, ivec3 c, uint field) {
     float diag, lap;
-    cell_operator(l, c, field, load_cell(field, int(level.cells) + cell_index(level.dims, c)), diag, lap);
+    cell_operator(level, c, field, load_cell(field, int(level.cells) + cell_index(level.dims, c)), diag, lap);
     return diag > 0.0f ? lap : 0.0f;
 }
 
-/// Gauss–Seidel / Jacobi update of φ at cell c of level l from the values in `field`.
-GUST_INLINE float relax_cell(uint l, ivec3 c, uint field) {
-    GridLevel level = load_level(l);
+/// Gauss–Seidel / Jacobi update of φ at cell c of `level` from the values in `field`.
+GUST_INLINE float relax_cell(GridLevel level, ivec3 c, uint field) {
     int i = int(level.cells) + cell_index(level.dims, c);
     float phi = load_cell(field, i);
     float diag, lap;
-    cell_operator(l, c, field, phi, diag, lap);
+    cell_operator(level, c, field, phi, diag, lap);
     if (!(diag > 0.0f)) return 0.0f;
     return phi + (lap - load_cell(kCellRhs, i)) / diag;
 }
 
-/// Damped Jacobi update of φ at level-0 cell c from the values in `field`.
-GUST_INLINE float jacobi_cell(ivec3 c, uint field) {
+/// Damped Jacobi update of φ at level-0 cell c (`level0`) from the values in `field`.
+GUST_INLINE float jacobi_cell(GridLevel level0, ivec3 c, uint field) {
     float old = load_cell(field, cell_index(grid_dims(), c));
-    return mix(old, relax_cell(0u, c, field), kJacobiWeight);
+    return mix(old, relax_cell(level0, c, field), kJacobiWeight);
 }
 
-/// Residual b − Lφ at cell c of level l (φ in kCellPressure); 0 where no face is open.
-GUST_INLINE float residual_cell(uint l, ivec3 c) {
-    GridLevel level = load_level(l);
+/// Residual b − Lφ at cell c of `level` (φ in kCellPressure); 0 where no face is open.
+GUST_INLINE float residual_cell(GridLevel level, ivec3 c) {
     int i = int(level.cells) + cell_index(level.dims, c);
     float diag, lap;
-    cell_operator(l, c, kCellPressure, load_cell(kCellPressure, i), diag, lap);
+    cell_operator(level, c, kCellPressure, load_cell(kCellPressure, i), diag, lap);
     return diag > 0.0f ? load_cell(kCellRhs, i) - lap : 0.0f;
 }
 
-/// Right-hand side of coarse cell C of level l (> 0): the mean residual of its children, computed here
-/// from the finer level's φ, so no residual pass (and no residual array) lies between smoothing and
+/// Right-hand side of coarse cell C of the level after `fine`: the mean residual of its children, computed
+/// here from the finer level's φ, so no residual pass (and no residual array) lies between smoothing and
 /// restriction.
-GUST_INLINE float restrict_cell(uint l, ivec3 C) {
-    GridLevel fine = load_level(l - 1u);
+GUST_INLINE float restrict_cell(GridLevel fine, ivec3 C) {
     ivec3 k = fine.factor;
     float sum = 0.0f;
     for (int z = 0; z < k.z; ++z)
         for (int y = 0; y < k.y; ++y)
             for (int x = 0; x < k.x; ++x) {
                 ivec3 c = C * k + ivec3(x, y, z);
-                if (inside_cells(fine.dims, c)) sum += residual_cell(l - 1u, c);
+                if (inside_cells(fine.dims, c)) sum += residual_cell(fine, c);
             }
     return sum / float(k.x * k.y * k.z);
 }
@@ -320,15 +315,13 @@ GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
     return sum / float(span.x * span.y * span.z);
 }
 
-/// Correction for fine cell c of level l from level l + 1 (its values in `coarse_field`): cell-centred
+/// Correction for fine cell c of level `fine` from the next level, `coarse` (its values in `coarse_field`): cell-centred
 /// trilinear interpolation (3/4 of
 /// the parent, 1/4 of its neighbour along each halved axis) through the coarse face between them, in
 /// proportion to its open fraction θ; the closed part acts as a wall (zero gradient: the parent's value).
 /// Past a domain side the neighbour is the boundary: a closed side is a wall, an open side's φ = 0 (half
 /// a level-0 cell out, as face_coupling puts it) is interpolated toward through the side's open part.
-GUST_INLINE float prolong_cell(uint l, ivec3 c, uint coarse_field) {
-    GridLevel fine = load_level(l);
-    GridLevel coarse = load_level(l + 1u);
+GUST_INLINE float prolong_cell(GridLevel fine, GridLevel coarse, ivec3 c, uint coarse_field) {
     ivec3 k = fine.factor;
     ivec3 parent = c / k;
     ivec3 toward = ivec3(0);

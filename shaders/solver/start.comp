@@ -12,8 +12,9 @@ layout(local_size_x = kSolverGroupSize) in;
 shared uint group_fluid;
 
 void main() {
+    load_bindings();
     int i = thread_index();
-    ivec3 n = sb().b.dims;
+    ivec3 n = hot.dims;
     bool inside = i < n.x * n.y * n.z;
     ivec3 c = inside ? cell_from_index(n, i) : ivec3(0);
     group_max_begin();
@@ -21,15 +22,16 @@ void main() {
     barrier();
     vec2 sums = vec2(0.0);
     if (inside) {
+        GridLevel level0 = load_level(0u);
         float diag, off;
-        cell_operator(0u, c, kCellPhi, 0.0, diag, off);
+        cell_operator(level0, c, kCellPhi, 0.0, diag, off);
         float d = diag > 0.0 ? cell_divergence(c) : 0.0;
         group_max_add(d);
         store_cell(kCellTarget, i, d);
         store_cell(kCellRhs, i, d);
         if (diag > 0.0) atomicAdd(group_fluid, 1u);
         if (pc.iterations != 0u) {
-            float q = laplacian_cell(0u, c, kCellPhi);
+            float q = laplacian_cell(level0, c, kCellPhi);
             store_cell(kCellScratch, i, q);
             sums = q * vec2(d, q);
         }

@@ -405,7 +405,7 @@ void CpuWind::Impl::smooth(std::uint32_t l) {
             each_cell(level, [&](int i, glm::ivec3 c) {
                 if (std::uint32_t(c.x + c.y + c.z) % 2 != colour) return;
                 k.cell[shaderio::kCellPressure][level.cells + std::size_t(i)] =
-                    k.relax_cell(l, c, shaderio::kCellPressure);
+                    k.relax_cell(level, c, shaderio::kCellPressure);
             });
 }
 
@@ -417,7 +417,7 @@ void CpuWind::Impl::v_cycle() {
         smooth(l);
         const GridLevel& coarse = k.levels[l + 1];
         each_cell(coarse, [&](int i, glm::ivec3 c) {
-            rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(l + 1, c);
+            rhs[coarse.cells + std::size_t(i)] = k.restrict_cell(k.levels[l], c);
             phi[coarse.cells + std::size_t(i)] = 0.0f;
         });
     }
@@ -425,13 +425,13 @@ void CpuWind::Impl::v_cycle() {
     for (std::uint32_t sweep = 0; sweep < 2 * detail::kCoarseSweeps; ++sweep)
         each_cell(coarsest, [&](int i, glm::ivec3 c) {
             if (std::uint32_t(c.x + c.y + c.z) % 2 == sweep % 2)
-                phi[coarsest.cells + std::size_t(i)] = k.relax_cell(levels - 1, c, shaderio::kCellPressure);
+                phi[coarsest.cells + std::size_t(i)] = k.relax_cell(coarsest, c, shaderio::kCellPressure);
         });
     for (std::uint32_t l = levels - 1; l-- > 0;) {
         const GridLevel& level = k.levels[l];
         std::vector<float> add(std::size_t(level.dims.x) * level.dims.y * level.dims.z);
         each_cell(level, [&](int i, glm::ivec3 c) {
-            add[std::size_t(i)] = k.prolong_cell(l, c, shaderio::kCellPressure);
+            add[std::size_t(i)] = k.prolong_cell(level, k.levels[l + 1], c, shaderio::kCellPressure);
         });
         for (std::size_t i = 0; i < add.size(); ++i)
             phi[level.cells + i] += add[i];
@@ -452,7 +452,7 @@ float CpuWind::Impl::start_solve(bool warm) {
     if (warm) {
         double bq = 0.0, qq = 0.0;
         each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-            const float lap = k.laplacian_cell(0, c, kCellPhi);
+            const float lap = k.laplacian_cell(k.levels[0], c, kCellPhi);
             q[std::size_t(i)] = lap;
             bq += double(b[std::size_t(i)]) * lap;
             qq += double(lap) * lap;
@@ -504,7 +504,7 @@ float CpuWind::Impl::conjugate_gradients(Check& check, float residual, bool& don
             p[i] = z[i] + beta * p[i];
         double pq = 0.0;
         each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-            pq += double(p[std::size_t(i)]) * k.laplacian_cell(0, c, kCellDirection);
+            pq += double(p[std::size_t(i)]) * k.laplacian_cell(k.levels[0], c, kCellDirection);
         });
         const float alpha = cg_alpha(old_rz, float(pq));
         for (std::size_t i = 0; i < n; ++i) {
@@ -514,7 +514,7 @@ float CpuWind::Impl::conjugate_gradients(Check& check, float residual, bool& don
         }
         residual = 0.0f;
         each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
-            r[std::size_t(i)] = b[std::size_t(i)] - k.laplacian_cell(0, c, kCellSolution);
+            r[std::size_t(i)] = b[std::size_t(i)] - k.laplacian_cell(k.levels[0], c, kCellSolution);
             residual = std::max(residual, std::abs(r[std::size_t(i)]));
         });
         done = check.done(residual);
@@ -527,7 +527,7 @@ float CpuWind::Impl::conjugate_gradients(Check& check, float residual, bool& don
 float CpuWind::Impl::max_residual() {
     float worst = 0.0f;
     each_cell(k.levels[0],
-              [&](int, glm::ivec3 c) { worst = std::max(worst, std::abs(k.residual_cell(0, c))); });
+              [&](int, glm::ivec3 c) { worst = std::max(worst, std::abs(k.residual_cell(k.levels[0], c))); });
     return worst;
 }
 
@@ -594,7 +594,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     float before = 0.0f;
     m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
         float diag, off;
-        k.cell_operator(0, c, shaderio::kCellPressure, 0.0f, diag, off);
+        k.cell_operator(k.levels[0], c, shaderio::kCellPressure, 0.0f, diag, off);
         const float d = diag > 0.0f ? k.cell_divergence(c) : 0.0f;
         rhs[std::size_t(i)] = d;
         k.cell[shaderio::kCellTarget][std::size_t(i)] = d;
@@ -630,7 +630,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
                 const std::uint32_t from = (it & 1) ? shaderio::kCellSolutionB : shaderio::kCellPressure;
                 std::vector<float>& to = (it & 1) ? phi : other;
                 m.each_cell(k.levels[0],
-                            [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(c, from); });
+                            [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(k.levels[0], c, from); });
                 std::copy(next.begin(), next.end(), to.begin());
             }
             residual = m.max_residual();
@@ -655,7 +655,7 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     float after = 0.0f, left = 0.0f;
     m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
         float diag, lap;
-        k.cell_operator(0, c, shaderio::kCellPhi, result[std::size_t(i)], diag, lap);
+        k.cell_operator(k.levels[0], c, shaderio::kCellPhi, result[std::size_t(i)], diag, lap);
         if (diag > 0.0f) {
             after = std::max(after, std::abs(k.cell_divergence(c)));
             left = std::max(left, std::abs(k.cell[shaderio::kCellTarget][std::size_t(i)] - lap));
