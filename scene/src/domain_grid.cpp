@@ -11,25 +11,6 @@ SolverDesc domain_solver_desc(const DomainDesc& domain) {
     return desc;
 }
 
-SolverDesc solver_desc(const SceneDesc& scene) {
-    SolverDesc desc = domain_solver_desc(scene.domain);
-    const SolverSettings& s = scene.solver;
-    desc.advection = s.advection == "none"         ? Advection::None
-                     : s.advection == "maccormack" ? Advection::MacCormack
-                                                   : Advection::SemiLagrangian;
-    desc.pressure = s.pressure == "jacobi"      ? PressureSolver::Jacobi
-                    : s.pressure == "multigrid" ? PressureSolver::Multigrid
-                                                : PressureSolver::MultigridPCG;
-    desc.tolerance = s.tolerance;
-    desc.max_cycles = s.max_cycles;
-    desc.cycles_per_step = s.cycles_per_step;
-    desc.max_iterations = s.max_iterations;
-    desc.vorticity = s.vorticity;
-    desc.viscosity = s.viscosity;
-    desc.max_solid_speed = s.max_solid_speed;
-    return desc;
-}
-
 SystemDesc system_desc(const SceneDesc& scene) {
     SystemDesc desc;
     const DomainDesc& d = scene.domain;

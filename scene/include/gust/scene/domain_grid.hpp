@@ -15,9 +15,6 @@ namespace gust {
 /// (center − cells·cell_size/2); numerics at their defaults.
 SolverDesc domain_solver_desc(const DomainDesc& domain);
 
-/// The wind grid of a scene: its domain's (domain_solver_desc) with the scene's solver settings.
-SolverDesc solver_desc(const SceneDesc& scene);
-
 /// The System a scene describes (what `gust simulate` runs): its domain, centred on the focus (the domain's
 /// center) with the tree's branching and hysteresis, and its solver settings; the device, submission,
 /// voxelizer path and hooks are left at SystemDesc's defaults for the caller to set.
