@@ -1,19 +1,19 @@
 #include "simulate.hpp"
 
 #include "pipeline_cache.hpp"
-#include "vdb_writer.hpp"
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <gust/gpu/context.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <gust/gust.hpp>
 #include <gust/scene/domain_grid.hpp>
 #include <gust/scene/scene_runtime.hpp>
-#include <gust/solver/wind_solver.hpp>
-#include <gust/voxelizer/voxel_world.hpp>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 namespace gust::cli {
@@ -31,18 +31,28 @@ std::string frame_file(std::uint64_t frame) {
     return name;
 }
 
+Vec3 to_vec3(const glm::vec3& v) {
+    return {v.x, v.y, v.z};
+}
+
+Mat4 to_mat4(const glm::mat4& m) {
+    Mat4 out;
+    std::memcpy(out.m, glm::value_ptr(m), sizeof(out.m));
+    return out;
+}
+
 /// The scene's emitters at time t (motors moved along their paths).
-std::vector<Emitter> emitters_at(const SceneDesc& scene, double t) {
-    std::vector<Emitter> out;
+std::vector<WindEmitter> emitters_at(const SceneDesc& scene, double t) {
+    std::vector<WindEmitter> out;
     for (const EmitterDesc& e : scene.emitters) {
-        Emitter emitter;
-        emitter.type = e.type == "directional" ? EmitterType::Directional
-                       : e.type == "omni"      ? EmitterType::Omni
-                       : e.type == "vortex"    ? EmitterType::Vortex
-                       : e.shape == "cone"     ? EmitterType::ConeMotor
-                                               : EmitterType::CapsuleMotor;
-        emitter.position = emitter_position(e, t);
-        emitter.direction = e.direction;
+        WindEmitter emitter;
+        emitter.type = e.type == "directional" ? WindEmitterType::Directional
+                       : e.type == "omni"      ? WindEmitterType::Omni
+                       : e.type == "vortex"    ? WindEmitterType::Vortex
+                       : e.shape == "cone"     ? WindEmitterType::ConeMotor
+                                               : WindEmitterType::CapsuleMotor;
+        emitter.position = to_vec3(emitter_position(e, t));
+        emitter.direction = to_vec3(e.direction);
         emitter.radius = e.radius;
         emitter.strength = e.strength;
         emitter.falloff = e.falloff;
@@ -52,20 +62,104 @@ std::vector<Emitter> emitters_at(const SceneDesc& scene, double t) {
     return out;
 }
 
+bool parse_path(const std::string& text, VoxelizePath& out) {
+    if (text == "raster")
+        out = VoxelizePath::Raster;
+    else if (text == "compute")
+        out = VoxelizePath::Compute;
+    else if (text == "auto")
+        out = VoxelizePath::Auto;
+    else
+        return false;
+    return true;
+}
+
+/// What the System logs (Hooks::log): the Vulkan validation layer's and the driver's messages, and its own
+/// (a frame that ran out of a list or pool). Errors are what the validation layer reports when the device
+/// is used wrongly; with --validation they fail the run.
+struct Messages {
+    std::uint32_t errors = 0;
+    std::string last_error;
+};
+
+void on_log(void* user, LogLevel level, const char* message) {
+    auto* messages = static_cast<Messages*>(user);
+    if (level == LogLevel::Info) return;
+    if (level == LogLevel::Error) {
+        ++messages->errors;
+        messages->last_error = message;
+        std::cerr << "gust: vulkan: " << message << "\n";
+    } else {
+        std::cerr << "gust: warning: " << message << "\n";
+    }
+}
+
+const float* floats(const std::vector<glm::vec3>& positions) {
+    return positions.empty() ? nullptr : glm::value_ptr(positions.front());
+}
+
+MeshDesc mesh_desc(const Mesh& mesh, const std::vector<glm::vec3>& positions, bool deforming) {
+    MeshDesc desc;
+    desc.positions = floats(positions);
+    desc.vertex_count = std::uint32_t(positions.size());
+    desc.indices = mesh.indices.data();
+    desc.index_count = std::uint32_t(mesh.indices.size());
+    desc.deforming = deforming;
+    return desc;
+}
+
+/// One line of stats.jsonl from a step's FrameStats (docs/cli.md lists the keys).
+nlohmann::ordered_json stats_line(const FrameStats& st, double t) {
+    nlohmann::ordered_json line;
+    line["frame"] = st.frame;
+    line["time"] = t;
+    line["fragments"] = st.fragments;
+    line["voxels"] = st.voxels;
+    line["nodes"] = st.nodes;
+    line["refined"] = st.refined;
+    line["coarsened"] = st.coarsened;
+    line["pool_bytes"] = st.pool_bytes;
+    line["fragment_bytes"] = st.fragment_bytes;
+    line["dense_bytes"] = st.dense_bytes;
+    nlohmann::ordered_json ms = nlohmann::ordered_json::object();
+    for (const auto& [pass, value] : st.ms)
+        ms[std::string(pass)] = value;
+    line["ms"] = ms;
+    line["dispatches"] = st.dispatches;
+    line["submissions"] = st.submissions;
+    line["waits"] = st.waits;
+    line["divergence_before"] = st.divergence_before;
+    line["divergence_after"] = st.divergence_after;
+    line["residual"] = st.residual;
+    line["cycles"] = st.cycles;
+    line["converged"] = st.converged;
+    line["cut_cells"] = st.cut_cells;
+    line["fluid_cells"] = st.fluid_cells;
+    line["sealed_cells"] = st.sealed_cells;
+    line["diverged"] = st.diverged;
+    line["nodes_per_level"] =
+        std::vector<std::uint64_t>(st.nodes_per_level.begin(), st.nodes_per_level.end());
+    line["exhausted"] = st.exhausted;
+    line["pool_growths"] = st.pool_growths;
+    line["free_node_blocks"] = st.free_node_blocks;
+    line["free_mask_blocks"] = st.free_mask_blocks;
+    line["static_rebuilt"] = st.static_rebuilt;
+    line["rejected"] = st.rejected_triangles;
+    return line;
+}
+
 } // namespace
 
 int run_simulate(const SimulateArgs& args) {
     namespace fs = std::filesystem;
-    VoxelizeMethod method{};
-    if (!parse_method(args.method, method))
+    VoxelizePath path{};
+    if (!parse_path(args.method, path))
         return fail("--method must be raster, compute or auto, got '" + args.method + "'");
     if (args.frames == 0) return fail("--frames must be at least 1");
     auto scene = load_scene(args.scene);
     if (!scene) return fail(scene.message());
     auto runtime = SceneRuntime::load(*scene);
     if (!runtime) return fail(runtime.message());
-    auto grid = domain_grid(scene->domain);
-    if (!grid) return fail(args.scene + ": domain: " + grid.message());
 
     std::error_code ec;
     fs::create_directories(args.out, ec);
@@ -73,140 +167,79 @@ int run_simulate(const SimulateArgs& args) {
     std::ofstream stats_file(fs::path(args.out) / "stats.jsonl");
     if (!stats_file) return fail(args.out + "/stats.jsonl: cannot open for writing");
 
-    gpu::ContextDesc ctx_desc;
-    ctx_desc.device = args.device;
-    ctx_desc.validation = args.validation;
-    ctx_desc.pipeline_cache = pipeline_cache_file(args.no_pipeline_cache);
-    ctx_desc.on_message = [](gpu::Severity severity, const std::string& message) {
-        if (severity != gpu::Severity::Info) std::cerr << "gust: vulkan: " << message << "\n";
-    };
-    auto ctx = gpu::Context::create(ctx_desc);
-    if (!ctx) return fail(ctx.message());
+    // The frame runs through the public API: System::step records it once, submits it once and waits once
+    // (docs/design.md "One frame").
+    SystemDesc desc = system_desc(*scene);
+    desc.validation = args.validation;
+    desc.device = args.device.empty() ? nullptr : args.device.c_str();
+    desc.voxelize = path;
+    const std::string cache = pipeline_cache_file(args.no_pipeline_cache);
+    desc.pipeline_cache = cache.empty() ? nullptr : cache.c_str();
+    Messages messages;
+    desc.hooks.user = &messages;
+    desc.hooks.log = on_log;
+    std::unique_ptr<System> system;
+    if (Outcome o = System::create(desc, system); !o) return fail(args.scene + ": " + o.message());
+    if (Outcome o = system->set_ambient(to_vec3(scene->ambient_velocity)); !o)
+        return fail(args.scene + ": ambient: " + o.message());
 
-    WorldDesc world_desc;
-    world_desc.grid = *grid;
-    world_desc.method = method;
-    world_desc.tree.branching = scene->domain.branching;
-    world_desc.tree.hysteresis = scene->domain.hysteresis;
-    auto world = VoxelWorld::create(**ctx, world_desc);
-    if (!world) return fail(world.message());
-    auto wind = WindSolver::create(**ctx, solver_desc(*scene));
-    if (!wind) return fail(args.scene + ": " + wind.message());
-    if (Status s = (*wind)->set_ambient(scene->ambient_velocity); !s)
-        return fail(args.scene + ": ambient: " + s.message());
-
-    // Objects showing the same mesh share one device copy (and one `auto` measurement); deforming
-    // objects get their own, since their vertex buffers change every frame.
+    // Objects showing the same mesh share one device copy; deforming objects get their own, since their
+    // vertices change every frame. Everything starts where it was one frame before
+    // frame 0, so that frame 0's velocities are those of the motion.
+    const double dt = scene->dt;
     const std::size_t count = runtime->object_count();
-    std::vector<GpuMesh> uploaded;
-    uploaded.reserve(count);
-    std::vector<std::size_t> slot(count);
-    std::map<const Mesh*, std::size_t> shared;
+    std::vector<MeshId> meshes(count);
+    std::vector<InstanceId> instances(count);
+    std::map<const Mesh*, MeshId> shared;
     for (std::size_t i = 0; i < count; ++i) {
         const Mesh& source = runtime->mesh(i);
-        if (!runtime->deforms(i))
-            if (const auto it = shared.find(&source); it != shared.end()) {
-                slot[i] = it->second;
-                continue;
-            }
-        auto mesh = (*world)->upload(view_of(source));
-        if (!mesh) return fail(scene->objects[i].mesh.string() + ": " + mesh.message());
-        slot[i] = uploaded.size();
-        if (!runtime->deforms(i)) shared.emplace(&source, slot[i]);
-        uploaded.push_back(std::move(*mesh));
+        const bool deforms = runtime->deforms(i);
+        if (const auto it = shared.find(&source); !deforms && it != shared.end()) {
+            meshes[i] = it->second;
+        } else {
+            const std::vector<glm::vec3>& positions = runtime->positions(i, -dt);
+            if (Outcome o = system->create_mesh(mesh_desc(source, positions, deforms), meshes[i]); !o)
+                return fail(scene->objects[i].mesh.string() + ": " + o.message());
+            if (!deforms) shared.emplace(&source, meshes[i]);
+        }
+        const Outcome placed =
+            scene->objects[i].is_static
+                ? system->create_instance(meshes[i], to_mat4(runtime->model(i, 0.0)), false, instances[i])
+                : system->create_moving_instance(meshes[i], to_mat4(runtime->model(i, 0.0)),
+                                                 to_mat4(runtime->model(i, -dt)), instances[i]);
+        if (!placed) return fail(scene->objects[i].mesh.string() + ": " + placed.message());
     }
-    const auto mesh_of = [&](std::size_t object) -> GpuMesh& { return uploaded[slot[object]]; };
-    const double dt = scene->dt;
-    std::vector<GpuInstance> statics;
-    for (std::size_t i = 0; i < count; ++i)
-        if (scene->objects[i].is_static) statics.push_back({&mesh_of(i), runtime->model(i, 0.0)});
-    (*world)->set_static(statics);
-    // The pose one frame before the first, so that frame 0's velocities are those of the motion.
-    for (std::size_t i = 0; i < count; ++i)
-        if (runtime->deforms(i))
-            if (Status s = (*world)->update_positions(mesh_of(i), runtime->positions(i, -dt)); !s)
-                return fail(s.message());
 
-    std::cerr << "gust: simulating " << args.frames << " frames of " << args.scene << " (" << grid->res
-              << "^3 voxels, " << (*ctx)->info().name << ")\n";
+    VoxelGridInfo grid;
+    static_cast<void>(system->debug_voxel_grid(grid));
+    std::cerr << "gust: simulating " << args.frames << " frames of " << args.scene << " ("
+              << grid.resolution[0] << "^3 voxels, " << system->device_name() << ")\n";
     const auto start = std::chrono::steady_clock::now();
     for (std::uint64_t frame = 0; frame < args.frames; ++frame) {
         const double t = double(frame) * dt;
-        const gpu::WorkCounts before = (*ctx)->work();
-        std::vector<GpuInstance> dynamic;
         for (std::size_t i = 0; i < count; ++i) {
             if (scene->objects[i].is_static) continue;
-            if (runtime->deforms(i))
-                if (Status s = (*world)->update_positions(mesh_of(i), runtime->positions(i, t)); !s)
-                    return fail(s.message());
-            GpuInstance inst{&mesh_of(i), runtime->model(i, t)};
-            inst.prev_model = runtime->model(i, t - dt);
-            inst.teleport = runtime->jumps(i, t - dt, t);
-            dynamic.push_back(inst);
+            // A keyframe jump or a clip's wrap moves the solid without pushing air.
+            const bool jump = runtime->jumps(i, t - dt, t);
+            if (runtime->deforms(i)) {
+                const std::vector<glm::vec3>& positions = runtime->positions(i, t);
+                if (Outcome o = system->set_vertices(meshes[i], floats(positions),
+                                                     std::uint32_t(positions.size()), 12, jump);
+                    !o)
+                    return fail(o.message());
+            }
+            if (Outcome o = system->set_transform(instances[i], to_mat4(runtime->model(i, t)), jump); !o)
+                return fail(o.message());
         }
-        auto step = (*world)->step(dynamic, float(dt));
-        if (!step) return fail("frame " + std::to_string(frame) + ": " + step.message());
-        const std::vector<Emitter> emitters = emitters_at(*scene, t);
-        if (Status s = (*wind)->set_emitters(emitters); !s) return fail(args.scene + ": " + s.message());
-        const SolidSource solid = solid_source(**world);
-        auto air = (*wind)->step(float(dt), &solid);
-        if (!air) return fail("frame " + std::to_string(frame) + ": wind: " + air.message());
-
-        nlohmann::ordered_json line;
-        const TreeStats& tree = step->tree;
-        const std::uint64_t fragments = step->static_voxelize.fragments + step->dynamic_voxelize.fragments;
-        line["frame"] = frame;
-        line["time"] = t;
-        line["fragments"] = fragments;
-        line["voxels"] = tree.voxels;
-        line["nodes"] = tree.nodes;
-        line["refined"] = tree.refined;
-        line["coarsened"] = tree.coarsened;
-        line["pool_bytes"] = tree.pool_bytes;
-        // Keys (4 bytes) of both lists, plus velocities (8 bytes) of the dynamic list.
-        line["fragment_bytes"] = fragments * 4 + step->dynamic_voxelize.fragments * 8;
-        line["dense_bytes"] = std::uint64_t(grid->res) * grid->res * grid->res * 4;
-        nlohmann::ordered_json ms;
-        for (const auto& [pass, value] : step->ms)
-            ms[std::string(pass)] = value;
-        for (const auto& [pass, value] : air->ms)
-            ms["wind_" + std::string(pass)] = value;
-        line["ms"] = ms;
-        const gpu::WorkCounts& after = (*ctx)->work();
-        line["dispatches"] = after.dispatches - before.dispatches;
-        line["submissions"] = after.submissions - before.submissions;
-        line["waits"] = after.waits - before.waits;
-        line["divergence_before"] = air->divergence_before;
-        line["divergence_after"] = air->divergence_after;
-        line["residual"] = air->residual;
-        line["cycles"] = air->cycles;
-        line["converged"] = air->converged;
-        line["cut_cells"] = air->cut_cells;
-        line["fluid_cells"] = air->fluid_cells;
-        line["sealed_cells"] = air->sealed_cells;
-        line["diverged"] = air->diverged;
-        line["nodes_per_level"] = tree.nodes_per_level;
-        line["exhausted"] = tree.exhausted;
-        line["pool_growths"] = step->pool_growths;
-        line["free_node_blocks"] = tree.free_node_blocks;
-        line["free_mask_blocks"] = tree.free_mask_blocks;
-        line["static_rebuilt"] = step->static_rebuilt;
-        line["rejected"] = step->static_voxelize.rejected + step->dynamic_voxelize.rejected;
-        stats_file << line.dump() << "\n";
+        const std::vector<WindEmitter> emitters = emitters_at(*scene, t);
+        if (Outcome o = system->set_emitters(emitters); !o) return fail(args.scene + ": " + o.message());
+        if (Outcome o = system->step(float(dt)); !o)
+            return fail("frame " + std::to_string(frame) + ": " + o.message());
+        stats_file << stats_line(system->stats(), t).dump() << "\n";
 
         if (frame == 0 || (args.every > 0 && frame % args.every == 0)) {
-            auto voxels = (*world)->tree().leaf_voxels();
-            if (!voxels) return fail(voxels.message());
-            auto velocity = (*wind)->read_cell_velocity();
-            auto solid_fraction = (*wind)->read_solid_fraction();
-            auto pressure = (*wind)->read_pressure();
-            if (!velocity || !solid_fraction || !pressure)
-                return fail("frame " + std::to_string(frame) + ": wind readback failed");
-            vdb::WindGrids grids{scene->domain.cells, scene->domain.cell_size,
-                                 (*wind)->origin(),   *solid_fraction,
-                                 *velocity,           *pressure};
-            const fs::path path = fs::path(args.out) / frame_file(frame);
-            if (Status s = vdb::write_frame_vdb(path, *voxels, *grid, grids); !s) return fail(s.message());
+            const fs::path file = fs::path(args.out) / frame_file(frame);
+            if (Outcome o = system->export_vdb(file.c_str()); !o) return fail(o.message());
         }
         if ((frame + 1) % std::max<std::uint64_t>(1, args.frames / 10) == 0 || frame + 1 == args.frames) {
             const double seconds =
@@ -216,11 +249,9 @@ int run_simulate(const SimulateArgs& args) {
     }
     stats_file.flush();
     if (!stats_file) return fail(args.out + "/stats.jsonl: write failed");
-    if ((*ctx)->validation_messages() > 0)
-        return fail(std::to_string((*ctx)->validation_messages()) +
-                    " Vulkan validation messages; last: " + (*ctx)->last_validation_message());
-    // The cache only saves time: failing to write it does not fail the run.
-    static_cast<void>((*ctx)->save_pipeline_cache());
+    if (args.validation && messages.errors > 0)
+        return fail(std::to_string(messages.errors) +
+                    " Vulkan validation messages; last: " + messages.last_error);
     return 0;
 }
 

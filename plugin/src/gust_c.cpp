@@ -36,6 +36,14 @@ static_assert(GUST_LOG_INFO == static_cast<int>(gust::LogLevel::Info));
 static_assert(GUST_LOG_WARNING == static_cast<int>(gust::LogLevel::Warning));
 static_assert(GUST_LOG_ERROR == static_cast<int>(gust::LogLevel::Error));
 
+static_assert(GUST_ADVECTION_MACCORMACK == static_cast<int>(gust::WindAdvection::MacCormack));
+static_assert(GUST_ADVECTION_SEMI_LAGRANGIAN == static_cast<int>(gust::WindAdvection::SemiLagrangian));
+static_assert(GUST_ADVECTION_NONE == static_cast<int>(gust::WindAdvection::None));
+
+static_assert(GUST_PRESSURE_MULTIGRID_PCG == static_cast<int>(gust::WindPressure::MultigridPCG));
+static_assert(GUST_PRESSURE_MULTIGRID == static_cast<int>(gust::WindPressure::Multigrid));
+static_assert(GUST_PRESSURE_JACOBI == static_cast<int>(gust::WindPressure::Jacobi));
+
 static_assert(GUST_SUBMISSION_OWN_QUEUE == static_cast<int>(gust::Submission::OwnQueue));
 static_assert(GUST_SUBMISSION_HOST_COMMANDS == static_cast<int>(gust::Submission::HostCommands));
 
@@ -310,27 +318,30 @@ gust::HostDevice to_cpp(const gust_host_device& c) {
 
 gust::WindDomain to_cpp(const gust_wind_domain& c) {
     gust::WindDomain out;
-    auto& [cells, cell_size, voxels_per_cell, branching, focus] = out;
+    auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis] = out;
     std::copy_n(c.cells, 3, cells);
     cell_size = c.cell_size;
     voxels_per_cell = c.voxels_per_cell;
     branching = c.branching;
     focus = to_cpp(c.focus);
+    hysteresis = c.hysteresis;
     return out;
 }
 gust_wind_domain to_c(const gust::WindDomain& d) {
-    const auto& [cells, cell_size, voxels_per_cell, branching, focus] = d;
+    const auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis] = d;
     return {.cells = {cells[0], cells[1], cells[2]},
             .cell_size = cell_size,
             .voxels_per_cell = voxels_per_cell,
             .branching = branching,
-            .focus = to_c(focus)};
+            .focus = to_c(focus),
+            .hysteresis = hysteresis};
 }
 
-// The advection is passed on unchecked: System::create rejects unknown ones.
+// The advection and the pressure solver are passed on unchecked: System::create rejects unknown ones.
 gust::WindSettings to_cpp(const gust_wind_settings& c) {
     gust::WindSettings out;
-    auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step] = out;
+    auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step, pressure,
+           max_iterations] = out;
     tolerance = c.tolerance;
     max_cycles = c.max_cycles;
     vorticity = c.vorticity;
@@ -338,18 +349,22 @@ gust::WindSettings to_cpp(const gust_wind_settings& c) {
     advection = to_cpp_enum<gust::WindAdvection>(c.advection);
     max_solid_speed = c.max_solid_speed;
     cycles_per_step = c.cycles_per_step;
+    pressure = to_cpp_enum<gust::WindPressure>(c.pressure);
+    max_iterations = c.max_iterations;
     return out;
 }
 gust_wind_settings to_c(const gust::WindSettings& w) {
-    const auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step] =
-        w;
+    const auto& [tolerance, max_cycles, vorticity, viscosity, advection, max_solid_speed, cycles_per_step,
+                 pressure, max_iterations] = w;
     return {.tolerance = tolerance,
             .max_cycles = max_cycles,
             .vorticity = vorticity,
             .viscosity = viscosity,
             .advection = static_cast<gust_advection>(static_cast<std::int32_t>(advection)),
             .max_solid_speed = max_solid_speed,
-            .cycles_per_step = cycles_per_step};
+            .cycles_per_step = cycles_per_step,
+            .pressure = static_cast<gust_pressure>(static_cast<std::int32_t>(pressure)),
+            .max_iterations = max_iterations};
 }
 
 // `host_device` is the converted c.host (or null); the hooks trampoline into `hooks_in_handle`.
@@ -357,7 +372,7 @@ gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice* host_
                         gust_hooks& hooks_in_handle) {
     gust::SystemDesc out;
     auto& [header_version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-           hooks] = out;
+           hooks, pipeline_cache] = out;
     header_version = c.header_version;
     host = host_device;
     validation = c.validation;
@@ -368,12 +383,13 @@ gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice* host_
     domain = to_cpp(c.domain);
     wind = to_cpp(c.wind);
     hooks = to_cpp(hooks_in_handle);
+    pipeline_cache = c.pipeline_cache;
     return out;
 }
 // The defaults: no host device and no hooks, whatever the C++ ones hold.
 gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_version) {
     const auto& [version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-                 hooks] = d;
+                 hooks, pipeline_cache] = d;
     return {.header_version = header_version,
             .host = nullptr,
             .validation = validation,
@@ -383,7 +399,8 @@ gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_version) {
             .voxelize = static_cast<gust_voxelize_path>(static_cast<std::int32_t>(voxelize)),
             .domain = to_c(domain),
             .wind = to_c(wind),
-            .hooks = {}};
+            .hooks = {},
+            .pipeline_cache = pipeline_cache};
 }
 
 gust::MeshDesc to_cpp(const gust_mesh_desc& c) {
@@ -451,7 +468,7 @@ gust_frame_stats to_c(const gust::FrameStats& f) {
     const auto& [frame, fragments, voxels, nodes, refined, coarsened, pool_bytes, fragment_bytes, dense_bytes,
                  divergence_before, divergence_after, residual, cycles, converged, diverged, sealed_cells,
                  rejected_triangles, dispatches, submissions, waits, cut_cells, fluid_cells, free_node_blocks,
-                 free_mask_blocks, exhausted, static_rebuilt, nodes_per_level, ms] = f;
+                 free_mask_blocks, exhausted, pool_growths, static_rebuilt, nodes_per_level, ms] = f;
     return {.frame = frame,
             .fragments = fragments,
             .voxels = voxels,
@@ -475,6 +492,7 @@ gust_frame_stats to_c(const gust::FrameStats& f) {
             .free_node_blocks = free_node_blocks,
             .free_mask_blocks = free_mask_blocks,
             .exhausted = exhausted,
+            .pool_growths = pool_growths,
             .converged = converged,
             .diverged = diverged,
             .static_rebuilt = static_rebuilt};
@@ -686,6 +704,21 @@ gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, cons
     });
 }
 
+gust_result gust_system_create_moving_instance(gust_system system, gust_mesh mesh, const float transform[16],
+                                               const float previous[16], gust_instance* instance) {
+    return on_system(system, "gust_system_create_moving_instance", [&](gust::System& s) -> gust::Outcome {
+        if (!instance) return invalid("instance (the output) is NULL");
+        *instance = 0;
+        if (!transform) return invalid("transform is NULL");
+        if (!previous) return invalid("previous is NULL");
+        gust::InstanceId id = 0;
+        gust::Outcome outcome =
+            s.create_moving_instance(mesh, to_cpp_matrix(transform), to_cpp_matrix(previous), id);
+        if (outcome) *instance = id;
+        return outcome;
+    });
+}
+
 gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16],
                                       bool teleport) {
     return on_system(system, "gust_system_set_transform", [&](gust::System& s) -> gust::Outcome {
@@ -835,6 +868,14 @@ gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin) {
     return on_system(system, "gust_system_domain_origin", [&](gust::System& s) -> gust::Outcome {
         if (!origin) return invalid("origin (the output) is NULL");
         *origin = to_c(s.domain_origin());
+        return {};
+    });
+}
+
+gust_result gust_system_device_name(gust_system system, const char** name) {
+    return on_system(system, "gust_system_device_name", [&](gust::System& s) -> gust::Outcome {
+        if (!name) return invalid("name (the output) is NULL");
+        *name = s.device_name();
         return {};
     });
 }

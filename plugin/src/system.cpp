@@ -146,7 +146,10 @@ struct System::Impl {
     std::uint64_t frame = 0;
 
     ~Impl() {
+        if (!ctx) return;
         if (sampler) ctx->vk().vkDestroySampler(ctx->device(), sampler, ctx->allocator());
+        // SystemDesc::pipeline_cache: the cache only saves time, so failing to write it fails nothing.
+        static_cast<void>(ctx->save_pipeline_cache());
     }
 
     void log(LogLevel level, const std::string& message) const {
@@ -204,6 +207,10 @@ struct System::Impl {
     /// for later frames.
     Outcome collect(Slot& slot, const gpu::WorkCounts& work);
 
+    /// create_instance() and create_moving_instance(): `previous` (or null) is the transform one step before.
+    Outcome add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,
+                         InstanceId& id);
+
     /// The mesh `id`, or null with `error` set.
     Mesh* find_mesh(MeshId id, Outcome& error) {
         auto it = meshes.find(id);
@@ -260,6 +267,7 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::mem
     own.device = desc.device ? desc.device : "";
     own.on_message = on_message;
     own.memory = memory;
+    if (desc.pipeline_cache) own.pipeline_cache = desc.pipeline_cache;
     auto ctx = gpu::Context::create(own);
     if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
     out = std::move(*ctx);
@@ -277,11 +285,33 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
     out.vorticity = desc.wind.vorticity;
     out.viscosity = desc.wind.viscosity;
     out.max_solid_speed = desc.wind.max_solid_speed;
-    if (desc.wind.advection != WindAdvection::MacCormack &&
-        desc.wind.advection != WindAdvection::SemiLagrangian)
-        return invalid("wind.advection must be MacCormack or SemiLagrangian");
-    out.advection =
-        desc.wind.advection == WindAdvection::MacCormack ? Advection::MacCormack : Advection::SemiLagrangian;
+    out.max_iterations = desc.wind.max_iterations;
+    switch (desc.wind.advection) {
+    case WindAdvection::MacCormack:
+        out.advection = Advection::MacCormack;
+        break;
+    case WindAdvection::SemiLagrangian:
+        out.advection = Advection::SemiLagrangian;
+        break;
+    case WindAdvection::None:
+        out.advection = Advection::None;
+        break;
+    default:
+        return invalid("wind.advection must be MacCormack, SemiLagrangian or None");
+    }
+    switch (desc.wind.pressure) {
+    case WindPressure::MultigridPCG:
+        out.pressure = PressureSolver::MultigridPCG;
+        break;
+    case WindPressure::Multigrid:
+        out.pressure = PressureSolver::Multigrid;
+        break;
+    case WindPressure::Jacobi:
+        out.pressure = PressureSolver::Jacobi;
+        break;
+    default:
+        return invalid("wind.pressure must be MultigridPCG, Multigrid or Jacobi");
+    }
     if (!finite(d.focus)) return invalid("domain.focus must be finite");
     if (!std::isfinite(d.cell_size) || !(d.cell_size > 0.0f)) return invalid("domain.cell_size must be > 0");
     out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
@@ -349,6 +379,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         WorldDesc world_desc;
         world_desc.grid = *grid;
         world_desc.tree.branching = b;
+        world_desc.tree.hysteresis = desc.domain.hysteresis;
         world_desc.method = desc.voxelize == VoxelizePath::Raster    ? VoxelizeMethod::Raster
                             : desc.voxelize == VoxelizePath::Compute ? VoxelizeMethod::Compute
                                                                      : VoxelizeMethod::Auto;
@@ -519,21 +550,34 @@ Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, 
     });
 }
 
-Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
+Outcome System::Impl::add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,
+                                   InstanceId& id) {
     id = 0;
     Outcome error;
-    Impl::Mesh* m = impl_->find_mesh(mesh, error);
+    Mesh* m = find_mesh(mesh, error);
     if (!m) return error;
     if (!finite(transform)) return invalid("transform must be finite");
+    if (previous && !finite(*previous)) return invalid("previous must be finite");
     return guarded([&]() -> Outcome {
-        const InstanceId next = impl_->next_id++;
+        const InstanceId next = next_id++;
         const bool dynamic = moving || m->deforming;
-        impl_->instances.emplace(next, Impl::Instance{mesh, to_glm(transform), std::nullopt, dynamic});
+        std::optional<glm::mat4> prev;
+        if (previous) prev = to_glm(*previous);
+        instances.emplace(next, Instance{mesh, to_glm(transform), prev, dynamic});
         ++m->instances;
-        if (!dynamic) impl_->static_dirty = true;
+        if (!dynamic) static_dirty = true;
         id = next;
         return {};
     });
+}
+
+Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
+    return impl_->add_instance(mesh, transform, nullptr, moving, id);
+}
+
+Outcome System::create_moving_instance(MeshId mesh, const Mat4& transform, const Mat4& previous,
+                                       InstanceId& id) {
+    return impl_->add_instance(mesh, transform, &previous, true, id);
 }
 
 Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool teleport) {
@@ -660,6 +704,7 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
     st.free_node_blocks = tree.free_node_blocks;
     st.free_mask_blocks = tree.free_mask_blocks;
     st.exhausted = tree.exhausted;
+    st.pool_growths = world_frame.pool_growths;
     st.static_rebuilt = world_frame.static_rebuilt;
     st.nodes_per_level.assign(tree.nodes_per_level.begin(), tree.nodes_per_level.end());
     st.ms.assign(world_frame.ms.begin(), world_frame.ms.end());
@@ -897,6 +942,9 @@ const FrameStats& System::stats() const {
 }
 Vec3 System::domain_origin() const {
     return to_vec3(impl_->solver->origin());
+}
+const char* System::device_name() const {
+    return impl_->ctx->info().name.c_str();
 }
 
 Outcome System::export_vdb(const char* path) {

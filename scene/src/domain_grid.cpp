@@ -11,22 +11,32 @@ SolverDesc domain_solver_desc(const DomainDesc& domain) {
     return desc;
 }
 
-SolverDesc solver_desc(const SceneDesc& scene) {
-    SolverDesc desc = domain_solver_desc(scene.domain);
+SystemDesc system_desc(const SceneDesc& scene) {
+    SystemDesc desc;
+    const DomainDesc& d = scene.domain;
+    for (int a = 0; a < 3; ++a)
+        desc.domain.cells[a] = d.cells[a];
+    desc.domain.cell_size = d.cell_size;
+    desc.domain.voxels_per_cell = d.voxels_per_cell;
+    desc.domain.branching = d.branching;
+    desc.domain.hysteresis = d.hysteresis;
+    // The System centres its domain on the focus: min corner center − cells·cell_size/2, as the scene's.
+    desc.domain.focus = {d.center.x, d.center.y, d.center.z};
     const SolverSettings& s = scene.solver;
-    desc.advection = s.advection == "none"         ? Advection::None
-                     : s.advection == "maccormack" ? Advection::MacCormack
-                                                   : Advection::SemiLagrangian;
-    desc.pressure = s.pressure == "jacobi"      ? PressureSolver::Jacobi
-                    : s.pressure == "multigrid" ? PressureSolver::Multigrid
-                                                : PressureSolver::MultigridPCG;
-    desc.tolerance = s.tolerance;
-    desc.max_cycles = s.max_cycles;
-    desc.cycles_per_step = s.cycles_per_step;
-    desc.max_iterations = s.max_iterations;
-    desc.vorticity = s.vorticity;
-    desc.viscosity = s.viscosity;
-    desc.max_solid_speed = s.max_solid_speed;
+    WindSettings& w = desc.wind;
+    w.advection = s.advection == "none"         ? WindAdvection::None
+                  : s.advection == "maccormack" ? WindAdvection::MacCormack
+                                                : WindAdvection::SemiLagrangian;
+    w.pressure = s.pressure == "jacobi"      ? WindPressure::Jacobi
+                 : s.pressure == "multigrid" ? WindPressure::Multigrid
+                                             : WindPressure::MultigridPCG;
+    w.tolerance = s.tolerance;
+    w.max_cycles = s.max_cycles;
+    w.cycles_per_step = s.cycles_per_step;
+    w.max_iterations = s.max_iterations;
+    w.vorticity = s.vorticity;
+    w.viscosity = s.viscosity;
+    w.max_solid_speed = s.max_solid_speed;
     return desc;
 }
 

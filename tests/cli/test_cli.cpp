@@ -524,5 +524,139 @@ TEST(CliSimulate, keepsItsPipelinesInTheSameCache) {
     fs::remove_all(dir);
 }
 
+// docs/design.md "One frame": the frame is recorded once, whoever drives it, and a blocking step is one
+// submission and one host wait. `gust simulate` drives it through gust::System, so every stats line says 1
+// and 1, with a skinned, keyframed character and nine static bunnies sharing one mesh; and every line holds
+// every key simulate writes.
+TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
+    const fs::path dir = fresh_dir("simulate_one_submission");
+    const CliRun run = gust("simulate " + asset("scenes/fox_bunnies.json") +
+                            " --frames 4 --validation --out " + (dir / "out").string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    std::ifstream stats(dir / "out" / "stats.jsonl");
+    std::string line;
+    int frames = 0;
+    while (std::getline(stats, line)) {
+        const auto j = nlohmann::json::parse(line);
+        for (const char* key : {"frame",
+                                "time",
+                                "fragments",
+                                "voxels",
+                                "nodes",
+                                "refined",
+                                "coarsened",
+                                "pool_bytes",
+                                "fragment_bytes",
+                                "dense_bytes",
+                                "ms",
+                                "dispatches",
+                                "submissions",
+                                "waits",
+                                "divergence_before",
+                                "divergence_after",
+                                "residual",
+                                "cycles",
+                                "converged",
+                                "cut_cells",
+                                "fluid_cells",
+                                "sealed_cells",
+                                "diverged",
+                                "nodes_per_level",
+                                "exhausted",
+                                "pool_growths",
+                                "free_node_blocks",
+                                "free_mask_blocks",
+                                "static_rebuilt",
+                                "rejected"})
+            EXPECT_TRUE(j.contains(key)) << key << " in " << line;
+        EXPECT_EQ(j["submissions"], 1) << line;
+        EXPECT_EQ(j["waits"], 1) << line;
+        EXPECT_GT(j["dispatches"].get<int>(), 10) << line;
+        EXPECT_EQ(j["static_rebuilt"], frames == 0) << line;
+        ++frames;
+    }
+    EXPECT_EQ(frames, 4);
+    fs::remove_all(dir);
+}
+
+/// The stats lines of `gust simulate` (with the validation layer) of a scene in `dir`: a static box and a
+/// box that stands at x = -4 m, then jumps to x = +4 m at t = 0.1 s (frame 2), in an 8 m/s wind with an
+/// omni emitter, with `solver` as the scene's "solver" object and `hysteresis` as the domain's.
+std::vector<nlohmann::json> simulate_boxes(const fs::path& dir, const std::string& solver, int hysteresis,
+                                           int frames) {
+    std::ofstream(dir / "box.obj") << "v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\n"
+                                      "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
+                                      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::ofstream(dir / "scene.json") << R"({
+      "dt": 0.05,
+      "domain": {"center": [0, 0, 0], "cells": [16, 8, 16], "cell_size": 1.0, "voxels_per_cell": 2,
+                 "hysteresis": )" << hysteresis
+                                      << R"(},
+      "ambient": {"velocity": [8, 0, 0]},
+      "solver": )" << solver << R"(,
+      "objects": [
+        {"mesh": "box.obj", "static": true, "transform": {"translate": [0, 0, -4]}},
+        {"mesh": "box.obj", "keyframes": [{"t": 0.0, "translate": [-4, 0, 3]},
+                                          {"t": 0.1, "translate": [4, 0, 3], "teleport": true}]}],
+      "emitters": [{"type": "omni", "position": [0, 0, 3], "radius": 3, "strength": 6}]})";
+    const fs::path out = dir / "out";
+    fs::remove_all(out);
+    const CliRun run = gust("simulate " + (dir / "scene.json").string() + " --frames " +
+                            std::to_string(frames) + " --validation --out " + out.string());
+    EXPECT_EQ(run.code, 0) << run.err;
+    std::vector<nlohmann::json> lines;
+    std::ifstream stats(out / "stats.jsonl");
+    for (std::string line; std::getline(stats, line);)
+        lines.push_back(nlohmann::json::parse(line));
+    EXPECT_EQ(lines.size(), std::size_t(frames));
+    return lines;
+}
+
+/// The first frame whose tree coarsened a block (-1 if none).
+int first_coarsening(const std::vector<nlohmann::json>& lines) {
+    for (std::size_t f = 0; f < lines.size(); ++f)
+        if (lines[f]["coarsened"].get<int>() > 0) return int(f);
+    return -1;
+}
+
+// The scene's solver settings reach the solver through gust::System, each seen in what it changes: Jacobi
+// runs iterations in blocks of 8 (past max_cycles, which only bounds V-cycles); plain multigrid records
+// fewer dispatches than MGPCG, whose every V-cycle ends in a conjugate-gradient update; no advection records
+// fewer than MacCormack's three passes and gives another flow than semi-Lagrangian advection; and the tree
+// keeps the blocks the jumping box left for `hysteresis` frames, so two more frames of it coarsen two frames
+// later.
+TEST(CliSimulate, takesTheScenesPressureSolverAdvectionAndHysteresis) {
+    const fs::path dir = fresh_dir("simulate_settings");
+    const int frames = 6;
+    const std::string budget = R"("cycles_per_step": 3, "tolerance": 1e-7)";
+    const auto mgpcg = simulate_boxes(dir, "{" + budget + "}", 1, frames);
+    const auto multigrid = simulate_boxes(dir, R"({"pressure": "multigrid", )" + budget + "}", 1, frames);
+    const auto jacobi = simulate_boxes(
+        dir, R"({"pressure": "jacobi", "max_iterations": 40, "max_cycles": 2, "tolerance": 1e-7})", 1,
+        frames);
+    const auto none = simulate_boxes(dir, R"({"advection": "none", )" + budget + "}", 1, frames);
+    const auto semi = simulate_boxes(dir, R"({"advection": "semi_lagrangian", )" + budget + "}", 1, frames);
+    const auto longer = simulate_boxes(dir, "{" + budget + "}", 3, frames);
+    ASSERT_TRUE(mgpcg.size() == std::size_t(frames) && multigrid.size() == mgpcg.size() &&
+                jacobi.size() == mgpcg.size() && none.size() == mgpcg.size() && semi.size() == mgpcg.size() &&
+                longer.size() == mgpcg.size());
+    for (int f = 0; f < frames; ++f) {
+        const int cycles = jacobi[f]["cycles"].get<int>();
+        EXPECT_EQ(cycles % 8, 0) << "frame " << f << ": Jacobi iterations come in blocks of 8";
+        EXPECT_GT(cycles, 2) << "frame " << f << ": more than max_cycles";
+        EXPECT_LE(cycles, 40) << "frame " << f;
+        EXPECT_LE(mgpcg[f]["cycles"].get<int>(), 3) << "frame " << f << ": the budget of V-cycles";
+        EXPECT_LT(multigrid[f]["dispatches"].get<int>(), mgpcg[f]["dispatches"].get<int>()) << "frame " << f;
+        EXPECT_LT(none[f]["dispatches"].get<int>(), mgpcg[f]["dispatches"].get<int>()) << "frame " << f;
+        EXPECT_EQ(none[f]["dispatches"], semi[f]["dispatches"]) << "frame " << f << ": one pass each";
+    }
+    EXPECT_NE(none[frames - 1]["divergence_before"], semi[frames - 1]["divergence_before"])
+        << "advection carries the emitter's and the boxes' flow; without it the flow differs";
+    const int early = first_coarsening(mgpcg), late = first_coarsening(longer);
+    ASSERT_GE(early, 2) << "the box leaves its blocks at frame 2";
+    EXPECT_EQ(late, early + 2) << "hysteresis 3 keeps the blocks two frames longer than hysteresis 1";
+    fs::remove_all(dir);
+}
+
 } // namespace
 } // namespace gust::test

@@ -3,10 +3,13 @@
 #include "system_test_support.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <gtest/gtest.h>
 #include <gust/gust.hpp>
 #include <limits>
+#include <string>
+#include <unistd.h>
 #if GUST_WITH_OPENVDB
 #include <openvdb/openvdb.h>
 #endif
@@ -32,6 +35,9 @@ TEST_F(SystemTest, stepsASceneAndReportsTheTreeAndTheSolve) {
     EXPECT_EQ(stats.submissions, 1u);
     EXPECT_EQ(stats.waits, 1u);
     EXPECT_GT(stats.dispatches, 10u);
+    EXPECT_EQ(stats.pool_growths, 0u) << "the pools hold the scene";
+    ASSERT_NE(system_->device_name(), nullptr);
+    EXPECT_GT(std::strlen(system_->device_name()), 0u);
 }
 
 // Growth after an overflow without extra waits: two slabs across a 16 m x 16 m domain need about 8,192 leaf
@@ -61,7 +67,7 @@ TEST(SystemGrowth, aTreePoolThatRunsOutGrowsForTheNextFramesWithoutExtraWaits) {
         ASSERT_TRUE(system->create_instance(mesh, slab, false, id));
     }
     std::vector<std::uint64_t> voxels;
-    std::vector<std::uint32_t> exhausted;
+    std::vector<std::uint32_t> exhausted, growths;
     for (int f = 0; f < 5; ++f) {
         ASSERT_TRUE(system->step(0.05f));
         const FrameStats& st = system->stats();
@@ -69,10 +75,14 @@ TEST(SystemGrowth, aTreePoolThatRunsOutGrowsForTheNextFramesWithoutExtraWaits) {
         EXPECT_EQ(st.waits, 1u) << "frame " << f;
         voxels.push_back(st.voxels);
         exhausted.push_back(st.exhausted);
+        growths.push_back(st.pool_growths);
     }
     EXPECT_GT(exhausted.front(), 0u) << "the first frame needs more than the initial pools";
     EXPECT_GE(watch.warnings, 1) << "a partial frame is reported";
     EXPECT_EQ(exhausted.back(), 0u);
+    for (int f = 0; f < 5; ++f)
+        EXPECT_EQ(growths[f], exhausted[f] > 0 ? 1u : 0u)
+            << "frame " << f << ": a frame that ran out grows once";
     EXPECT_EQ(voxels[3], voxels[4]) << "once grown, every frame holds the same slabs";
     EXPECT_GT(voxels[4], voxels[0]) << "the grown tree holds what the first frame lost";
     EXPECT_GT(voxels[4], 2u * 250u * 250u) << "both slabs, about 256 x 256 voxels each";
@@ -119,6 +129,79 @@ TEST_F(SystemTest, theDefaultIsAFixedBudgetOfTwoVCyclesAStep) {
         left.push_back(s.divergence_after);
     }
     EXPECT_LT(left.back(), 0.5f * left[1]) << "the warm start carries what each step left";
+}
+
+// An instance created in motion (create_moving_instance) pushes still air in its first step, as its motion
+// from `previous` says (0.5 m in 0.05 s: 10 m/s); one created and then moved (create_instance, set_transform)
+// pushes none then, since it has no motion before its first step: the air stays still, without divergence.
+TEST_F(SystemTest, anInstanceCreatedInMotionPushesTheAirInItsFirstStep) {
+    const auto first_divergence = [&](System& system, bool in_motion) {
+        MeshId mesh = 0;
+        EXPECT_TRUE(system.create_mesh(box_.desc(), mesh));
+        InstanceId box = 0;
+        const Mat4 at = translation(0.5f, 4.0f, 0.0f), before = translation(0.0f, 4.0f, 0.0f);
+        if (in_motion) {
+            EXPECT_TRUE(system.create_moving_instance(mesh, at, before, box));
+        } else {
+            EXPECT_TRUE(system.create_instance(mesh, before, true, box));
+            EXPECT_TRUE(system.set_transform(box, at));
+        }
+        EXPECT_TRUE(system.step(0.05f));
+        return system.stats().divergence_before;
+    };
+    EXPECT_GT(first_divergence(*system_, true), 1.0f) << "1/s: a 10 m/s surface against air at rest";
+    std::unique_ptr<System> placed;
+    ASSERT_TRUE(System::create(small_desc(watch_), placed));
+    EXPECT_LT(first_divergence(*placed, false), 1e-6f);
+
+    const Mat4 nan = translation(kNaN, 0.0f, 0.0f);
+    MeshId mesh = 0;
+    ASSERT_TRUE(system_->create_mesh(box_.desc(), mesh));
+    InstanceId id = 7;
+    EXPECT_EQ(system_->create_moving_instance(mesh, Mat4{}, nan, id).code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(id, 0u);
+    EXPECT_EQ(system_->create_moving_instance(mesh, nan, Mat4{}, id).code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(system_->create_moving_instance(0, Mat4{}, Mat4{}, id).code(), ErrorCode::InvalidHandle);
+}
+
+// The Jacobi baseline (WindSettings::pressure) relaxes in blocks of 8 iterations up to max_iterations, which
+// max_cycles (a bound on V-cycles) does not cap; it starts from zero every step, so 24 iterations leave the
+// solve short of a tight tolerance.
+TEST_F(SystemTest, theJacobiBaselineRunsUpToMaxIterationsInBlocksOfEight) {
+    SystemDesc desc = small_desc(watch_);
+    desc.wind.pressure = WindPressure::Jacobi;
+    desc.wind.max_iterations = 24;
+    desc.wind.max_cycles = 2;
+    desc.wind.tolerance = 1e-7f;
+    std::unique_ptr<System> jacobi;
+    ASSERT_TRUE(System::create(desc, jacobi));
+    run_scene(*jacobi, 2);
+    const FrameStats& stats = jacobi->stats();
+    EXPECT_EQ(stats.cycles, 24u);
+    EXPECT_FALSE(stats.converged);
+    EXPECT_LT(stats.divergence_after, stats.divergence_before);
+}
+
+// SystemDesc::pipeline_cache: the file is written when the System is destroyed (not before), and a System
+// created from it runs as before.
+TEST(SystemPipelineCache, isWrittenWhenTheSystemIsDestroyedAndServesTheNext) {
+    const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                       ("gust_system_pipelines_" + std::to_string(::getpid()) + ".bin");
+    std::filesystem::remove(file);
+    for (int run = 0; run < 2; ++run) {
+        Watch watch;
+        SystemDesc desc = small_desc(watch);
+        desc.pipeline_cache = file.c_str();
+        std::unique_ptr<System> system;
+        ASSERT_TRUE(System::create(desc, system));
+        EXPECT_EQ(std::filesystem::exists(file), run > 0) << "run " << run;
+        ASSERT_TRUE(system->step(0.05f));
+        system.reset();
+        EXPECT_EQ(watch.errors + watch.warnings, 0) << watch.last;
+        ASSERT_TRUE(std::filesystem::is_regular_file(file)) << "run " << run;
+        EXPECT_GT(std::filesystem::file_size(file), 0u);
+    }
+    std::filesystem::remove(file);
 }
 
 TEST_F(SystemTest, pointsOutsideTheDomainGetTheAmbientWindExactly) {
@@ -357,6 +440,16 @@ TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {
         desc.frames_in_flight = frames;
         EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument) << frames << " in flight";
     }
+    desc = small_desc(watch);
+    desc.wind.advection = WindAdvection(3);
+    EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument);
+    desc = small_desc(watch);
+    desc.wind.pressure = WindPressure(3);
+    EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument);
+    desc = small_desc(watch);
+    desc.wind.pressure = WindPressure::Jacobi;
+    desc.wind.max_iterations = 0;
+    EXPECT_EQ(System::create(desc, system).code(), ErrorCode::InvalidArgument);
     desc = small_desc(watch);
     desc.device = "no such device";
     EXPECT_EQ(System::create(desc, system).code(), ErrorCode::DeviceUnsupported);

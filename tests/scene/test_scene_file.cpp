@@ -173,16 +173,51 @@ TEST_F(SceneFile, readsMovingMotorsAndSolverSettings) {
     EXPECT_EQ(scene.solver.viscosity, 0.01f);
 }
 
-TEST_F(SceneFile, pressureSolverNamesMapOntoTheSolversDescription) {
-    EXPECT_EQ(gust::solver_desc(load_ok("{}")).pressure, gust::PressureSolver::MultigridPCG);
-    const std::pair<const char*, gust::PressureSolver> names[] = {
-        {"mgpcg", gust::PressureSolver::MultigridPCG},
-        {"multigrid", gust::PressureSolver::Multigrid},
-        {"jacobi", gust::PressureSolver::Jacobi}};
+TEST_F(SceneFile, pressureSolverAndAdvectionNamesMapOntoTheSystemsSettings) {
+    EXPECT_EQ(gust::system_desc(load_ok("{}")).wind.pressure, gust::WindPressure::MultigridPCG);
+    const std::pair<const char*, gust::WindPressure> names[] = {{"mgpcg", gust::WindPressure::MultigridPCG},
+                                                                {"multigrid", gust::WindPressure::Multigrid},
+                                                                {"jacobi", gust::WindPressure::Jacobi}};
     for (const auto& [name, solver] : names) {
         const gust::SceneDesc scene = load_ok(std::string(R"({"solver": {"pressure": ")") + name + "\"}}");
-        EXPECT_EQ(gust::solver_desc(scene).pressure, solver) << name;
+        EXPECT_EQ(gust::system_desc(scene).wind.pressure, solver) << name;
     }
+    const std::pair<const char*, gust::WindAdvection> advections[] = {
+        {"maccormack", gust::WindAdvection::MacCormack},
+        {"semi_lagrangian", gust::WindAdvection::SemiLagrangian},
+        {"none", gust::WindAdvection::None}};
+    for (const auto& [name, advection] : advections) {
+        const gust::SceneDesc scene = load_ok(std::string(R"({"solver": {"advection": ")") + name + "\"}}");
+        EXPECT_EQ(gust::system_desc(scene).wind.advection, advection) << name;
+    }
+}
+
+// The System centres its domain on the focus: the scene's center, so its min corner is the scene's
+// center − cells·cell_size/2; the rest of the domain and the numerics are the file's.
+TEST_F(SceneFile, describesTheSystemThatRunsIt) {
+    const gust::SceneDesc scene = load_ok(R"({
+      "domain": {"center": [1, 2, 3], "cells": [16, 8, 24], "cell_size": 0.5, "voxels_per_cell": 2,
+                 "branching": 2, "hysteresis": 3},
+      "solver": {"tolerance": 0.001, "max_cycles": 5, "cycles_per_step": 4, "max_iterations": 100,
+                 "vorticity": 0.5, "viscosity": 0.01}})");
+    const gust::SystemDesc desc = gust::system_desc(scene);
+    EXPECT_EQ(desc.domain.cells[0], 16u);
+    EXPECT_EQ(desc.domain.cells[1], 8u);
+    EXPECT_EQ(desc.domain.cells[2], 24u);
+    EXPECT_EQ(desc.domain.cell_size, 0.5f);
+    EXPECT_EQ(desc.domain.voxels_per_cell, 2u);
+    EXPECT_EQ(desc.domain.branching, 2u);
+    EXPECT_EQ(desc.domain.hysteresis, 3u);
+    EXPECT_EQ(desc.domain.focus.x, 1.0f);
+    EXPECT_EQ(desc.domain.focus.y, 2.0f);
+    EXPECT_EQ(desc.domain.focus.z, 3.0f);
+    EXPECT_EQ(desc.wind.tolerance, 1e-3f);
+    EXPECT_EQ(desc.wind.max_cycles, 5u);
+    EXPECT_EQ(desc.wind.cycles_per_step, 4u);
+    EXPECT_EQ(desc.wind.max_iterations, 100u);
+    EXPECT_EQ(desc.wind.vorticity, 0.5f);
+    EXPECT_EQ(desc.wind.viscosity, 0.01f);
+    EXPECT_EQ(gust::system_desc(load_ok("{}")).domain.hysteresis, 8u);
 }
 
 TEST_F(SceneFile, resolvesAbsoluteMeshPathsAsGiven) {
@@ -309,15 +344,15 @@ TEST_F(SceneFile, readsTeleportKeysAndTheSolidSpeedLimit) {
         {"t": 0, "translate": [-10, 0, 0]}, {"t": 1, "translate": [10, 0, 0], "teleport": true}]}]})");
     EXPECT_FALSE(scene.objects[0].keyframes[0].teleport);
     EXPECT_TRUE(scene.objects[0].keyframes[1].teleport);
-    EXPECT_EQ(gust::solver_desc(scene).max_solid_speed, 12.5f);
-    EXPECT_EQ(gust::solver_desc(load_ok("{}")).max_solid_speed, 50.0f);
-    EXPECT_EQ(gust::solver_desc(load_ok("{}")).advection, gust::Advection::MacCormack);
+    EXPECT_EQ(gust::system_desc(scene).wind.max_solid_speed, 12.5f);
+    EXPECT_EQ(gust::system_desc(load_ok("{}")).wind.max_solid_speed, 50.0f);
+    EXPECT_EQ(gust::system_desc(load_ok("{}")).wind.advection, gust::WindAdvection::MacCormack);
 }
 
 // Scene files are for tools: the solve runs to the tolerance unless the file names a budget.
 TEST_F(SceneFile, readsAFixedBudgetOfVCyclesAndDefaultsToTheTolerance) {
-    EXPECT_EQ(gust::solver_desc(load_ok(R"({"solver": {"cycles_per_step": 3}})")).cycles_per_step, 3u);
-    EXPECT_EQ(gust::solver_desc(load_ok("{}")).cycles_per_step, 0u);
+    EXPECT_EQ(gust::system_desc(load_ok(R"({"solver": {"cycles_per_step": 3}})")).wind.cycles_per_step, 3u);
+    EXPECT_EQ(gust::system_desc(load_ok("{}")).wind.cycles_per_step, 0u);
 }
 
 // A "teleport" key holds its predecessor's placement until its own time, then jumps: no frame sees the

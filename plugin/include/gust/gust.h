@@ -34,7 +34,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 4
+#define GUST_VERSION_MINOR 5
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -127,15 +127,24 @@ typedef struct gust_wind_domain {
     uint32_t voxels_per_cell; ///< voxels of the solid boundary per cell per axis, 1..8
     uint32_t branching;       ///< the voxel tree's branching per axis: 2, 4 or 8
     gust_vec3 focus;          ///< the domain's first centre (player or camera), world m
+    uint32_t hysteresis;      ///< steps a tree node stays refined after a moving surface left it (default 8)
 } gust_wind_domain;
 
-/// Numerics of the wind (the defaults suit game wind; docs/solver.md explains each).
 /// How the wind carries itself along (gust::WindAdvection).
 typedef enum gust_advection {
     GUST_ADVECTION_MACCORMACK = 0,      ///< second order, clamped (the default)
     GUST_ADVECTION_SEMI_LAGRANGIAN = 1, ///< first order: cheaper, smooths the flow next to obstacles
+    GUST_ADVECTION_NONE = 2,            ///< the air is not carried, only forced (tests, studies)
 } gust_advection;
 
+/// How the pressure equation is solved (gust::WindPressure).
+typedef enum gust_pressure {
+    GUST_PRESSURE_MULTIGRID_PCG = 0, ///< conjugate gradients preconditioned by a V-cycle each (the default)
+    GUST_PRESSURE_MULTIGRID = 1,     ///< multigrid V-cycles alone
+    GUST_PRESSURE_JACOBI = 2,        ///< the baseline: up to max_iterations Jacobi sweeps a step, from zero
+} gust_pressure;
+
+/// Numerics of the wind (the defaults suit game wind; docs/solver.md explains each).
 typedef struct gust_wind_settings {
     float tolerance;          ///< relative residual the pressure solve stops at
     uint32_t max_cycles;      ///< V-cycles per step at most
@@ -144,6 +153,8 @@ typedef struct gust_wind_settings {
     gust_advection advection; ///< GUST_ADVECTION_MACCORMACK by default
     float max_solid_speed;    ///< m/s, in (0, 256]: the fastest a moving surface pushes air (default 50)
     uint32_t cycles_per_step; ///< V-cycles every step runs (default 2); 0: until the tolerance
+    gust_pressure pressure;   ///< GUST_PRESSURE_MULTIGRID_PCG by default
+    uint32_t max_iterations;  ///< Jacobi only: iterations a step at most, 1..1000000 (default 4000)
 } gust_wind_settings;
 
 /// How a system's GPU work reaches a queue.
@@ -171,6 +182,9 @@ typedef struct gust_system_desc {
     gust_wind_domain domain;      ///< the simulated box
     gust_wind_settings wind;      ///< solver numerics
     gust_hooks hooks;             ///< host hooks (copied; the functions must stay valid until destroy)
+    /// Own device: a pipeline cache file, read in create (when it holds this device's cache) and written by
+    /// gust_system_destroy, so the next process need not compile its pipelines; NULL keeps it in memory.
+    const char* pipeline_cache;
 } gust_system_desc;
 
 /// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices; read during the call.
@@ -236,7 +250,7 @@ typedef struct gust_frame_stats {
     float divergence_before;     ///< max |divergence| before projection, 1/s
     float divergence_after;      ///< max |divergence| after projection, 1/s
     float residual;              ///< max |residual| at the solve's last check, 1/s
-    uint32_t cycles;             ///< V-cycles (or iterations) the pressure solve ran
+    uint32_t cycles;             ///< V-cycles (Jacobi: iterations) the pressure solve ran
     uint32_t sealed_cells;       ///< cells whose air is sealed inside solids (solid for the wind)
     uint32_t rejected_triangles; ///< triangles with non-finite vertices after transform this frame
     uint64_t dispatches;         ///< GPU dispatches and draws the step recorded (indirect ones included)
@@ -247,6 +261,7 @@ typedef struct gust_frame_stats {
     uint32_t free_node_blocks;   ///< tree node blocks on the free list
     uint32_t free_mask_blocks;   ///< tree leaf-mask blocks on the free list
     uint32_t exhausted;          ///< refinements refused by a full pool (that frame's solids were partial)
+    uint32_t pool_growths;       ///< times the tree's pools grew because they ran out in this step
     bool converged;              ///< the pressure solve reached the tolerance
     bool diverged;               ///< the solve diverged and was stopped; the step projected nothing
     bool static_rebuilt;         ///< the static set was voxelized again
@@ -346,6 +361,12 @@ gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, 
 gust_result gust_system_create_instance(gust_system system, gust_mesh mesh, const float transform[16],
                                         bool moving, gust_instance* instance);
 
+/// Places a moving instance already in motion: `previous` (16 finite floats) is its transform one step
+/// before, so its first step's surfaces move as that motion does (gust_system_create_instance's first step
+/// moves none). `*instance` receives its id.
+gust_result gust_system_create_moving_instance(gust_system system, gust_mesh mesh, const float transform[16],
+                                               const float previous[16], gust_instance* instance);
+
 /// Sets an instance's column-major mesh-to-world transform (16 finite floats). `teleport`: the change is a
 /// jump (a respawn, a cut), so the next step moves the solid without pushing air.
 gust_result gust_system_set_transform(gust_system system, gust_instance instance, const float transform[16],
@@ -412,6 +433,10 @@ gust_result gust_system_stats_pass(gust_system system, uint32_t index, const cha
 
 /// `*origin` receives the domain's min corner (world m) after the last step.
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
+
+/// `*name` receives the name of the Vulkan device the system runs on (owned by the system, valid until
+/// gust_system_destroy).
+gust_result gust_system_device_name(gust_system system, const char** name);
 
 /// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; docs/design.md
 /// layout); GUST_ERROR_UNSUPPORTED when built without OpenVDB (GUST_WITH_OPENVDB=OFF).

@@ -21,7 +21,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 4;
+inline constexpr std::uint32_t kVersionMinor = 5;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -121,12 +121,23 @@ struct WindDomain {
     std::uint32_t voxels_per_cell = 4;     ///< voxels of the solid boundary per cell per axis, 1..8
     std::uint32_t branching = 4;           ///< the voxel tree's branching per axis: 2, 4 or 8
     Vec3 focus{};                          ///< the domain's first centre (player or camera)
+    /// Steps a tree node stays refined after a moving or deforming surface last reached it (0: coarsened at
+    /// the next step); longer keeps the tree steady under surfaces that come and go, at the cost of nodes.
+    std::uint32_t hysteresis = 8;
 };
 
 /// How the wind carries itself along (docs/solver.md "Advection").
 enum class WindAdvection : std::int32_t {
     MacCormack = 0,     ///< second order, clamped: keeps the speed-up beside obstacles over many steps
     SemiLagrangian = 1, ///< first order: a third of the cost, smooths the flow next to obstacles
+    None = 2,           ///< not carried, only forced (emitters, ambient wind, confinement): tests, studies
+};
+
+/// How the pressure equation is solved (docs/solver.md "Projection").
+enum class WindPressure : std::int32_t {
+    MultigridPCG = 0, ///< conjugate gradients, a multigrid V-cycle as preconditioner (McAdams et al. 2010)
+    Multigrid = 1,    ///< multigrid V-cycles alone
+    Jacobi = 2,       ///< the baseline: up to max_iterations sweeps from zero a step (slow; comparisons)
 };
 
 /// Numerics of the wind (defaults suit game wind; docs/solver.md explains each).
@@ -143,6 +154,10 @@ struct WindSettings {
     /// into the next (docs/solver.md "Per-frame budget"). 0: each step runs until `tolerance` (at most
     /// `max_cycles`), as tools and tests want.
     std::uint32_t cycles_per_step = 2;
+    WindPressure pressure = WindPressure::MultigridPCG;
+    /// Jacobi only: iterations per step at most, 1..1000000 (run in blocks of 8, each followed by a check
+    /// against `tolerance`; the multigrid solvers ignore it and take max_cycles and cycles_per_step).
+    std::uint32_t max_iterations = 4000;
 };
 
 /// How a System's GPU work reaches a queue.
@@ -172,6 +187,11 @@ struct SystemDesc {
     WindDomain domain;
     WindSettings wind;
     Hooks hooks;
+    /// Own device: a file the Vulkan pipeline cache is read from at creation (when it holds this device's
+    /// cache, whole; any other file, a missing one included, is ignored) and written to when the System is
+    /// destroyed (replaced whole; a failure to write is ignored), so the next process creates its pipelines
+    /// from it instead of compiling them. Null: the cache stays in memory. Read during create().
+    const char* pipeline_cache = nullptr;
 };
 
 /// Ids of meshes and instances: 0 is never valid; a destroyed id is never reused.
@@ -244,7 +264,7 @@ struct FrameStats {
     float divergence_before = 0.0f;   ///< max |divergence| before projection, 1/s
     float divergence_after = 0.0f;    ///< the same after, 1/s
     float residual = 0.0f;            ///< max |residual| of the pressure solve, 1/s
-    std::uint32_t cycles = 0;         ///< V-cycles the solve took
+    std::uint32_t cycles = 0;         ///< V-cycles the solve took (WindPressure::Jacobi: iterations)
     bool converged = false;           ///< the solve met its tolerance
     /// The solve diverged (an inconsistent problem): it was stopped and this step projected nothing, so
     /// the wind stays bounded; converged is false. docs/solver.md "Stability".
@@ -262,6 +282,9 @@ struct FrameStats {
     /// Refinements refused because a tree pool was full: that frame's solids were partial, and the pools
     /// grow for the frames after it.
     std::uint32_t exhausted = 0;
+    /// Times the tree's pools grew after this step because they ran out in it (exhausted > 0); the frames
+    /// recorded from then on use the larger pools.
+    std::uint32_t pool_growths = 0;
     bool static_rebuilt = false; ///< the static set was voxelized again (added, moved, removed; a scroll)
     /// Tree nodes per level 1..depth−1, then leaf bricks (the root is level 0), in the System's host memory.
     using Counts = std::pmr::vector<std::uint64_t>;
@@ -333,6 +356,10 @@ class System {
     /// Places a mesh. Static instances are voxelized once (again only when the static set changes);
     /// moving ones every frame, with velocities from their last transform.
     Outcome create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id);
+    /// Places a moving instance already in motion: `previous` is its transform one step before, so its first
+    /// step's surfaces move as that motion does (create_instance's first step moves none). For an object
+    /// that was moving before the System saw it: a level loaded mid-motion, a replay started mid-way.
+    Outcome create_moving_instance(MeshId mesh, const Mat4& transform, const Mat4& previous, InstanceId& id);
     /// Sets an instance's mesh-to-world transform (finite; a static instance's move re-voxelizes the set).
     /// A moving instance's velocity comes from its last transform; with `teleport` the change is a jump
     /// (a respawn, a cut), so the next step moves the solid without pushing air.
@@ -375,6 +402,8 @@ class System {
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
+    /// The Vulkan device the System runs on (VkPhysicalDeviceProperties::deviceName), valid while it lives.
+    const char* device_name() const;
     /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; docs/design.md layout);
     /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).
     Outcome export_vdb(const char* path);
