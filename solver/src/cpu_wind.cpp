@@ -629,8 +629,9 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             for (std::uint32_t it = 0; it < detail::kJacobiBlock; ++it) {
                 const std::uint32_t from = (it & 1) ? shaderio::kCellSolutionB : shaderio::kCellPressure;
                 std::vector<float>& to = (it & 1) ? phi : other;
-                m.each_cell(k.levels[0],
-                            [&](int i, glm::ivec3 c) { next[std::size_t(i)] = k.jacobi_cell(k.levels[0], c, from); });
+                m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+                    next[std::size_t(i)] = k.jacobi_cell(k.levels[0], c, from);
+                });
                 std::copy(next.begin(), next.end(), to.begin());
             }
             residual = m.max_residual();
