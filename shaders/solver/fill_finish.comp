@@ -42,11 +42,11 @@ void main() {
         }
         FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
         if ((flags & kCellMoving) != 0u) {
-            ivec4 m = IVec4Ref(sb().b.cell_motion).v[i];
+            ivec4 m = IVec4Ref(hot.cell_motion).v[i];
             ivec4 mean = ivec4(m.xyz / m.w, 1);
             for (uint k = 0u; k < kCellParts; ++k) {
                 if (counts[k] == 0u || roots[k] == kOutsideNode) continue;
-                IVec4Ref region = IVec4Ref(sb().b.region_motion);
+                IVec4Ref region = IVec4Ref(hot.region_motion);
                 atomicAdd(region.v[roots[k]].x, mean.x);
                 atomicAdd(region.v[roots[k]].y, mean.y);
                 atomicAdd(region.v[roots[k]].z, mean.z);

@@ -108,7 +108,7 @@ void main() {
 
     int self = slot_of(local);
     uint colour = uint(c.x + c.y + c.z) & 1u;
-    for (uint half_sweep = 0u; half_sweep < 2u * sb().b.smoothing; ++half_sweep) {
+    for (uint half_sweep = 0u, sweeps = 2u * sb().b.smoothing; half_sweep < sweeps; ++half_sweep) {
         if (mine && colour == (half_sweep & 1u) && diag > 0.0) {
             float phi = tile[self];
             float off = 0.0;

@@ -54,11 +54,11 @@ void main() {
     // The last step's moving fragments and region sums kept here (kCellMoving, kCellRegion): clear them,
     // so only the cells that held some are written, not the whole arrays.
     uint old = flags.v[i];
-    if ((old & kCellMoving) != 0u) IVec4Ref(sb().b.cell_motion).v[i] = ivec4(0);
+    if ((old & kCellMoving) != 0u) IVec4Ref(hot.cell_motion).v[i] = ivec4(0);
     LabelsRef labels = LabelsRef(hot.labels);
     for (uint k = 0u; k < kCellParts; ++k) {
         uint node = part_node(uint(i), k);
-        if ((old & (kCellRegion << k)) != 0u) IVec4Ref(sb().b.region_motion).v[node] = ivec4(0);
+        if ((old & (kCellRegion << k)) != 0u) IVec4Ref(hot.region_motion).v[node] = ivec4(0);
         labels.v[node] = node;
     }
     if (i == 0) {
@@ -125,7 +125,7 @@ void main() {
         for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
     uint cut = kCellCut;
     if (bits_count(held) != 0u) {
-        for (uint w = 0u; w < cw; ++w) WordsRef(sb().b.cell_static).v[uint(i) * cw + w] = held.w[w];
+        for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_static).v[uint(i) * cw + w] = held.w[w];
         cut |= kCellStatic;
     }
     flags.v[i] = cut;

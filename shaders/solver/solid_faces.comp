@@ -25,7 +25,7 @@ CellBits static_at(ivec3 c, uint flags) {
     CellBits b = bits_none();
     uint cw = hot.cell_words;
     int i = cell_index(n, c);
-    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(sb().b.cell_static).v[uint(i) * cw + w];
+    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(hot.cell_static).v[uint(i) * cw + w];
     return b;
 }
 

@@ -20,7 +20,7 @@ void main() {
     vec3 velocity = vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x);
     ivec3 fixed_point = ivec3(round(clamp_speed(velocity, sb().b.max_solid_speed) * kVelocityScale));
     int cell = cell_index(hot.dims, c);
-    IVec4Ref motion = IVec4Ref(sb().b.cell_motion);
+    IVec4Ref motion = IVec4Ref(hot.cell_motion);
     atomicAdd(motion.v[cell].x, fixed_point.x);
     atomicAdd(motion.v[cell].y, fixed_point.y);
     atomicAdd(motion.v[cell].z, fixed_point.z);

@@ -35,7 +35,7 @@ int thread_index() {
 struct HotBindings {
     uint64_t velocity, velocity_tmp, velocity_back, solid_velocity, weights, open_counts;
     uint64_t pressure, pressure_up, rhs, scratch, cg_cells;
-    uint64_t vorticity, emitters, cell_flags, cell_parts, cell_solid, labels;
+    uint64_t vorticity, emitters, cell_flags, cell_parts, cell_solid, labels, cell_static, cell_motion, region_motion;
     ivec3 dims;
     float h;
     vec3 origin;
@@ -67,6 +67,9 @@ void load_bindings() {
     hot.cell_parts = r.b.cell_parts;
     hot.cell_solid = r.b.cell_solid;
     hot.labels = r.b.labels;
+    hot.cell_static = r.b.cell_static;
+    hot.cell_motion = r.b.cell_motion;
+    hot.region_motion = r.b.region_motion;
     hot.dims = r.b.dims;
     hot.h = r.b.h;
     hot.origin = r.b.origin;
@@ -219,7 +222,8 @@ bool sum_dispatch(vec2 value, out vec2 total) {
     uint t = gl_LocalInvocationIndex;
     uint width = gl_WorkGroupSize.x * gl_WorkGroupSize.y * gl_WorkGroupSize.z;
     vec2 sum = vec2(0.0);
-    for (uint g = t; g < group_total(); g += width) sum += PartialsRef(sb().b.partials).v[g];
+    PartialsRef partials = PartialsRef(sb().b.partials);
+    for (uint g = t; g < group_total(); g += width) sum += partials.v[g];
     total = group_sum(sum);
     return true;
 }
@@ -290,13 +294,13 @@ void uf_unite(uint a, uint b) {
 /// without air, else, its sealed region's (the summed mean velocities of the region's moving cells); zero
 /// for static solids.
 ivec4 solid_motion_of(int i, uint flags) {
-    if ((flags & kCellMoving) != 0u) return IVec4Ref(sb().b.cell_motion).v[i];
+    if ((flags & kCellMoving) != 0u) return IVec4Ref(hot.cell_motion).v[i];
     if ((flags & kCellNoAir) == 0u) return ivec4(0);
     uint root = LabelsRef(hot.labels).v[part_node(uint(i), 0u)];
     if (root == kOutsideNode) return ivec4(0);
     uint part = (root - 1u) % kCellParts;
     if ((flags_at(int((root - 1u) / kCellParts)) & (kCellRegion << part)) == 0u) return ivec4(0);
-    return IVec4Ref(sb().b.region_motion).v[root];
+    return IVec4Ref(hot.region_motion).v[root];
 }
 
 vec3 motion_velocity(ivec4 m) { return m.w > 0 ? vec3(m.xyz) / (kVelocityScale * float(m.w)) : vec3(0.0); }
