@@ -570,8 +570,9 @@ gust::Result<Bandwidth> copy_bandwidth(gust::gpu::Context& ctx, int repeat) {
 //
 // Counting rule, from the kernels in shaders/solver/*.comp and solver_kernels.h, for an interior face or
 // cell (all neighbours inside the grid, every face open), 4 bytes per float or word:
-//   accessed: every load and store a thread issues, as if no cache existed (an advected face's two
-//             velocity samples and its field sample are 3 x 8 + 3 x 8 + 8 loads);
+//   accessed: every load and store a thread issues, as if no cache existed (an advected face's velocity
+//             at its centre, its velocity sample at the midpoint and its field sample are 9 + 3 x 8 + 8
+//             loads);
 //   unique:   every array element a dispatch touches, once (a perfect cache: a neighbour read by six
 //             threads counts once); this is what a kernel must move at the least, so unique bytes over
 //             the copy bandwidth is the floor.
@@ -663,22 +664,23 @@ Traffic faces_traffic(const Workload& w) {
     return t;
 }
 
-/// The "advect" pass: semi-Lagrangian, or MacCormack's forward, backward and clamped correction; the pass
-/// that writes the velocity (the only one, or MacCormack's last) also adds the emitters, the ambient
-/// domain faces and vorticity confinement from the last step's vorticity (two forces of seven vec4
-/// vorticities each).
+/// The "advect" pass: semi-Lagrangian, or MacCormack's forward (which keeps the range it blended),
+/// backward and clamped correction; the pass that writes the velocity (the only one, or MacCormack's last)
+/// also adds the emitters, the ambient domain faces and vorticity confinement from the last step's
+/// vorticity (two forces of seven vec4 vorticities each).
 Traffic advect_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
-    // Each trace samples the velocity twice (3 components x 8 loads); a sample of a field is 8 loads.
-    const double trace = 2 * 3 * 8 * 4, confine = 2 * 7 * 16;
+    // Each trace reads the velocity at the face (its own value and four of each other component) and
+    // samples it at the midpoint (3 components x 8 loads); a sample of a field is 8 loads.
+    const double trace = (9 + 3 * 8) * 4, confine = 2 * 7 * 16;
     if (w.advection != gust::Advection::MacCormack) {
         t.add(F * (trace + 8 * 4 + confine + 4), 8 * F + 16 * C); // velocity -> tmp
         return t;
     }
-    t.add(F * (trace + 8 * 4 + 4), 8 * F);  // velocity -> tmp
-    t.add(F * (trace + 8 * 4 + 4), 12 * F); // tmp -> back, tracing with the velocity
-    t.add(F * (3 * 4 + trace + 8 * 4 + confine + 4), 16 * F + 16 * C); // -> tmp, clamped to 8 values
+    t.add(F * (trace + 8 * 4 + 3 * 4), 16 * F);        // velocity -> tmp, low and high
+    t.add(F * (trace + 8 * 4 + 4), 12 * F);            // tmp -> back, tracing with the velocity
+    t.add(F * (5 * 4 + confine + 4), 24 * F + 16 * C); // tmp, velocity, back, low, high -> tmp
     return t;
 }
 
@@ -975,14 +977,15 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
     const double bandwidth = copies.compute;
     out << "### Bytes per step against the bandwidth floor\n\n";
     out << "Copy bandwidth: " << fmt_gbs(bandwidth) << " GB/s copying with a compute shader "
-        << "(shaders/bench/copy.comp, vec4 loads and stores in a grid-stride loop), "
-        << fmt_gbs(copies.copy) << " GB/s with one `vkCmdCopyBuffer`; each of " << grouped(kCopyBytes >> 20)
+        << "(shaders/bench/copy.comp, vec4 loads and stores in a grid-stride loop), " << fmt_gbs(copies.copy)
+        << " GB/s with one `vkCmdCopyBuffer`; each of " << grouped(kCopyBytes >> 20)
         << " MiB timed by GPU timestamps (`gpu::Profiler`), counted as " << grouped(kCopyBytes >> 20)
         << " MiB read plus as much written, median of " << options.repeat
         << " after one warm-up. Bytes per pass are counted from the kernels (shaders/solver/*.comp, "
            "solver_kernels.h) for an interior face or cell at 4 bytes per float: *accessed* counts every "
-           "load and store a thread issues as if there were no cache (an advected face traces through two "
-           "velocity samples of 3 x 8 loads and samples its field with 8 more; a red-black sweep touches "
+           "load and store a thread issues as if there were no cache (an advected face traces from its own "
+           "velocity, 9 loads, through a velocity sample of 3 x 8 loads and samples its field with 8 more; "
+           "a red-black sweep touches "
            "half the cells, each reading six weights, six neighbours and its right-hand side); *unique* "
            "counts every array element a dispatch touches once, as a perfect cache would, and is the least a "
            "pass must move, so floor ms = unique bytes / copy bandwidth. Uniform parameters (bindings, level "

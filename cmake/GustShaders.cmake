@@ -1,26 +1,43 @@
-# gust_embed_shaders(TARGET <name> NAMESPACE <ns> SOURCES <files...> [INCLUDE_DIRS <dirs...>])
+# gust_embed_shaders(TARGET <name> SOURCES <files...> [DEPENDS <files...>]
+#                    [VARIANT <suffix> <DEFINE> VARIANT_SOURCES <files...>])
 # Compiles each GLSL file to SPIR-V with glslangValidator at build time and emits a header
 # <binary>/gust_shaders/<stem>_<stage>.h holding `const uint32_t <stem>_<stage>[]`, so the library
-# ships no loose shader files. The target becomes an INTERFACE library carrying the include path (build
+# ships no loose shader files. Each of VARIANT_SOURCES (also listed in SOURCES) is compiled a second time
+# with -D<DEFINE> into <stem>_<suffix>_<stage>.h. The target becomes an INTERFACE library carrying the include path (build
 # tree only); it is listed in the global property GUST_SHADER_TARGETS so that cmake/GustInstall.cmake can
 # export it beside the static libraries that name it as a private dependency.
 function(gust_embed_shaders)
-  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;DEPENDS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;DEPENDS;VARIANT;VARIANT_SOURCES" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/gust_shaders)
   file(MAKE_DIRECTORY ${out_dir})
-  set(headers)
+  set(jobs)
   foreach(src IN LISTS ARG_SOURCES)
+    list(APPEND jobs "${src}||")
+  endforeach()
+  if(ARG_VARIANT)
+    list(GET ARG_VARIANT 0 suffix)
+    list(GET ARG_VARIANT 1 define)
+    foreach(src IN LISTS ARG_VARIANT_SOURCES)
+      list(APPEND jobs "${src}|_${suffix}|-D${define}")
+    endforeach()
+  endif()
+  set(headers)
+  foreach(job IN LISTS jobs)
+    string(REPLACE "|" ";" parts "${job}")
+    list(GET parts 0 src)
+    list(GET parts 1 suffix)
+    list(GET parts 2 define)
     get_filename_component(stem ${src} NAME_WE)
     get_filename_component(ext ${src} LAST_EXT)
     string(SUBSTRING ${ext} 1 -1 stage)
-    set(var ${stem}_${stage})
+    set(var ${stem}${suffix}_${stage})
     set(header ${out_dir}/${var}.h)
     add_custom_command(
       OUTPUT ${header}
-      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 -I${CMAKE_CURRENT_SOURCE_DIR}
+      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 ${define} -I${CMAKE_CURRENT_SOURCE_DIR}
               --vn ${var} -o ${header} ${CMAKE_CURRENT_SOURCE_DIR}/${src}
       DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${src} ${ARG_DEPENDS}
-      COMMENT "glslang ${src}"
+      COMMENT "glslang ${src} ${define}"
       VERBATIM)
     list(APPEND headers ${header})
   endforeach()

@@ -2,9 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 // Per face, the velocity's next field into kFieldTmp. pc.parity 0: semi-Lagrangian advection, then the
 // emitters (closing pc.param of the gap), the ambient wind on the domain's faces and vorticity confinement
-// (forced_face), all in this one pass. MacCormack: 1 the forward pass (kFieldTmp), 2 the backward pass
-// (kFieldTmp -> kFieldBack), 3 the clamped correction and the same forces, in place in kFieldTmp (each
-// thread reads and writes only its own face there). 4: no advection, the forces alone.
+// (forced_face), all in this one pass. MacCormack: 1 the forward pass (kFieldTmp, and the range it
+// blended into kFieldLow and kFieldHigh), 2 the backward pass (kFieldTmp -> kFieldBack), 3 the clamped
+// correction and the same forces, in place in kFieldTmp (each thread reads and writes only its own face
+// there). 4: no advection, the forces alone.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -18,13 +19,19 @@ void main() {
     ivec3 f = face_from_index(n, i, axis);
     float epsilon = sb().b.vorticity_strength;
     if (pc.parity == 0u)
-        store_face(kFieldTmp, i, forced_face(advect_face(kFieldVelocity, axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
-    else if (pc.parity == 1u)
-        store_face(kFieldTmp, i, advect_face(kFieldVelocity, axis, f, pc.dt));
-    else if (pc.parity == 2u)
+        store_face(
+            kFieldTmp, i,
+            forced_face(advect_face(kFieldVelocity, axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
+    else if (pc.parity == 1u) {
+        vec2 range;
+        store_face(kFieldTmp, i, advect_face_range(axis, f, pc.dt, range));
+        store_face(kFieldLow, i, range.x);
+        store_face(kFieldHigh, i, range.y);
+    } else if (pc.parity == 2u)
         store_face(kFieldBack, i, advect_face(kFieldTmp, axis, f, -pc.dt));
     else if (pc.parity == 4u)
-        store_face(kFieldTmp, i, forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
+        store_face(kFieldTmp, i,
+                   forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
     else
-        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
+        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f), axis, f, pc.param, pc.dt, epsilon));
 }

@@ -96,7 +96,8 @@ uint64_t face_field(uint field) {
     if (field == kFieldVelocity) return swapped ? hot.velocity_tmp : hot.velocity;
     if (field == kFieldTmp) return swapped ? hot.velocity : hot.velocity_tmp;
     if (field == kFieldBack) return hot.velocity_back;
-    return hot.solid_velocity;
+    if (field == kFieldSolid) return hot.solid_velocity;
+    return hot.velocity_back + uint64_t(field - kFieldSolid) * uint64_t(hot.level0_faces) * 4ul;
 }
 uint64_t cell_field(uint field) {
     if (field == kCellPressure) return hot.pressure;
@@ -228,10 +229,15 @@ bool sum_dispatch(vec2 value, out vec2 total) {
     return true;
 }
 
-/// A cell's six face layers (−x,+x,−y,+y,−z,+z), made once on the CPU.
+/// A cell's six face layers (−x,+x,−y,+y,−z,+z), made once on the CPU; only the cell's words are loaded
+/// (each buffer-reference load costs a loop over the SIMD lanes on llvmpipe), the others are empty.
 void load_face_masks(out CellBits faces[6]) {
-    for (uint s = 0u; s < 6u; ++s)
-        for (uint k = 0u; k < kCellWords; ++k) faces[s].w[k] = sb().b.face_mask[s * kCellWords + k];
+    BindingsRef r = sb();
+    uint cw = hot.cell_words;
+    for (uint s = 0u; s < 6u; ++s) {
+        faces[s] = bits_none();
+        for (uint k = 0u; k < cw; ++k) faces[s].w[k] = r.b.face_mask[s * kCellWords + k];
+    }
 }
 
 // ---- Cell parts, the outside-air fill and the solid's motion (solver_io.h, "cell_flags") -----------------

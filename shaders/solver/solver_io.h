@@ -17,8 +17,17 @@ GUST_CONST uint kTileSide = 8;
 GUST_CONST uint kCoarseCells = 4096;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
-/// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3.
+/// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3 (the layout of the voxel-set arrays).
 GUST_CONST uint kCellWords = 16;
+/// Words a CellBits holds. The shaders that work on voxel sets are also built with GUST_SMALL_CELLS
+/// (shaders/CMakeLists.txt), for up to 4 voxels per cell (4^3 = 64 bits): their sets are two words, not
+/// sixteen. llvmpipe executes every word of every branch, so this cut the sample's step by 29%
+/// (docs/results.md); a GPU only saves registers.
+#ifdef GUST_SMALL_CELLS
+GUST_CONST uint kBitsWords = 2;
+#else
+GUST_CONST uint kBitsWords = kCellWords;
+#endif
 GUST_CONST uint kMaxVoxelsPerCell = 8;
 GUST_CONST uint kMaxEmitters = 64;
 /// Fragment velocities are summed per cell as fixed point with this many steps per m/s, clamped to
@@ -121,6 +130,9 @@ GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face(): the veloc
 GUST_CONST uint kFieldTmp = 1u;      ///< the other velocity buffer: a pass writes the next field here
 GUST_CONST uint kFieldBack = 2u;     ///< MacCormack's backward pass
 GUST_CONST uint kFieldSolid = 3u;
+GUST_CONST uint kFieldLow = 4u;  ///< MacCormack's forward pass: the least value each face blended
+GUST_CONST uint kFieldHigh = 5u; ///< and the largest (both after kFieldBack in velocity_back)
+GUST_CONST uint kFaceFields = 6u;
 GUST_CONST uint kCellPressure = 0u;    ///< cell fields for load_cell(): a level's V-cycle value, downward
 GUST_CONST uint kCellRhs = 1u;         ///< a level's V-cycle right-hand side (level 0: the residual r)
 GUST_CONST uint kCellScratch = 2u;     ///< level 0 only: the warm start's q = Lφ
@@ -138,7 +150,7 @@ GUST_CONST uint kCellFields = 11u;
 struct SolverBindings {
     GUST_ADDRESS velocity;       ///< float[faces]: one of the two velocity buffers (SolverPush::swap), m/s
     GUST_ADDRESS velocity_tmp;   ///< float[faces]: the other
-    GUST_ADDRESS velocity_back;  ///< float[faces]: MacCormack's backward pass
+    GUST_ADDRESS velocity_back;  ///< float[faces]: MacCormack's backward pass (then kFieldLow, kFieldHigh)
     GUST_ADDRESS weights;        ///< float[]: weights of levels 1 on, from index level0_faces
     GUST_ADDRESS solid_velocity; ///< float[faces]: solid's normal velocity per face, m/s
     GUST_ADDRESS pressure;       ///< float[]: kCellPressure, all levels
@@ -285,12 +297,12 @@ GUST_INLINE uint open_sides_for(vec3 ambient) {
 // ---- Cell voxel sets (a cell's voxels, bit x + v·(y + v·z) for v voxels per cell) ---------------------
 
 struct CellBits {
-    uint w[kCellWords];
+    uint w[kBitsWords];
 };
 
 GUST_INLINE CellBits bits_none() {
     CellBits r;
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         r.w[i] = 0u;
     return r;
 }
@@ -299,7 +311,7 @@ GUST_INLINE CellBits bits_none() {
 GUST_INLINE CellBits bits_all(uint v) {
     CellBits r = bits_none();
     uint n = v * v * v;
-    for (uint i = 0u; i < kCellWords; ++i) {
+    for (uint i = 0u; i < kBitsWords; ++i) {
         uint lo = i * 32u;
         if (n >= lo + 32u)
             r.w[i] = 0xffffffffu;
@@ -315,32 +327,32 @@ GUST_INLINE bool bits_get(CellBits b, uint i) {
 
 GUST_INLINE uint bits_count(CellBits b) {
     uint c = 0u;
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         c += uint(bitCount(b.w[i]));
     return c;
 }
 
 GUST_INLINE bool bits_equal(CellBits a, CellBits b) {
     bool same = true;
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         same = same && a.w[i] == b.w[i];
     return same;
 }
 
 GUST_INLINE CellBits bits_and(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         a.w[i] &= b.w[i];
     return a;
 }
 
 GUST_INLINE CellBits bits_and_not(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         a.w[i] &= ~b.w[i];
     return a;
 }
 
 GUST_INLINE CellBits bits_or(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kCellWords; ++i)
+    for (uint i = 0u; i < kBitsWords; ++i)
         a.w[i] |= b.w[i];
     return a;
 }
@@ -349,7 +361,7 @@ GUST_INLINE CellBits bits_or(CellBits a, CellBits b) {
 GUST_INLINE CellBits bits_up(CellBits a, uint s) {
     CellBits r = bits_none();
     uint words = s / 32u, bits = s % 32u;
-    for (uint i = kCellWords; i-- > words;) {
+    for (uint i = kBitsWords; i-- > words;) {
         uint j = i - words;
         r.w[i] = a.w[j] << bits;
         if (bits != 0u && j > 0u) r.w[i] |= a.w[j - 1u] >> (32u - bits);
@@ -361,10 +373,10 @@ GUST_INLINE CellBits bits_up(CellBits a, uint s) {
 GUST_INLINE CellBits bits_down(CellBits a, uint s) {
     CellBits r = bits_none();
     uint words = s / 32u, bits = s % 32u;
-    for (uint i = 0u; i + words < kCellWords; ++i) {
+    for (uint i = 0u; i + words < kBitsWords; ++i) {
         uint j = i + words;
         r.w[i] = a.w[j] >> bits;
-        if (bits != 0u && j + 1u < kCellWords) r.w[i] |= a.w[j + 1u] << (32u - bits);
+        if (bits != 0u && j + 1u < kBitsWords) r.w[i] |= a.w[j + 1u] << (32u - bits);
     }
     return r;
 }
@@ -423,7 +435,7 @@ GUST_INLINE void cell_parts_general(CellBits occupied, uint v, CellBits faces[6]
     uint n = v * v * v;
     for (uint seeds = 0u; seeds < n; ++seeds) {
         uint start = n;
-        for (uint i = 0u; i < kCellWords && start == n; ++i)
+        for (uint i = 0u; i < kBitsWords && start == n; ++i)
             if (remaining.w[i] != 0u) start = i * 32u + uint(findLSB(remaining.w[i]));
         if (start == n) break;
         CellBits component = bits_none();

@@ -35,9 +35,13 @@ GUST_INLINE bool inside_grid(vec3 p) {
     return p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= n.x && p.y <= n.y && p.z <= n.z;
 }
 
-/// Component `axis` of face field `field` at p, trilinear; the ambient wind outside the grid.
-GUST_INLINE float sample_component(uint field, uint axis, vec3 p) {
-    if (!inside_grid(p)) return grid_ambient()[axis];
+/// Component `axis` of face field `field` at p, trilinear, and the smallest and largest of the eight
+/// lattice values it blends (MacCormack's clamp); the ambient wind outside the grid.
+GUST_INLINE float sample_component_range(uint field, uint axis, vec3 p, GUST_OUT(vec2) range) {
+    if (!inside_grid(p)) {
+        range = vec2(grid_ambient()[axis]);
+        return grid_ambient()[axis];
+    }
     ivec3 i0, i1;
     vec3 t;
     component_lattice(axis, p, i0, i1, t);
@@ -50,25 +54,17 @@ GUST_INLINE float sample_component(uint field, uint axis, vec3 p) {
     float c101 = load_face(field, face_index(n, axis, ivec3(i1.x, i0.y, i1.z)));
     float c011 = load_face(field, face_index(n, axis, ivec3(i0.x, i1.y, i1.z)));
     float c111 = load_face(field, face_index(n, axis, ivec3(i1.x, i1.y, i1.z)));
+    range = vec2(min(min(min(c000, c100), min(c010, c110)), min(min(c001, c101), min(c011, c111))),
+                 max(max(max(c000, c100), max(c010, c110)), max(max(c001, c101), max(c011, c111))));
     float c00 = mix(c000, c100, t.x), c10 = mix(c010, c110, t.x);
     float c01 = mix(c001, c101, t.x), c11 = mix(c011, c111, t.x);
     return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
 }
 
-/// Smallest and largest of the eight lattice values around p (MacCormack's clamp).
-GUST_INLINE vec2 component_range(uint field, uint axis, vec3 p) {
-    if (!inside_grid(p)) return vec2(grid_ambient()[axis]);
-    ivec3 i0, i1;
-    vec3 t;
-    component_lattice(axis, p, i0, i1, t);
-    ivec3 n = grid_dims();
-    vec2 r = vec2(3.4e38f, -3.4e38f);
-    for (int k = 0; k < 8; ++k) {
-        ivec3 c = ivec3((k & 1) != 0 ? i1.x : i0.x, (k & 2) != 0 ? i1.y : i0.y, (k & 4) != 0 ? i1.z : i0.z);
-        float v = load_face(field, face_index(n, axis, c));
-        r = vec2(min(r.x, v), max(r.y, v));
-    }
-    return r;
+/// Component `axis` of face field `field` at p, trilinear (the compilers drop the unused range).
+GUST_INLINE float sample_component(uint field, uint axis, vec3 p) {
+    vec2 unused;
+    return sample_component_range(field, axis, p, unused);
 }
 
 GUST_INLINE vec3 sample_velocity(uint field, vec3 p) {
@@ -78,26 +74,53 @@ GUST_INLINE vec3 sample_velocity(uint field, vec3 p) {
 
 // ---- Advection (Stam 1999; MacCormack after Selle et al. 2008) ---------------------------------------
 
-/// Where the air at x (cell units) was dt seconds ago (dt < 0: where it will be), midpoint rule.
-GUST_INLINE vec3 trace(vec3 x, float dt) {
+/// The velocity of `field` at face f's centre: the face's own component and, for the two others, the
+/// mean of the four faces around the centre (the two cells beside f, clamped to the grid). This is what
+/// sample_velocity gives there, from 9 loads instead of 24.
+GUST_INLINE vec3 face_velocity(uint field, uint axis, ivec3 f) {
+    ivec3 n = grid_dims();
+    ivec3 lo = f, hi = f;
+    lo[axis] = max(f[axis] - 1, 0);
+    hi[axis] = min(f[axis], n[axis] - 1);
+    vec3 v = vec3(0.0f);
+    for (uint b = 0u; b < 3u; ++b) {
+        ivec3 e = axis_unit(b);
+        v[b] = b == axis ? load_face(field, face_index(n, axis, f))
+                         : 0.25f * (load_face(field, face_index(n, b, lo)) +
+                                    load_face(field, face_index(n, b, lo + e)) +
+                                    load_face(field, face_index(n, b, hi)) +
+                                    load_face(field, face_index(n, b, hi + e)));
+    }
+    return v;
+}
+
+/// Where the air at face f's centre was dt seconds ago (dt < 0: where it will be), in cell units,
+/// midpoint rule.
+GUST_INLINE vec3 trace(uint axis, ivec3 f, float dt) {
+    vec3 x = face_position(axis, f);
     float s = dt / grid_h();
-    vec3 mid = x - 0.5f * s * sample_velocity(kFieldVelocity, x);
+    vec3 mid = x - 0.5f * s * face_velocity(kFieldVelocity, axis, f);
     return x - s * sample_velocity(kFieldVelocity, mid);
 }
 
 /// Semi-Lagrangian: face f of `field` carried by the velocity field over dt.
 GUST_INLINE float advect_face(uint field, uint axis, ivec3 f, float dt) {
-    return sample_component(field, axis, trace(face_position(axis, f), dt));
+    return sample_component(field, axis, trace(axis, f, dt));
+}
+
+/// MacCormack's forward pass: face f of the velocity carried over dt, and in `range` the smallest and
+/// largest of the values it blended (kFieldLow, kFieldHigh for the correction's clamp).
+GUST_INLINE float advect_face_range(uint axis, ivec3 f, float dt, GUST_OUT(vec2) range) {
+    return sample_component_range(kFieldVelocity, axis, trace(axis, f, dt), range);
 }
 
 /// MacCormack's correction of the forward result (kFieldTmp) by the error the backward pass
-/// (kFieldBack) found, clamped to the values the forward pass interpolated (stays bounded).
-GUST_INLINE float maccormack_face(uint axis, ivec3 f, float dt) {
+/// (kFieldBack) found, clamped to the values the forward pass blended (stays bounded).
+GUST_INLINE float maccormack_face(uint axis, ivec3 f) {
     int i = face_index(grid_dims(), axis, f);
     float corrected =
         load_face(kFieldTmp, i) + 0.5f * (load_face(kFieldVelocity, i) - load_face(kFieldBack, i));
-    vec2 range = component_range(kFieldVelocity, axis, trace(face_position(axis, f), dt));
-    return clamp(corrected, range.x, range.y);
+    return clamp(corrected, load_face(kFieldLow, i), load_face(kFieldHigh, i));
 }
 
 // ---- Forces -----------------------------------------------------------------------------------------------
@@ -315,12 +338,12 @@ GUST_INLINE float coarse_weight(uint l, uint axis, ivec3 F) {
     return sum / float(span.x * span.y * span.z);
 }
 
-/// Correction for fine cell c of level `fine` from the next level, `coarse` (its values in `coarse_field`): cell-centred
-/// trilinear interpolation (3/4 of
-/// the parent, 1/4 of its neighbour along each halved axis) through the coarse face between them, in
-/// proportion to its open fraction θ; the closed part acts as a wall (zero gradient: the parent's value).
-/// Past a domain side the neighbour is the boundary: a closed side is a wall, an open side's φ = 0 (half
-/// a level-0 cell out, as face_coupling puts it) is interpolated toward through the side's open part.
+/// Correction for fine cell c of level `fine` from the next level, `coarse` (its values in `coarse_field`):
+/// cell-centred trilinear interpolation (3/4 of the parent, 1/4 of its neighbour along each halved axis)
+/// through the coarse face between them, in proportion to its open fraction θ; the closed part acts as a wall
+/// (zero gradient: the parent's value). Past a domain side the neighbour is the boundary: a closed side is a
+/// wall, an open side's φ = 0 (half a level-0 cell out, as face_coupling puts it) is interpolated toward
+/// through the side's open part.
 GUST_INLINE float prolong_cell(GridLevel fine, GridLevel coarse, ivec3 c, uint coarse_field) {
     ivec3 k = fine.factor;
     ivec3 parent = c / k;

@@ -16,7 +16,7 @@ struct HostKernels {
     uint open_sides = 0;
     std::vector<GridLevel> levels;
     std::vector<GpuEmitter> emitters;
-    std::vector<float> face[4]; ///< kField*
+    std::vector<float> face[kFaceFields]; ///< kField*
     std::vector<float> weights;
     std::vector<float> cell[kCellFields]; ///< kCell*
     std::vector<vec4> vorticity;
@@ -551,18 +551,26 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
     std::vector<float>& back = k.face[shaderio::kFieldBack];
     if (desc.advection != Advection::None) {
-        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
-            tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt);
-        });
         if (desc.advection == Advection::MacCormack) {
+            std::vector<float>& low = k.face[shaderio::kFieldLow];
+            std::vector<float>& high = k.face[shaderio::kFieldHigh];
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+                glm::vec2 range;
+                tmp[std::size_t(i)] = k.advect_face_range(a, f, dt, range);
+                low[std::size_t(i)] = range.x;
+                high[std::size_t(i)] = range.y;
+            });
             m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
                 back[std::size_t(i)] = k.advect_face(shaderio::kFieldTmp, a, f, -dt);
             });
             std::vector<float> out(m.faces());
-            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
-                out[std::size_t(i)] = k.maccormack_face(a, f, dt);
-            });
+            m.each_face(
+                [&](int i, std::uint32_t a, glm::ivec3 f) { out[std::size_t(i)] = k.maccormack_face(a, f); });
             tmp = std::move(out);
+        } else {
+            m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+                tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt);
+            });
         }
     }
     // advect.comp's one pass: the advected value (tmp; the velocity itself without advection) with the

@@ -17,7 +17,9 @@ namespace {
 #include "gust_shaders/diffuse_comp.h"
 #include "gust_shaders/extend_comp.h"
 #include "gust_shaders/fill_finish_comp.h"
+#include "gust_shaders/fill_finish_small_comp.h"
 #include "gust_shaders/fill_link_comp.h"
+#include "gust_shaders/fill_link_small_comp.h"
 #include "gust_shaders/finish_comp.h"
 #include "gust_shaders/jacobi_comp.h"
 #include "gust_shaders/project_comp.h"
@@ -26,7 +28,9 @@ namespace {
 #include "gust_shaders/scroll_comp.h"
 #include "gust_shaders/smooth_comp.h"
 #include "gust_shaders/solid_cells_comp.h"
+#include "gust_shaders/solid_cells_small_comp.h"
 #include "gust_shaders/solid_faces_comp.h"
+#include "gust_shaders/solid_faces_small_comp.h"
 #include "gust_shaders/solid_motion_comp.h"
 #include "gust_shaders/start_comp.h"
 
@@ -138,25 +142,28 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         std::span<const std::uint32_t> code;
         const char* name;
     };
-    const Stage stages[] = {{&m.solid_cells, words(solid_cells_comp), "gust solid_cells"},
-                            {&m.solid_motion, words(solid_motion_comp), "gust solid_motion"},
-                            {&m.fill_link, words(fill_link_comp), "gust fill_link"},
-                            {&m.fill_finish, words(fill_finish_comp), "gust fill_finish"},
-                            {&m.solid_faces, words(solid_faces_comp), "gust solid_faces"},
-                            {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
-                            {&m.advect, words(advect_comp), "gust advect"},
-                            {&m.diffuse, words(diffuse_comp), "gust diffuse"},
-                            {&m.start, words(start_comp), "gust start"},
-                            {&m.smooth, words(smooth_comp), "gust smooth"},
-                            {&m.restrict_, words(restrict_comp), "gust restrict"},
-                            {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
-                            {&m.cg, words(cg_comp), "gust cg"},
-                            {&m.jacobi, words(jacobi_comp), "gust jacobi"},
-                            {&m.project, words(project_comp), "gust project"},
-                            {&m.extend, words(extend_comp), "gust extend"},
-                            {&m.finish, words(finish_comp), "gust finish"},
-                            {&m.scroll, words(scroll_comp), "gust scroll"},
-                            {&m.sample, words(sample_comp), "gust sample"}};
+    // The voxel-set passes' two-word build serves cells of up to 4^3 voxels (solver_io.h, kBitsWords).
+    const bool small = detail::cell_words(desc.voxels_per_cell) <= 2;
+    const Stage stages[] = {
+        {&m.solid_cells, small ? words(solid_cells_small_comp) : words(solid_cells_comp), "gust solid_cells"},
+        {&m.solid_motion, words(solid_motion_comp), "gust solid_motion"},
+        {&m.fill_link, small ? words(fill_link_small_comp) : words(fill_link_comp), "gust fill_link"},
+        {&m.fill_finish, small ? words(fill_finish_small_comp) : words(fill_finish_comp), "gust fill_finish"},
+        {&m.solid_faces, small ? words(solid_faces_small_comp) : words(solid_faces_comp), "gust solid_faces"},
+        {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
+        {&m.advect, words(advect_comp), "gust advect"},
+        {&m.diffuse, words(diffuse_comp), "gust diffuse"},
+        {&m.start, words(start_comp), "gust start"},
+        {&m.smooth, words(smooth_comp), "gust smooth"},
+        {&m.restrict_, words(restrict_comp), "gust restrict"},
+        {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
+        {&m.cg, words(cg_comp), "gust cg"},
+        {&m.jacobi, words(jacobi_comp), "gust jacobi"},
+        {&m.project, words(project_comp), "gust project"},
+        {&m.extend, words(extend_comp), "gust extend"},
+        {&m.finish, words(finish_comp), "gust finish"},
+        {&m.scroll, words(scroll_comp), "gust scroll"},
+        {&m.sample, words(sample_comp), "gust sample"}};
     // coarse_solve.comp runs in one workgroup as wide as the device allows (a power of two, up to 1024),
     // so that each thread relaxes few cells of the levels it holds. A CPU device runs a workgroup's
     // invocations one after another between barriers, so there width buys nothing and costs each barrier.
@@ -198,7 +205,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const Want wants[] = {
         {&m.velocity, faces * 4, 0, "gust velocity A"},
         {&m.velocity_tmp, faces * 4, 0, "gust velocity B"},
-        {&m.velocity_back, faces * 4, 0, "gust velocity back"},
+        {&m.velocity_back, faces * 4 * (desc.advection == Advection::MacCormack ? 3 : 1), 0,
+         "gust velocity back"},
         {&m.open_counts, open_words * 4, 0, "gust open counts"},
         {&m.weights, std::max<std::uint64_t>(all_faces - faces, 1) * 4, 0, "gust coarse weights"},
         {&m.solid_velocity, faces * 4, 0, "gust solid velocity"},

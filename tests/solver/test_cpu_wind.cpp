@@ -146,7 +146,7 @@ struct PassCase {
     float viscosity;
     PressureSolver pressure;
     bool emitters;
-    std::uint32_t voxels_per_cell = 4; ///< 3: cells straddle the tree's 4-voxel bricks
+    std::uint32_t voxels_per_cell = 4; ///< 3: cells straddle the tree's 4-voxel bricks; 5: wide voxel sets
     glm::uvec3 cells{16, 16, 16};      ///< odd sides: rows of one colour differ, faces not a multiple of 4
 };
 
@@ -264,6 +264,8 @@ INSTANTIATE_TEST_SUITE_P(
         PassCase{"viscosity", Advection::None, 0.0f, 0.2f, PressureSolver::Multigrid, false},
         PassCase{"jacobi", Advection::None, 0.0f, 0.0f, PressureSolver::Jacobi, false},
         PassCase{"cellsAcrossBricks", Advection::None, 0.0f, 0.0f, PressureSolver::Multigrid, false, 3},
+        // Over 4^3 voxels a cell: the voxel-set passes' sixteen-word build (solver_io.h, kBitsWords).
+        PassCase{"wideVoxelSets", Advection::MacCormack, 0.0f, 0.0f, PressureSolver::Multigrid, false, 5},
         PassCase{"oddSides",
                  Advection::SemiLagrangian,
                  0.3f,
