@@ -622,6 +622,8 @@ Traffic solid_traffic(const Workload& w) {
     // voxels, at most as many words) of a cut cell, the tree once. Clearing the last step's moving cells'
     // motion is left out (at most one per fragment).
     t.add(16 * C + 1.5 * parts + w.tree_bytes, 16 * C + 1.5 * parts + w.tree_bytes);
+    // ... and each cell's confinement force and speed: seven vorticities, six faces, one vec4 stored.
+    t.add(C * (7 * 16 + 6 * 4 + 16), 32 * C + 4 * w.faces(0), 0);
     // solid_motion: key and half-float velocity, four 4-byte atomics, per fragment.
     t.add(44 * w.fragments, 44 * w.fragments);
     return t;
@@ -667,13 +669,13 @@ Traffic faces_traffic(const Workload& w) {
 /// The "advect" pass: semi-Lagrangian, or MacCormack's forward (which keeps the range it blended),
 /// backward and clamped correction; the pass that writes the velocity (the only one, or MacCormack's last)
 /// also adds the emitters, the ambient domain faces and vorticity confinement from the last step's
-/// vorticity (two forces of seven vec4 vorticities each).
+/// vorticity (the two cells' forces, made by solid_cells).
 Traffic advect_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0);
     // Each trace reads the velocity at the face (its own value and four of each other component) and
     // samples it at the midpoint (3 components x 8 loads); a sample of a field is 8 loads.
-    const double trace = (9 + 3 * 8) * 4, confine = 2 * 7 * 16;
+    const double trace = (9 + 3 * 8) * 4, confine = 2 * 16;
     if (w.advection != gust::Advection::MacCormack) {
         t.add(F * (trace + 8 * 4 + confine + 4), 8 * F + 16 * C); // velocity -> tmp
         return t;

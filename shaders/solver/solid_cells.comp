@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
 // parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
-// clears what the last step summed here. Thread 0 also sizes the moving-fragment pass.
+// clears what the last step summed here. Thread 0 also sizes the moving-fragment pass. Every cell also
+// makes its vorticity-confinement force for advection.
 #include "../tree/tree_io.h"
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -48,6 +49,10 @@ void main() {
     ivec3 n = hot.dims;
     if (i >= n.x * n.y * n.z) return;
     ivec3 c = cell_from_index(n, i);
+    // Each cell's confinement force and speed for this step's advect.comp (cell_confinement), here where
+    // every cell is visited before it, so that advection reads two values a face instead of 26.
+    float epsilon = sb().b.vorticity_strength;
+    if (epsilon != 0.0) Vec4Ref(hot.confinement).v[i] = cell_confinement(c, epsilon);
     uint v = hot.voxels_per_cell;
     uint levels = tree_levels;
     WordsRef flags = WordsRef(hot.cell_flags);

@@ -35,7 +35,7 @@ int thread_index() {
 struct HotBindings {
     uint64_t velocity, velocity_tmp, velocity_back, solid_velocity, weights, open_counts;
     uint64_t pressure, pressure_up, rhs, scratch, cg_cells;
-    uint64_t vorticity, emitters, cell_flags, cell_parts, cell_solid, labels, cell_static, cell_motion, region_motion;
+    uint64_t vorticity, confinement, emitters, cell_flags, cell_parts, cell_solid, labels, cell_static, cell_motion, region_motion;
     ivec3 dims;
     float h;
     vec3 origin;
@@ -62,6 +62,7 @@ void load_bindings() {
     hot.scratch = r.b.scratch;
     hot.cg_cells = r.b.cg_cells;
     hot.vorticity = r.b.vorticity;
+    hot.confinement = r.b.confinement;
     hot.emitters = r.b.emitters;
     hot.cell_flags = r.b.cell_flags;
     hot.cell_parts = r.b.cell_parts;
@@ -134,6 +135,7 @@ float load_cell(uint field, int index) {
 float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
 #endif
 vec4 load_vorticity(int index) { return Vec4Ref(hot.vorticity).v[index]; }
+vec4 load_confinement(int index) { return Vec4Ref(hot.confinement).v[index]; }
 /// The step's pressure solution at level-0 cell `index` as the solve left it: x + α p (or + z for plain
 /// multigrid) of the iterate and direction the state names, 0 after a diverged solve.
 float load_phi(int index) {

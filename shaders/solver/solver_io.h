@@ -166,6 +166,7 @@ struct SolverBindings {
     GUST_ADDRESS region_motion;  ///< ivec4[1 + kCellParts * cells]: per sealed region's root node, the
                                  ///< fixed-point mean velocities of its moving cells, summed, and their count
     GUST_ADDRESS vorticity;      ///< vec4[cells]: curl (1/s) and its length
+    GUST_ADDRESS confinement;    ///< vec4[cells]: the step's confinement force (m/s^2) and speed (m/s)
     GUST_ADDRESS emitters;       ///< GpuEmitter[emitter_count]
     GUST_ADDRESS state;          ///< SolverState
     GUST_ADDRESS dispatch;       ///< LevelDispatch[2 * kDispatchSlots]: live, then full

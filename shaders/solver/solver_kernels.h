@@ -8,6 +8,7 @@
 //   float load_weight(int index);              weight array (level offsets included)
 //   float load_cell(uint field, int index);    kCell* arrays (level offsets included)
 //   vec4 load_vorticity(int index);            level-0 cells
+//   vec4 load_confinement(int index);          level-0 cells: cell_confinement, made earlier in the step
 //   float load_phi(int index);                 level-0 cells: the step's pressure solution φ
 //   GridLevel load_level(uint level);
 //   uint emitter_count();  GpuEmitter load_emitter(uint i);
@@ -168,18 +169,25 @@ GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
     return epsilon * grid_h() * cross(g / len, vec3(load_vorticity(cell_index(n, c))));
 }
 
+/// Cell c's confinement force (xyz, confinement_force) and the speed of its velocity (w), made once per cell
+/// early in the step (solid_cells.comp) for confinement_change, which would otherwise redo both for the two
+/// cells of every face.
+GUST_INLINE vec4 cell_confinement(ivec3 c, float epsilon) {
+    return vec4(confinement_force(c, epsilon), length(cell_velocity(kFieldVelocity, c)));
+}
+
 /// Vorticity confinement's change of face f over dt, from the vorticity the last step ended with
-/// (load_vorticity): fusing the force into advection's pass costs that one step of lag, where computing
-/// this step's curl first would cost a pass. The step is limited to the local CFL time (h / speed, the
-/// speed of kFieldVelocity's two cells), so a large dt cannot make the force overshoot; none on the
-/// domain's faces.
+/// (load_vorticity, through load_confinement): fusing the force into advection's pass costs that one step
+/// of lag, where computing this step's curl first would cost a pass. The step is limited to the local CFL
+/// time (h / speed, the speed of kFieldVelocity's two cells), so a large dt cannot make the force
+/// overshoot; none on the domain's faces.
 GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon) {
     ivec3 n = grid_dims();
     if (epsilon == 0.0f || boundary_side(n, axis, f) != 6u) return 0.0f;
-    ivec3 a = f - axis_unit(axis);
-    float speed = max(length(cell_velocity(kFieldVelocity, a)), length(cell_velocity(kFieldVelocity, f)));
+    vec4 a = load_confinement(cell_index(n, f - axis_unit(axis))), b = load_confinement(cell_index(n, f));
+    float speed = max(a.w, b.w);
     float step = speed > 0.0f ? min(dt, grid_h() / speed) : dt;
-    return step * 0.5f * (confinement_force(a, epsilon)[axis] + confinement_force(f, epsilon)[axis]);
+    return step * 0.5f * (a[axis] + b[axis]);
 }
 
 /// Face f of the next field from advection's value `u` there: the emitters (`rate` of the gap each), the

@@ -20,6 +20,7 @@ struct HostKernels {
     std::vector<float> weights;
     std::vector<float> cell[kCellFields]; ///< kCell*
     std::vector<vec4> vorticity;
+    std::vector<vec4> confinement;
 
     ivec3 grid_dims() const { return dims; }
     float grid_h() const { return h; }
@@ -30,6 +31,7 @@ struct HostKernels {
     float load_weight(int index) const { return weights[std::size_t(index)]; }
     float load_cell(uint field, int index) const { return cell[field][std::size_t(index)]; }
     vec4 load_vorticity(int index) const { return vorticity[std::size_t(index)]; }
+    vec4 load_confinement(int index) const { return confinement[std::size_t(index)]; }
     float load_phi(int index) const { return cell[kCellPhi][std::size_t(index)]; }
     GridLevel load_level(uint l) const { return levels[l]; }
     uint emitter_count() const { return uint(emitters.size()); }
@@ -121,6 +123,7 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
     for (auto& c : m.k.cell)
         c.assign(all_cells, 0.0f);
     m.k.vorticity.assign(m.cells(), glm::vec4(0.0f));
+    m.k.confinement.assign(m.cells(), glm::vec4(0.0f));
     m.solid_fraction.assign(m.cells(), 0.0f);
     m.flags.assign(m.cells(), 0);
     m.parts.assign(m.cells() * shaderio::kCellParts, shaderio::bits_none());
@@ -543,6 +546,12 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
             return Status::failure("CpuSolid::occupied must hold one byte per voxel of the grid");
     }
     WindStats stats;
+    // solid_cells.comp also makes each cell's confinement force and speed from the field the step starts
+    // with.
+    if (desc.vorticity != 0.0f)
+        m.each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+            k.confinement[std::size_t(i)] = k.cell_confinement(c, desc.vorticity);
+        });
     m.solid_pass(solid, stats);
     if (solid) stats.moving_fragments = std::uint32_t(solid->fragments.size());
     m.coarse_weights();

@@ -76,8 +76,8 @@ struct WindSolver::Impl : gpu::HostObject {
         diffuse, start, smooth, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
         pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
-        cell_motion, labels, region_motion, vorticity_buf, emitters, state, dispatch, bindings, points,
-        samples, state_readback;
+        cell_motion, labels, region_motion, vorticity_buf, confinement, emitters, state, dispatch, bindings,
+        points, samples, state_readback;
     gpu::Profiler profiler;
     std::pmr::vector<GridLevel> levels;
     /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.
@@ -224,6 +224,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.labels, nodes * 4, 0, "gust fill labels"},
         {&m.region_motion, nodes * 16, 0, "gust region motion"},
         {&m.vorticity_buf, cells * 16, 0, "gust vorticity"},
+        {&m.confinement, cells * 16, 0, "gust confinement"},
         {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), 0, "gust emitters"},
         {&m.state, sizeof(SolverState), kIndirect, "gust solver state"},
         {&m.dispatch, 2 * kDispatchSlots * sizeof(LevelDispatch), kIndirect, "gust solver dispatch"},
@@ -274,6 +275,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.region_motion = m.region_motion.address();
     b.max_solid_speed = desc.max_solid_speed;
     b.vorticity = m.vorticity_buf.address();
+    b.confinement = m.confinement.address();
     b.emitters = m.emitters.address();
     b.state = m.state.address();
     b.dispatch = m.dispatch.address();
