@@ -13,8 +13,11 @@
 //     kCellPressureUp), smoothed against the right-hand side, into kCellPressureUp.
 //   3 (level 0 upward, conjugate gradients): as 2, then the sums z·r and z·r_old, which the workgroup that
 //     finishes last turns into β.
+// The mode is the pipeline's specialization constant 0 (pc.parity holds it too), so a compiler keeps only
+// that mode's code: a CPU device executes every branch, taken or not.
 #include "solver_io.h"
 layout(local_size_x = kTileSide, local_size_y = kTileSide, local_size_z = kTileSide) in;
+layout(constant_id = 0) const uint kMode = 0u;
 #include "solver_common.glsl"
 
 const int kSide = int(kTileSide);
@@ -37,7 +40,7 @@ float iterate(ivec3 c, bool plain) {
 void main() {
     load_bindings();
     uint l = pc.level;
-    uint mode = pc.parity;
+    const uint mode = kMode;
     GridLevel level = load_level(l);
     ivec3 local = ivec3(gl_LocalInvocationID);
     bool up = mode == 2u || mode == 3u;

@@ -15,6 +15,9 @@ GUST_CONST uint kTileSide = 8;
 /// Levels of at most this many cells are solved together by one workgroup in shared memory
 /// (coarse_solve.comp), so none of them costs a dispatch of its own.
 GUST_CONST uint kCoarseCells = 4096;
+/// advect.comp's and smooth.comp's modes (SolverPush::parity 0 to 4), one pipeline each.
+GUST_CONST uint kAdvectModes = 5;
+GUST_CONST uint kSmoothModes = 5;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
 /// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3 (the layout of the voxel-set arrays).

@@ -72,8 +72,11 @@ std::uint64_t cells_of(glm::ivec3 dims) {
 
 struct WindSolver::Impl : gpu::HostObject {
     explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
-    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, coarse_weights, advect,
-        diffuse, start, smooth, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll, sample;
+    /// advect.comp and smooth.comp specialized to each mode (SolverPush::parity) the solver uses.
+    std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
+    std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
+    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, coarse_weights, diffuse,
+        start, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
         pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
         cell_motion, labels, region_motion, vorticity_buf, confinement, emitters, state, dispatch, bindings,
@@ -151,10 +154,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.fill_finish, small ? words(fill_finish_small_comp) : words(fill_finish_comp), "gust fill_finish"},
         {&m.solid_faces, small ? words(solid_faces_small_comp) : words(solid_faces_comp), "gust solid_faces"},
         {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
-        {&m.advect, words(advect_comp), "gust advect"},
         {&m.diffuse, words(diffuse_comp), "gust diffuse"},
         {&m.start, words(start_comp), "gust start"},
-        {&m.smooth, words(smooth_comp), "gust smooth"},
         {&m.restrict_, words(restrict_comp), "gust restrict"},
         {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
         {&m.cg, words(cg_comp), "gust cg"},
@@ -177,6 +178,32 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
+    // advect.comp and smooth.comp once per mode (SolverPush::parity) the solver uses, the mode a
+    // specialization constant: a compiler then keeps only that mode's code, where a CPU device would
+    // execute every mode's.
+    auto create_modes = [&](std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
+                            const char* name, std::span<const std::uint32_t> modes) -> Status {
+        for (const std::uint32_t mode : modes) {
+            const std::uint32_t constants[] = {mode};
+            auto pipeline = gpu::Pipeline::compute(ctx, name, code, sizeof(SolverPush), constants);
+            if (!pipeline) return pipeline.status();
+            out[mode] = std::move(*pipeline);
+        }
+        return {};
+    };
+    static constexpr std::uint32_t kMacCormackModes[] = {1, 2, 3}, kSemiLagrangianMode[] = {0},
+                                   kForcesMode[] = {4};
+    static constexpr std::uint32_t kPcgModes[] = {0, 1, 2, 3}, kMultigridModes[] = {1, 2, 4};
+    const std::span<const std::uint32_t> advect_modes =
+        desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
+        : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
+                                                      : std::span<const std::uint32_t>(kForcesMode);
+    const std::span<const std::uint32_t> smooth_modes =
+        desc.pressure == PressureSolver::MultigridPCG ? std::span<const std::uint32_t>(kPcgModes)
+        : desc.pressure == PressureSolver::Multigrid  ? std::span<const std::uint32_t>(kMultigridModes)
+                                                      : std::span<const std::uint32_t>();
+    if (Status s = create_modes(m.advect, words(advect_comp), "gust advect", advect_modes); !s) return s;
+    if (Status s = create_modes(m.smooth, words(smooth_comp), "gust smooth", smooth_modes); !s) return s;
     m.coarse_level = solver->levels_ - 1;
     while (m.coarse_level > 0 && cells_of(m.levels[m.coarse_level - 1].dims) <= shaderio::kCoarseCells)
         --m.coarse_level;
@@ -603,11 +630,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     if (desc_.advection == Advection::MacCormack) {
         for (std::uint32_t mode : {1u, 2u, 3u}) {
             push.parity = mode;
-            run(m.advect, face_groups);
+            run(m.advect[mode], face_groups);
         }
     } else {
         push.parity = desc_.advection == Advection::SemiLagrangian ? 0u : 4u;
-        run(m.advect, face_groups);
+        run(m.advect[push.parity], face_groups);
     }
     m.swap ^= 1u;
     m.profiler.end(cmd);
@@ -659,13 +686,13 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.iterations = k;
             push.level = 0;
             push.parity = cg ? 0u : 4u;
-            run_slot(m.smooth, shaderio::kTileSlot);
+            run_slot(m.smooth[push.parity], shaderio::kTileSlot);
             for (std::uint32_t l = 0; l < coarse; ++l) {
                 push.level = l + 1;
                 run_slot(m.restrict_, l + 1);
                 if (l + 1 == coarse) break;
                 push.parity = 1;
-                run_slot(m.smooth, shaderio::kTileSlot + l + 1);
+                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l + 1);
             }
             push.level = coarse;
             push.parity = coarse == 0 && cg ? 1u : 0u;
@@ -674,7 +701,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             for (std::uint32_t l = coarse; l-- > 0;) {
                 push.level = l;
                 push.parity = l == 0 && cg ? 3u : 2u;
-                run_slot(m.smooth, shaderio::kTileSlot + l);
+                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l);
             }
             if (cg) {
                 push.level = 0;
