@@ -15,6 +15,7 @@
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
 #include <gust/gpu/profiler.hpp>
+#include <gust/gust.hpp>
 #include <gust/solver/wind_solver.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <iostream>
@@ -63,7 +64,7 @@ constexpr float kCellSize = 1.0f;
 constexpr glm::vec3 kAmbient{4.0f, 0.0f, 0.0f};
 /// Velocity of the moving box, m/s.
 constexpr glm::vec3 kBoxVelocity{0.0f, 0.0f, 3.0f};
-/// Untimed steps before the timed ones of the step-time table.
+/// Untimed frames before the timed ones of the frame tables.
 constexpr int kWarmupSteps = 2;
 /// A solver of the time-to-tolerance table.
 struct Contender {
@@ -97,15 +98,11 @@ struct Options {
     /// Largest grid of the time-to-tolerance table: Jacobi's iterations grow with the square of the
     /// grid's width and each costs the cells, so a 128^3 solve would take hours on lavapipe.
     std::uint64_t solve_max_cells = 64ull * 64 * 64;
-    /// Step-time table: every pressure solve from zero (SolverDesc::warm_start off), to compare.
-    bool cold_start = false;
-    /// Step-time table: V-cycles per step at most (SolverDesc::max_cycles).
+    /// Frame-time table: V-cycles per frame at most (WindSettings::max_cycles).
     std::uint32_t max_cycles = gust::SolverDesc{}.max_cycles;
     /// Every table: SolverDesc::advection (--advection semi_lagrangian or maccormack, the scene format's
     /// names).
     gust::Advection advection = gust::SolverDesc{}.advection;
-    /// Red-black sweeps before and after each coarse correction (SolverDesc::smoothing), every table.
-    std::uint32_t smoothing = gust::SolverDesc{}.smoothing;
     /// Frame-budget table: V-cycles per step (0: no such table).
     std::uint32_t frame_cycles = 2;
     std::string write;
@@ -216,50 +213,28 @@ struct Placed {
     bool top_fraction;
 };
 
-/// The solids and sources of one grid: a ground slab whose top cuts the lowest cells, three buildings
-/// standing in it, a box sliding along +z over the ground, an omni emitter among them, and the ambient
-/// wind along +x. Footprints and heights are fractions of the domain, so every size holds the same scene
-/// at its own resolution; the ground's top is at the same height in metres, so it cuts its cells alike.
-class Scene {
+/// Where the scene's solids and source lie on one grid: a ground slab whose top cuts the lowest cells,
+/// three buildings standing in it, a box sliding along +z over the ground, an omni emitter among them,
+/// and the ambient wind along +x. Footprints and heights are fractions of the domain, so every size holds
+/// the same scene at its own resolution; the ground's top is at the same height in metres, so it cuts its
+/// cells alike.
+class Layout {
   public:
-    /// A b = 4 VoxelWorld over the wind grid of `desc` with the static boxes set; the moving box is placed
-    /// by advance().
-    static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx,
-                                                       const gust::SolverDesc& desc) {
-        std::unique_ptr<Scene> scene(new Scene(desc));
-        auto grid = gust::voxel_grid(desc, 4);
-        if (!grid) return grid.status();
-        gust::WorldDesc world;
-        world.grid = *grid;
-        world.tree.branching = 4;
-        world.method = gust::VoxelizeMethod::Compute;
-        auto created = gust::VoxelWorld::create(ctx, world);
-        if (!created) return created.status();
-        scene->world_ = std::move(*created);
-        auto box = scene->world_->upload(UnitBox().view());
-        if (!box) return gust::Status::failure("box upload failed: " + box.message());
-        scene->box_ = std::make_unique<gust::GpuMesh>(std::move(*box));
-        std::vector<gust::GpuInstance> statics;
+    explicit Layout(const gust::SolverDesc& desc)
+        : origin_(desc.origin), extent_(glm::vec3(desc.cells) * desc.cell_size) {}
+
+    /// Model matrices of the unit box for the static boxes, the ground first.
+    std::vector<glm::mat4> statics() const {
+        std::vector<glm::mat4> out;
         for (const Placed& p : kStatic)
-            statics.push_back({scene->box_.get(), scene->model(p), std::nullopt});
-        scene->world_->set_static(std::move(statics));
-        return scene;
+            out.push_back(model(p));
+        return out;
     }
 
-    /// Moves the box to step `index` and voxelizes the frame (static set once, box with velocities).
-    gust::Result<gust::WorldFrame> advance(std::uint64_t index) {
-        const glm::vec3 at = float(index) * kDt * kBoxVelocity;
-        const glm::mat4 here = glm::translate(glm::mat4(1.0f), at) * model(kMoving);
-        const glm::mat4 before = glm::translate(glm::mat4(1.0f), at - kDt * kBoxVelocity) * model(kMoving);
-        const gust::GpuInstance moving{box_.get(), here, before};
-        auto frame = world_->step(std::span(&moving, 1), kDt);
-        if (frame) last_ = *frame;
-        return frame;
+    /// The sliding box's model matrix at step `index`.
+    glm::mat4 moving(std::int64_t index) const {
+        return glm::translate(glm::mat4(1.0f), float(index) * kDt * kBoxVelocity) * model(kMoving);
     }
-
-    /// The solid boundary as the solver takes it: the tree and the moving box's fragments. Taken after
-    /// advance(), since a step may reallocate the fragment list.
-    gust::SolidSource source() const { return gust::solid_source(*world_); }
 
     /// The omni emitter, pushing air outwards among the buildings.
     gust::Emitter emitter() const {
@@ -271,8 +246,7 @@ class Scene {
         return e;
     }
 
-    /// The last frame the world stepped.
-    const gust::WorldFrame& last_frame() const { return last_; }
+    glm::vec3 centre() const { return origin_ + 0.5f * extent_; }
 
     /// What the scene holds, for the results text.
     static std::string describe() {
@@ -297,9 +271,6 @@ class Scene {
     }
 
   private:
-    explicit Scene(const gust::SolverDesc& desc)
-        : origin_(desc.origin), extent_(glm::vec3(desc.cells) * desc.cell_size) {}
-
     glm::mat4 model(const Placed& p) const {
         const float hi_y = p.top_fraction ? p.hi_y * extent_.y : p.hi_y;
         const glm::vec3 lo(p.lo_xz.x * extent_.x, p.lo_y, p.lo_xz.y * extent_.z);
@@ -320,9 +291,158 @@ class Scene {
 
     glm::vec3 origin_;
     glm::vec3 extent_;
+};
+
+/// The scene for the wind solver alone (the time-to-tolerance table): a b = 4 VoxelWorld over the wind
+/// grid with the static boxes set; the moving box is placed by advance().
+class Scene {
+  public:
+    static gust::Result<std::unique_ptr<Scene>> create(gust::gpu::Context& ctx,
+                                                       const gust::SolverDesc& desc) {
+        std::unique_ptr<Scene> scene(new Scene(desc));
+        auto grid = gust::voxel_grid(desc, 4);
+        if (!grid) return grid.status();
+        gust::WorldDesc world;
+        world.grid = *grid;
+        world.tree.branching = 4;
+        world.method = gust::VoxelizeMethod::Compute;
+        auto created = gust::VoxelWorld::create(ctx, world);
+        if (!created) return created.status();
+        scene->world_ = std::move(*created);
+        auto box = scene->world_->upload(UnitBox().view());
+        if (!box) return gust::Status::failure("box upload failed: " + box.message());
+        scene->box_ = std::make_unique<gust::GpuMesh>(std::move(*box));
+        std::vector<gust::GpuInstance> statics;
+        for (const glm::mat4& model : scene->layout_.statics())
+            statics.push_back({scene->box_.get(), model, std::nullopt});
+        scene->world_->set_static(std::move(statics));
+        return scene;
+    }
+
+    /// Moves the box to step `index` and voxelizes the frame (static set once, box with velocities).
+    gust::Status advance(std::int64_t index) {
+        const gust::GpuInstance moving{box_.get(), layout_.moving(index), layout_.moving(index - 1)};
+        auto frame = world_->step(std::span(&moving, 1), kDt);
+        return frame ? gust::Status{} : frame.status();
+    }
+
+    /// The solid boundary as the solver takes it: the tree and the moving box's fragments. Taken after
+    /// advance(), since a step may reallocate the fragment list.
+    gust::SolidSource source() const { return gust::solid_source(*world_); }
+
+    const Layout& layout() const { return layout_; }
+
+  private:
+    explicit Scene(const gust::SolverDesc& desc) : layout_(desc) {}
+
+    Layout layout_;
     std::unique_ptr<gust::VoxelWorld> world_;
     std::unique_ptr<gust::GpuMesh> box_;
-    gust::WorldFrame last_;
+};
+
+/// gust's matrix type from GLM's (both column-major).
+gust::Mat4 to_mat4(const glm::mat4& m) {
+    gust::Mat4 out;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            out.m[4 * c + r] = m[c][r];
+    return out;
+}
+
+/// The Status of a public API call's Outcome, its message prefixed with what was being done.
+gust::Status checked(const gust::Outcome& outcome, const char* what) {
+    return outcome ? gust::Status{} : gust::Status::failure(std::string(what) + ": " + outcome.message());
+}
+
+/// The frame tables' scene through the public API, as a game drives gust: a gust::System on its own
+/// device whose wind domain is the grid of `desc`, the unit box as one mesh, the static boxes as
+/// instances, the sliding box as a moving instance, the ambient wind and the emitter. advance() moves the
+/// box and runs one whole frame (voxelizer, tree, wind, texture) with System::step.
+class FrameScene {
+  public:
+    static gust::Result<std::unique_ptr<FrameScene>> create(const gust::SolverDesc& desc,
+                                                            const Options& options,
+                                                            std::uint32_t cycles_per_step,
+                                                            bool moving = true) {
+        std::unique_ptr<FrameScene> scene(new FrameScene(desc));
+        gust::SystemDesc system;
+        system.device = options.device.empty() ? nullptr : options.device.c_str();
+        system.voxelize = gust::VoxelizePath::Compute;
+        for (int a = 0; a < 3; ++a)
+            system.domain.cells[a] = desc.cells[a];
+        system.domain.cell_size = desc.cell_size;
+        system.domain.voxels_per_cell = desc.voxels_per_cell;
+        system.domain.branching = 4;
+        const glm::vec3 centre = scene->layout_.centre();
+        system.domain.focus = {centre.x, centre.y, centre.z};
+        system.wind.tolerance = desc.tolerance;
+        system.wind.max_cycles = desc.max_cycles;
+        system.wind.cycles_per_step = cycles_per_step;
+        system.wind.vorticity = desc.vorticity;
+        system.wind.advection = desc.advection == gust::Advection::MacCormack
+                                    ? gust::WindAdvection::MacCormack
+                                    : gust::WindAdvection::SemiLagrangian;
+        if (gust::Status s = checked(gust::System::create(system, scene->system_), "System::create"); !s)
+            return s;
+        gust::System& sys = *scene->system_;
+        const UnitBox box;
+        gust::MeshDesc mesh;
+        mesh.positions = &box.positions[0].x;
+        mesh.vertex_count = std::uint32_t(box.positions.size());
+        mesh.indices = box.indices.data();
+        mesh.index_count = std::uint32_t(box.indices.size());
+        gust::MeshId mesh_id = 0;
+        if (gust::Status s = checked(sys.create_mesh(mesh, mesh_id), "create_mesh"); !s) return s;
+        for (const glm::mat4& model : scene->layout_.statics()) {
+            gust::InstanceId id = 0;
+            if (gust::Status s =
+                    checked(sys.create_instance(mesh_id, to_mat4(model), false, id), "create_instance");
+                !s)
+                return s;
+        }
+        if (moving)
+            if (gust::Status s =
+                    checked(sys.create_moving_instance(mesh_id, to_mat4(scene->layout_.moving(0)),
+                                                       to_mat4(scene->layout_.moving(-1)), scene->moving_),
+                            "create_moving_instance");
+                !s)
+                return s;
+        if (gust::Status s = checked(sys.set_ambient({kAmbient.x, kAmbient.y, kAmbient.z}), "set_ambient");
+            !s)
+            return s;
+        const gust::Emitter e = scene->layout_.emitter();
+        gust::WindEmitter emitter;
+        emitter.type = gust::WindEmitterType::Omni;
+        emitter.position = {e.position.x, e.position.y, e.position.z};
+        emitter.radius = e.radius;
+        emitter.strength = e.strength;
+        emitter.falloff = e.falloff;
+        if (gust::Status s = checked(sys.set_emitters(std::span(&emitter, 1)), "set_emitters"); !s) return s;
+        return scene;
+    }
+
+    /// Moves the box to step `index` (created at step 0) and runs the frame; the wall time around step().
+    gust::Result<double> advance(std::int64_t index) {
+        if (index > 0 && moving_ != 0)
+            if (gust::Status s =
+                    checked(system_->set_transform(moving_, to_mat4(layout_.moving(index))), "set_transform");
+                !s)
+                return s;
+        const auto start = Clock::now();
+        const gust::Outcome stepped = system_->step(kDt);
+        const double wall_ms = ms_since(start);
+        if (gust::Status s = checked(stepped, "step"); !s) return s;
+        return wall_ms;
+    }
+
+    const gust::FrameStats& stats() const { return system_->stats(); }
+
+  private:
+    explicit FrameScene(const gust::SolverDesc& desc) : layout_(desc) {}
+
+    Layout layout_;
+    std::unique_ptr<gust::System> system_;
+    gust::InstanceId moving_ = 0;
 };
 
 /// Face velocities of the uniform ambient wind: the non-random start of every timed solve.
@@ -343,27 +463,40 @@ make_solver(gust::gpu::Context& ctx, const gust::SolverDesc& desc, const Scene& 
     auto solver = gust::WindSolver::create(ctx, desc);
     if (!solver) return solver;
     if (gust::Status s = (*solver)->set_ambient(kAmbient); !s) return s;
-    const gust::Emitter emitter = scene.emitter();
+    const gust::Emitter emitter = scene.layout().emitter();
     if (gust::Status s = (*solver)->set_emitters(std::span(&emitter, 1)); !s) return s;
     return solver;
 }
 
-/// One timed step.
+/// One timed frame.
 struct StepSample {
-    double wall_ms = 0.0; ///< around WindSolver::step()
-    gust::WindStats stats;
+    double wall_ms = 0.0; ///< around System::step()
+    gust::FrameStats stats;
 };
 
-/// The step-time table's row of one grid.
+/// The frame tables' row of one grid.
 struct StepRow {
     glm::uvec3 cells{0};
     std::uint32_t levels = 0;
+    std::uint64_t static_fragments = 0; ///< FrameStats::fragments of the static boxes alone
+    /// FrameStats::fragments less the static boxes': the sliding box's, which solid_motion reads.
+    double moving_fragments(const StepSample& s) const {
+        return double(s.stats.fragments - static_fragments);
+    }
     std::vector<StepSample> steps;
-    gust::WorldFrame world; ///< of the last timed step
     std::string error;
-    /// Medians over the timed steps: GPU ms of `name`, of all passes, wall ms, V-cycles.
+    /// Medians over the timed frames: GPU ms of the wind's pass `name` (FrameStats::ms "wind_<name>"), of
+    /// the voxelizer's and the tree's passes, of all passes, wall ms, V-cycles.
     double pass(const std::string& name) const {
-        return median_of(steps, [&](const StepSample& s) { return pass_ms(s.stats.ms, name); });
+        return median_of(steps, [&](const StepSample& s) { return pass_ms(s.stats.ms, "wind_" + name); });
+    }
+    double world() const {
+        return median_of(steps, [](const StepSample& s) {
+            double sum = 0.0;
+            for (const auto& [name, ms] : s.stats.ms)
+                sum += name.starts_with("wind_") ? 0.0 : ms;
+            return sum;
+        });
     }
     double total() const {
         return median_of(steps, [](const StepSample& s) { return summed(s.stats.ms); });
@@ -374,36 +507,44 @@ struct StepRow {
     double cycles() const {
         return median_of(steps, [](const StepSample& s) { return s.stats.cycles; });
     }
-    double recorded() const {
-        return median_of(steps, [](const StepSample& s) { return s.stats.cycles_recorded; });
-    }
 };
 
-/// Steps the scene and a default (MGPCG) solver from the uniform ambient wind, moving the box every
-/// step: kWarmupSteps untimed, then up to `repeat` timed, fewer once the timed ones pass `budget_s`.
-gust::Status bench_steps(Scene& scene, gust::WindSolver& solver, int repeat, double budget_s, StepRow& row) {
-    if (gust::Status s = solver.set_velocity(ambient_field(row.cells)); !s) return s;
+/// Runs the scene's frames from rest, moving the box every frame: kWarmupSteps untimed, then up to
+/// `repeat` timed, fewer once the timed ones pass `budget_s`.
+gust::Status bench_frames(FrameScene& scene, int repeat, double budget_s, StepRow& row) {
     double spent_ms = 0.0;
     for (int i = 0; i < kWarmupSteps + repeat; ++i) {
         if (!row.steps.empty() && spent_ms > budget_s * 1000.0) break;
-        auto frame = scene.advance(std::uint64_t(i));
-        if (!frame) return frame.status();
-        const gust::SolidSource solid = scene.source();
+        auto wall = scene.advance(i);
+        if (!wall) return wall.status();
         StepSample sample;
-        const auto start = Clock::now();
-        auto stats = solver.step(kDt, &solid);
-        sample.wall_ms = ms_since(start);
-        if (!stats) return stats.status();
-        sample.stats = std::move(*stats);
-        std::cerr << "  step " << i << (i < kWarmupSteps ? " (untimed)" : "") << ": " << sample.stats.cycles
+        sample.wall_ms = *wall;
+        sample.stats = scene.stats();
+        std::cerr << "  frame " << i << (i < kWarmupSteps ? " (untimed)" : "") << ": " << sample.stats.cycles
                   << " V-cycles" << (sample.stats.converged ? "" : " (not converged)") << ", "
                   << fmt_ms(sample.wall_ms) << " ms wall" << std::endl;
         if (i < kWarmupSteps) continue;
         spent_ms += sample.wall_ms;
         row.steps.push_back(std::move(sample));
     }
-    row.world = scene.last_frame();
     return {};
+}
+
+/// The frame table's row of `desc`'s grid at `cycles_per_step` (WindSettings): the static boxes' fragments
+/// from a System holding them alone, then bench_frames on the whole scene.
+gust::Status run_frames(const gust::SolverDesc& desc, const Options& options, std::uint32_t cycles_per_step,
+                        StepRow& row) {
+    row.cells = desc.cells;
+    row.levels = std::uint32_t(gust::detail::build_levels(desc.cells, desc.cell_size).size());
+    {
+        auto statics = FrameScene::create(desc, options, cycles_per_step, false);
+        if (!statics) return statics.status();
+        if (auto wall = (*statics)->advance(0); !wall) return wall.status();
+        row.static_fragments = (*statics)->stats().fragments;
+    }
+    auto frames = FrameScene::create(desc, options, cycles_per_step);
+    if (!frames) return frames.status();
+    return bench_frames(**frames, options.repeat, options.budget_s, row);
 }
 
 /// One step of one solver from the uniform ambient wind.
@@ -751,18 +892,20 @@ std::vector<std::pair<std::string, Traffic>> step_traffic(const Workload& w) {
             {"pressure", pressure_traffic(w)}, {"project", project_traffic(w)}};
 }
 
-/// The workload of a step-time row.
+/// The workload of a frame-time row (its frames run the API's solver settings: warm start, default
+/// smoothing).
 Workload workload_of(const StepRow& row, const gust::SolverDesc& desc) {
+    const gust::SolverDesc api;
     Workload w;
     w.levels = gust::detail::build_levels(row.cells, desc.cell_size);
     w.advection = desc.advection;
-    w.smoothing = desc.smoothing;
+    w.smoothing = api.smoothing;
     w.cell_words = gust::detail::cell_words(desc.voxels_per_cell);
     w.cycles = row.cycles();
-    w.warm_start = desc.warm_start;
+    w.warm_start = api.warm_start;
     w.cut_cells = median_of(row.steps, [](const StepSample& s) { return s.stats.cut_cells; });
-    w.fragments = median_of(row.steps, [](const StepSample& s) { return s.stats.moving_fragments; });
-    w.tree_bytes = double(row.world.tree.pool_bytes);
+    w.fragments = median_of(row.steps, [&](const StepSample& s) { return row.moving_fragments(s); });
+    w.tree_bytes = double(row.steps.back().stats.pool_bytes);
     return w;
 }
 
@@ -780,99 +923,106 @@ std::string fmt_mb(double bytes) {
     return text;
 }
 
-/// The passes the step-time table shows, in the solver's order.
+/// The passes the frame-time table shows, in the solver's order.
 constexpr const char* kPasses[] = {"solid", "fill", "faces", "advect", "pressure", "project"};
 
 void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, const gust::SolverDesc& desc,
                   const Options& options, std::vector<std::string>& notes) {
-    out << "### Step time per pass\n\n";
+    out << "### Frame time per pass\n\n";
     out << "Every grid has " << kCellSize
         << " m cells, so a larger grid covers more ground, and holds the same "
-        << "scene: " << Scene::describe() << ". One `VoxelWorld` over the wind grid (b = 4, compute path, "
+        << "scene: " << Layout::describe()
+        << ". The frame runs through the public API, as a game drives it: one `gust::System` on its own "
+           "device, the wind domain over the grid ("
         << desc.voxels_per_cell
-        << " voxels per cell per axis) steps the moving box before each solver step. Ambient wind ("
+        << " voxels per cell per axis, tree branching 4, the compute voxelizer), the unit box as one mesh, "
+           "the static boxes as instances, the sliding box as a moving instance moved with `set_transform` "
+           "before each `System::step`, which records the whole frame (voxelizer, tree, wind, texture) and "
+           "submits it once. Ambient wind ("
         << kAmbient.x << ", " << kAmbient.y << ", " << kAmbient.z
-        << ") m/s, dt = 1/30 s, `SolverDesc` defaults otherwise: "
+        << ") m/s, dt = 1/30 s, `WindSettings` defaults otherwise: "
         << (desc.advection == gust::Advection::MacCormack ? "MacCormack" : "semi-Lagrangian")
-        << " advection, the default pressure "
-           "solver MGPCG (`PressureSolver::MultigridPCG`: conjugate gradients preconditioned by one "
-           "multigrid V-cycle per iteration, "
-        << desc.smoothing << " + " << desc.smoothing << " red-black sweeps), tolerance "
-        << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles
-        << " iterations (V-cycles), of which a step records what the last step suggests (Recorded; "
-           "docs/solver.md, \"Cycles recorded\"), "
-        << (desc.warm_start
-                ? "each solve starting from the last step's pressure scaled to fit (the warm start)"
-                : "each solve starting from zero (`--cold-start`)")
-        << ", vorticity confinement " << desc.vorticity
-        << ", no viscosity (so no `viscosity` pass). The air starts as the uniform ambient wind; "
-        << kWarmupSteps << " untimed steps, then up to " << options.repeat
-        << " timed ones, fewer once they pass " << options.budget_s
-        << " s; every column is the median over the timed steps. Pass columns are `WindStats::ms` (GPU "
-           "timestamps); total GPU ms sums them; wall ms is around `WindSolver::step()` (recording, "
-           "submission "
-           "and the wait).\n\n";
-    out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Steps |";
+        << " advection, MGPCG (conjugate gradients preconditioned by one multigrid V-cycle per iteration, "
+        << gust::SolverDesc{}.smoothing << " + " << gust::SolverDesc{}.smoothing
+        << " red-black sweeps), tolerance " << fmt_sci(desc.tolerance) << ", at most " << desc.max_cycles
+        << " V-cycles, `cycles_per_step` 0 (each frame solves to the tolerance, recording the V-cycles the "
+           "last frame suggests; docs/solver.md, \"Cycles recorded\"), the warm start, vorticity "
+           "confinement "
+        << desc.vorticity << ", no viscosity. The air starts at rest; " << kWarmupSteps
+        << " untimed frames, then up to " << options.repeat << " timed ones, fewer once they pass "
+        << options.budget_s
+        << " s; every column is the median over the timed frames. Pass columns are `FrameStats::ms` (GPU "
+           "timestamps): the wind's passes by name, *world* the voxelizer's and the tree's together; frame "
+           "GPU ms sums them all; wall ms is around `System::step()` (recording, the submission and the "
+           "wait). Moving fragments are `FrameStats::fragments` less those of a System holding the static "
+           "boxes alone.\n\n";
+    out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Frames | World ms |";
     for (const char* pass : kPasses)
         out << " `" << pass << "` ms |";
-    out << " Total GPU ms | Wall ms | V-cycles | Recorded | Converged |\n|--:|--:|--:|--:|--:|--:|";
+    out << " Frame GPU ms | Wall ms | V-cycles | Dispatches | Converged |\n|--:|--:|--:|--:|--:|--:|--:|";
     for (std::size_t i = 0; i < std::size(kPasses); ++i)
         out << "--:|";
     out << "--:|--:|--:|--:|---|\n";
     for (const StepRow& row : rows) {
         out << "| " << size_name(row.cells) << " | " << grouped(cell_count(row.cells)) << " | ";
         if (!row.error.empty()) {
-            out << failed_cell(notes, size_name(row.cells) + " steps", row.error) << " |";
+            out << failed_cell(notes, size_name(row.cells) + " frames", row.error) << " |";
             for (std::size_t i = 0; i < std::size(kPasses) + 9; ++i)
                 out << " |";
             out << "\n";
             continue;
         }
-        const gust::WindStats& last = row.steps.back().stats;
+        const gust::FrameStats& last = row.steps.back().stats;
         std::size_t converged = 0;
         for (const StepSample& s : row.steps)
             converged += s.stats.converged ? 1 : 0;
-        out << row.levels << " | " << grouped(last.cut_cells) << " | " << grouped(last.moving_fragments)
-            << " | " << row.steps.size() << " |";
+        out << row.levels << " | " << grouped(last.cut_cells) << " | "
+            << grouped(std::uint64_t(row.moving_fragments(row.steps.back()))) << " | " << row.steps.size()
+            << " | " << fmt_ms(row.world()) << " |";
         for (const char* pass : kPasses)
             out << " " << fmt_ms(row.pass(pass)) << " |";
         out << " " << fmt_ms(row.total()) << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
-            << row.recorded() << " | " << converged << " of " << row.steps.size() << " |\n";
+            << grouped(last.dispatches) << " | " << converged << " of " << row.steps.size() << " |\n";
     }
     out << "\n";
 }
 
-/// The frame-budget table: the step-time scene with a fixed number of V-cycles a step, as a game that
+/// The frame-budget table: the frame-time scene with a fixed number of V-cycles a step, as a game that
 /// gives the solver a slice of its frame would run it, and how far those cycles got.
 void render_budget(std::ostringstream& out, const std::vector<StepRow>& rows, const Options& options,
                    std::vector<std::string>& notes) {
     if (rows.empty()) return;
-    out << "### Step time at a frame budget of " << options.frame_cycles << " V-cycles\n\n";
-    out << "The step-time scene and settings with at most " << options.frame_cycles
-        << " V-cycles a step (`--frame-cycles`, `SolverDesc::max_cycles`), converged or not, as a game that "
-           "gives the solver a fixed slice of its frame would run it; the warm start carries the rest of the "
-           "solve into the next step. Same warm-up and timed steps, medians over the timed steps. Residual / "
+    out << "### Frame time at a budget of " << options.frame_cycles << " V-cycles\n\n";
+    out << "The frame-time scene and settings with " << options.frame_cycles
+        << " V-cycles a frame (`--frame-cycles`, `WindSettings::cycles_per_step`, the API's default for "
+           "games), converged or not, as a game that gives the solver a fixed slice of its frame runs it; "
+           "the warm start carries the rest of the solve into the next frame. Same warm-up and timed "
+           "frames, medians over the timed frames. Residual / "
            "divergence is max |residual| / max |divergence before projection| after the last cycle; "
            "divergence after / before is the largest divergence left by the projection over the largest "
            "before it.\n\n";
-    out << "| Grid | Steps | `pressure` ms | Total GPU ms | Wall ms | V-cycles | Residual / divergence | "
-           "Divergence after / before |\n|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    out << "| Grid | Frames | `pressure` ms | Frame GPU ms | Wall ms | V-cycles | Dispatches | Submissions | "
+           "Waits | Residual / divergence | Divergence after / before "
+           "|\n|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+           "--:|\n";
     for (const StepRow& row : rows) {
         out << "| " << size_name(row.cells) << " | ";
         if (!row.error.empty()) {
             out << failed_cell(notes, size_name(row.cells) + " at the frame budget", row.error)
-                << " | | | | | | |\n";
+                << " | | | | | | | | | |\n";
             continue;
         }
+        const gust::FrameStats& last = row.steps.back().stats;
         const auto ratio = [&](auto field) {
             return median_of(row.steps, [&](const StepSample& s) {
                 return s.stats.divergence_before > 0.0 ? field(s.stats) / s.stats.divergence_before : 0.0;
             });
         };
         out << row.steps.size() << " | " << fmt_ms(row.pass("pressure")) << " | " << fmt_ms(row.total())
-            << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
-            << fmt_sci(ratio([](const gust::WindStats& w) { return w.residual; })) << " | "
-            << fmt_sci(ratio([](const gust::WindStats& w) { return w.divergence_after; })) << " |\n";
+            << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | " << grouped(last.dispatches)
+            << " | " << last.submissions << " | " << last.waits << " | "
+            << fmt_sci(ratio([](const gust::FrameStats& f) { return f.residual; })) << " | "
+            << fmt_sci(ratio([](const gust::FrameStats& f) { return f.divergence_after; })) << " |\n";
     }
     out << "\n";
 }
@@ -882,7 +1032,7 @@ void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
                    std::vector<std::string>& notes) {
     const std::string base = kContenders[0].name;
     out << "### MGPCG, multigrid and Jacobi to a tolerance\n\n";
-    out << "The same scene with the moving box stopped where the step-time runs left it, the same settings, "
+    out << "The same scene with the moving box stopped where the frame-time runs left it, the same settings, "
            "and one step from the uniform ambient wind each time, so the divergence is smooth (the emitter, "
            "the inflow side and the solids' faces). Every solver stops when max |residual| <= tolerance "
            "x max |divergence before projection|. A solver records every cycle or iteration its cap allows "
@@ -995,17 +1145,17 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "count, conjugate gradients' sums for alpha and beta) are left out; the tree's live pools count "
            "once; the three `vkCmdCopyBuffer` of a step count as read plus write. The pressure pass (MGPCG) "
            "is counted per iteration (one V-cycle, at every level but the coarsest: "
-        << 2 * desc.smoothing << " half-sweeps down and " << 2 * desc.smoothing
+        << 2 * gust::SolverDesc{}.smoothing << " half-sweeps down and " << 2 * gust::SolverDesc{}.smoothing
         << " up, restriction (which computes the finer level's residual), prolongation; the coarsest level's "
         << 2 * gust::detail::kCoarseSweeps
         << " half-sweeps; then conjugate gradients' five level-0 passes: the sums of z*r and z*r_old, "
            "p = z + beta*p, the sum of p*Lp, the update of x, r_old and z, and r = b - Lx with the check's "
-           "maximum) times the median V-cycles of the step-time table, plus the divergence (which also sets "
-           "b and zeroes x, p and r_old), the warm start (q = L phi with the sums b*q and q*q; left out with "
-           "`--cold-start`), the start (x0 = s*phi and r0 = b - s*q) and the copy of x into the pressure. "
-           "Measured ms are that table's pass medians; the step row sums them (the step-time table's total "
-           "is the median of the sums). A step records the V-cycles the last step suggests (the step-time "
-           "table's recorded column, at most "
+           "maximum) times the median V-cycles of the frame-time table, plus the divergence (which also sets "
+           "b and zeroes x, p and r_old), the warm start (q = L phi with the sums b*q and q*q), the start "
+           "(x0 = s*phi and r0 = b - s*q) and the copy of x into the pressure. "
+           "Measured ms are that table's medians of the wind's passes; the step row sums them (the voxelizer "
+           "and the tree, the frame-time table's world column, are not modelled). A frame records the "
+           "V-cycles the last frame suggests (at most "
         << desc.max_cycles
         << ") and the check zeroes the dispatches of those left after convergence, so the measured "
            "pressure ms also holds their empty dispatches. Accessed at bandwidth ms is what the accessed "
@@ -1047,7 +1197,8 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
                    const RunInfo& run) {
     std::ostringstream out;
     std::vector<std::string> notes;
-    out << "## Wind solver: step time, MGPCG, multigrid and Jacobi to a tolerance, bytes against bandwidth"
+    out << "## Wind solver: frame time through the API, MGPCG, multigrid and Jacobi to a tolerance, bytes "
+           "against bandwidth"
         << heading_device(device) << "\n\n";
     out << "Command: `" << run.command << "`\n\n";
     out << "Machine: Vulkan device " << device.name << " (" << device.type << ", " << device.driver
@@ -1089,19 +1240,14 @@ int main(int argc, char** argv) {
     app.add_option("--solve-max-cells", options.solve_max_cells,
                    "largest grid, in cells, of the time-to-tolerance table")
         ->check(CLI::Range(std::uint64_t(1), std::uint64_t(256) * 256 * 256));
-    app.add_flag("--cold-start", options.cold_start,
-                 "step-time table: start every pressure solve from zero (SolverDesc::warm_start = false)");
-    app.add_option("--max-cycles", options.max_cycles, "step-time table: V-cycles per step at most")
+    app.add_option("--max-cycles", options.max_cycles, "frame-time table: V-cycles per frame at most")
         ->check(CLI::Range(1, 1000));
     const std::map<std::string, gust::Advection> advections{
         {"semi_lagrangian", gust::Advection::SemiLagrangian}, {"maccormack", gust::Advection::MacCormack}};
     app.add_option("--advection", options.advection, "semi_lagrangian or maccormack (SolverDesc::advection)")
         ->transform(CLI::CheckedTransformer(advections));
-    app.add_option("--smoothing", options.smoothing,
-                   "red-black sweeps before and after each coarse correction (SolverDesc::smoothing)")
-        ->check(CLI::Range(1, 16));
     app.add_option("--frame-cycles", options.frame_cycles,
-                   "frame-budget table: V-cycles per step, converged or not (0: leave the table out)")
+                   "frame-budget table: V-cycles per frame, converged or not (0: leave the table out)")
         ->check(CLI::Range(0, 1000));
     app.add_option("--write", options.write, "Markdown file whose solver block is replaced (or appended)");
     app.add_option("--device", options.device, "Vulkan device index or name substring");
@@ -1137,9 +1283,7 @@ int main(int argc, char** argv) {
 
     gust::SolverDesc defaults;
     defaults.cell_size = kCellSize;
-    defaults.warm_start = !options.cold_start;
     defaults.max_cycles = options.max_cycles;
-    defaults.smoothing = options.smoothing;
     defaults.advection = options.advection;
     std::vector<StepRow> steps;
     std::vector<SolveRow> solves;
@@ -1148,31 +1292,32 @@ int main(int argc, char** argv) {
         gust::SolverDesc desc = defaults;
         desc.cells = cells;
         StepRow row;
-        row.cells = cells;
-        auto scene = Scene::create(**ctx, desc);
-        if (!scene) {
-            row.error = scene.message();
-            steps.push_back(std::move(row));
-            continue;
-        }
-        auto solver = make_solver(**ctx, desc, **scene);
-        if (!solver) {
-            row.error = solver.message();
-        } else {
-            row.levels = (*solver)->levels();
-            if (gust::Status s = bench_steps(**scene, **solver, options.repeat, options.budget_s, row); !s)
-                row.error = s.message();
-        }
+        if (gust::Status s = run_frames(desc, options, 0, row); !s) row.error = s.message();
         if (row.error.empty())
-            std::cerr << "  step: " << fmt_ms(row.total()) << " ms GPU, " << fmt_ms(row.wall())
+            std::cerr << "  frame: " << fmt_ms(row.total()) << " ms GPU, " << fmt_ms(row.wall())
                       << " ms wall, " << row.cycles() << " V-cycles" << std::endl;
         else
-            std::cerr << "  step failed: " << row.error << std::endl;
+            std::cerr << "  frames failed: " << row.error << std::endl;
         const bool stepped = row.error.empty();
+        const std::int64_t last_frame = std::int64_t(kWarmupSteps + row.steps.size()) - 1;
         steps.push_back(std::move(row));
         if (!stepped) continue;
         if (cell_count(cells) > options.solve_max_cells) continue;
+        // The solver alone, on the solids where the frames left them.
+        auto scene = Scene::create(**ctx, desc);
+        gust::Status placed = scene ? (*scene)->advance(last_frame) : scene.status();
         for (float tolerance : kTolerances) {
+            if (!placed) {
+                SolveRow failed;
+                failed.cells = cells;
+                failed.tolerance = tolerance;
+                for (std::size_t i = 0; i < std::size(kContenders); ++i) {
+                    failed.sides[i].solver = &kContenders[i];
+                    failed.sides[i].error = placed.message();
+                }
+                solves.push_back(std::move(failed));
+                continue;
+            }
             SolveRow solve = bench_solve(**ctx, **scene, cells, tolerance, options.repeat, options.budget_s);
             for (const SolveSide& side : solve.sides) {
                 std::cerr << "  " << side.solver->name << " to " << fmt_sci(tolerance) << ": ";
@@ -1195,16 +1340,8 @@ int main(int argc, char** argv) {
         desc.cells = cells;
         desc.max_cycles = options.frame_cycles;
         StepRow row;
-        row.cells = cells;
-        auto scene = Scene::create(**ctx, desc);
-        if (!scene) {
-            row.error = scene.message();
-        } else if (auto solver = make_solver(**ctx, desc, **scene); !solver) {
-            row.error = solver.message();
-        } else if (gust::Status s = bench_steps(**scene, **solver, options.repeat, options.budget_s, row);
-                   !s) {
+        if (gust::Status s = run_frames(desc, options, options.frame_cycles, row); !s)
             row.error = s.message();
-        }
         budget_rows.push_back(std::move(row));
     }
 
