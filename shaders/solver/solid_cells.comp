@@ -2,7 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
 // parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
-// clears what the last step summed here. Thread 0 also sizes the moving-fragment pass. Every cell also
+// clears what the last step summed here. Only cells whose voxels may have changed are gathered again: with
+// pc.parity 0 (the static solids as at the last step) a cell that held no moving voxels then and whose
+// leaf bricks hold none now keeps its parts and static voxels; pc.parity 1 redoes every cell. Thread 0 also sizes the moving-fragment pass. Every cell also
 // makes its vorticity-confinement force for advection.
 #include "../tree/tree_io.h"
 #include "solver_io.h"
@@ -40,6 +42,27 @@ uint node_at(ivec3 v, uint level) {
 bool in_tree(ivec3 v) {
     int res = 1 << int(tree_levels * b_log2());
     return all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, ivec3(res)));
+}
+
+/// Whether a leaf brick holding any of voxels lo .. lo + v - 1 has a voxel of a moving surface this step
+/// (anywhere in the brick: a cell redone for nothing costs only time).
+bool bricks_dynamic(ivec3 lo, uint v) {
+    int shift = int(b_log2());
+    ivec3 first = lo >> shift, last = (lo + int(v - 1u)) >> shift;
+    uint words = sb().b.mask_words;
+    uint stride = sb().b.mask_stride;
+    for (int z = first.z; z <= last.z; ++z)
+        for (int y = first.y; y <= last.y; ++y)
+            for (int x = first.x; x <= last.x; ++x) {
+                ivec3 corner = ivec3(x, y, z) << shift;
+                if (!in_tree(corner)) continue;
+                uint node = node_at(corner, tree_levels - 1u);
+                uint block = node == kNone ? 0u : NodesRef(tree_nodes).v[node].x;
+                if (block == 0u) continue;
+                for (uint w = 0u; w < words; ++w)
+                    if (WordsRef(tree_masks).v[block * stride + words + w] != 0u) return true;
+            }
+    return false;
 }
 
 void main() {
@@ -94,10 +117,19 @@ void main() {
         any_node = node != kNone && NodesRef(tree_nodes).v[node].x != 0u;
     }
     if (!any_node) return;
+    if (pc.parity == 0u && (old & kCellDynamic) == 0u && !bricks_dynamic(lo, v)) {
+        // Nothing here changed since the last step: its parts and static voxels stay as that step left them.
+        if ((old & kCellCut) != 0u) {
+            flags.v[i] = old & (kCellCut | kCellStatic);
+            atomicAdd(state().s.cut_cells, 1u);
+        }
+        return;
+    }
 
     uint words = sb().b.mask_words;
     uint stride = sb().b.mask_stride;
     CellBits occupied = bits_none(), held = bits_none();
+    bool dynamic = false;
     ivec3 cached_brick = ivec3(-1);
     uint block = 0u;
     for (uint z = 0u; z < v; ++z)
@@ -115,8 +147,10 @@ void main() {
                 uint bit = child_slot(uvec3(voxel), levels - 1u, levels, b_log2());
                 uint base = block * stride + bit / 32u;
                 uint static_word = WordsRef(tree_masks).v[base];
-                uint word = static_word | WordsRef(tree_masks).v[base + words];
+                uint dynamic_word = WordsRef(tree_masks).v[base + words];
+                uint word = static_word | dynamic_word;
                 uint j = x + v * (y + v * z);
+                if ((dynamic_word >> (bit % 32u) & 1u) != 0u) dynamic = true;
                 if ((word >> (bit % 32u) & 1u) != 0u) occupied.w[j / 32u] |= 1u << (j % 32u);
                 if ((static_word >> (bit % 32u) & 1u) != 0u) held.w[j / 32u] |= 1u << (j % 32u);
             }
@@ -128,7 +162,7 @@ void main() {
     uint cw = hot.cell_words;
     for (uint k = 0u; k < kCellParts; ++k)
         for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
-    uint cut = kCellCut;
+    uint cut = dynamic ? kCellCut | kCellDynamic : kCellCut;
     if (bits_count(held) != 0u) {
         for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_static).v[uint(i) * cw + w] = held.w[w];
         cut |= kCellStatic;

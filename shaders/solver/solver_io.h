@@ -122,6 +122,7 @@ GUST_CONST uint kCellNoAir = 4u;      ///< no part reaches an open side: the who
 GUST_CONST uint kCellSecondPart = 8u; ///< its air is part 1 (part 0 is sealed)
 GUST_CONST uint kCellRegion = 16u;    ///< << k: node k of this cell roots a sealed region with motion sums
 GUST_CONST uint kCellStatic = 64u;    ///< holds static solid voxels: they are in SolverBindings::cell_static
+GUST_CONST uint kCellDynamic = 128u;  ///< held voxels of moving surfaces: the next step redoes its voxels
 
 /// Union-find node of part k of cell `cell`; node 0 stands for the air beyond the open domain sides.
 GUST_CONST uint kOutsideNode = 0u;

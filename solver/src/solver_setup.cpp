@@ -153,6 +153,7 @@ Result<GridDesc> voxel_grid(const SolverDesc& desc, std::uint32_t branching) {
 SolidSource solid_source(const VoxelWorld& world) {
     SolidSource s;
     s.tree = &world.tree();
+    s.static_generation = world.static_generation();
     const Voxelizer& moving = world.dynamic_voxelizer();
     if (moving.velocity_buffer()) {
         s.fragments = moving.fragment_buffer().address();

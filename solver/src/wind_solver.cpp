@@ -116,6 +116,12 @@ struct WindSolver::Impl : gpu::HostObject {
     /// φ holds the last solve of this field's history, so the next solve may start from it (the warm
     /// start); false before the first step and after set_velocity replaced the field.
     bool has_guess = false;
+    /// What the last step's solid_cells saw: a step whose solids differ in any of these (or the first, or
+    /// one after a scroll) redoes every cell's voxels; otherwise only the cells a moving surface reaches.
+    bool solids_stale = true;
+    const SparseTree* last_tree = nullptr;
+    std::uint64_t last_static_generation = 0;
+    glm::ivec3 last_voxel_offset{0};
     SolverBindings b{};
 };
 
@@ -505,6 +511,7 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     ctx_.vk().vkCmdCopyBuffer(cmd, m.scratch.handle(), m.cg_cells.handle(), 1, &phi);
     ctx_.vk().vkCmdFillBuffer(cmd, m.vorticity_buf.handle(), 0, VK_WHOLE_SIZE, 0);
     gpu::barrier(ctx_, cmd);
+    m.solids_stale = true;
     origin_ += glm::vec3(cells) * desc_.cell_size;
 }
 
@@ -561,6 +568,14 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         b.mask_stride = shaderio::mask_stride(b.tree_log2_branching);
         b.voxel_offset = solid->voxel_offset;
     }
+    const SparseTree* tree = solid ? solid->tree : nullptr;
+    const std::uint64_t generation = solid ? solid->static_generation : 0;
+    const bool all_cells = m.solids_stale || tree != m.last_tree || generation != m.last_static_generation ||
+                           b.voxel_offset != m.last_voxel_offset;
+    m.solids_stale = false;
+    m.last_tree = tree;
+    m.last_static_generation = generation;
+    m.last_voxel_offset = b.voxel_offset;
     if (solid && solid->fragments && solid->fragment_velocities) {
         b.fragments = solid->fragments;
         b.fragment_count = solid->fragment_count;
@@ -605,7 +620,9 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     // The solid boundary in three timed parts: the cells' voxels and the moving fragments (solid), the
     // outside-air fill (fill), the faces' open fractions and solid velocities (faces).
     m.profiler.begin(cmd, "solid");
+    push.parity = all_cells ? 1u : 0u;
     run(m.solid_cells, cell_groups);
+    push.parity = 0;
     m.solid_motion.bind(cmd, &push, sizeof(push));
     m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);

@@ -74,7 +74,9 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
     if (!tree) return tree.status();
     // Refinement stopped where a pool ran out: grow both pools and rebuild this frame's tree from the
     // kept fragment lists, so no frame is left partial.
+    if (rebuild) ++static_generation_;
     while (tree->exhausted > 0) {
+        ++static_generation_;
         const std::uint32_t nodes = tree_->node_capacity(), masks = tree_->mask_capacity();
         if (Status s = tree_->reserve(nodes * 2, masks * 2); !s) return s;
         ++out.pool_growths;
@@ -114,6 +116,7 @@ Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dyna
     if (Status s = tree_->record_update(cmd, rebuild ? &static_source : nullptr, &dynamic_source); !s)
         return s;
     static_dirty_ = false;
+    if (rebuild) ++static_generation_;
     recorded_rebuild_ = rebuild;
     recorded_frame_ = frame_++;
     return {};

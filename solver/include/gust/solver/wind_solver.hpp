@@ -86,6 +86,10 @@ struct SolidSource {
     VkDeviceAddress fragment_count = 0;      ///< uint counter
     VkDeviceAddress fragment_velocities = 0; ///< uvec2 half-float velocity per fragment, m/s
     std::uint64_t fragment_capacity = 0;
+    /// VoxelWorld::static_generation(). While it, the tree and voxel_offset stay the same, a step redoes
+    /// only the cells whose voxels a moving surface reaches now or reached at the last step; any change
+    /// redoes every cell.
+    std::uint64_t static_generation = 0;
 };
 
 /// What one step did.

@@ -78,6 +78,10 @@ class VoxelWorld : public gpu::HostObject {
     /// The dynamic fragment list and its velocities, for the solver.
     const Voxelizer& dynamic_voxelizer() const { return *dynamic_; }
     const Voxelizer& static_voxelizer() const { return *static_; }
+    /// Counts the static set's voxelizations, run or recorded (a new set, a moved grid, a rebuild after the
+    /// pools grew): while it stays the same, the static voxels in every cell do too, which lets the wind
+    /// solver keep the cells that no moving surface reaches (SolidSource::static_generation).
+    std::uint64_t static_generation() const { return static_generation_; }
     const GridDesc& grid() const { return desc_.grid; }
 
   private:
@@ -90,6 +94,7 @@ class VoxelWorld : public gpu::HostObject {
     std::unique_ptr<SparseTree> tree_;
     std::pmr::vector<GpuInstance> static_set_;
     bool static_dirty_ = true;
+    std::uint64_t static_generation_ = 0;
     VoxelizeStats last_static_;
     std::uint64_t frame_ = 0;
     std::uint64_t recorded_frame_ = 0;  ///< record(): the frame recorded last
