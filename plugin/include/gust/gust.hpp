@@ -126,7 +126,7 @@ struct WindDomain {
     std::uint32_t hysteresis = 8;
 };
 
-/// How the wind carries itself along (docs/solver.md "Advection").
+/// How the wind carries itself along (docs/solver.md, "Advection default" under "One step").
 enum class WindAdvection : std::int32_t {
     MacCormack = 0,     ///< second order, clamped: keeps the speed-up beside obstacles over many steps
     SemiLagrangian = 1, ///< first order: a third of the cost, smooths the flow next to obstacles
