@@ -399,11 +399,14 @@ fs::path fresh_dir(const std::string& name) {
 }
 
 /// `gust voxelize` of the bunny at 24^3 with the validation layer on, in an environment of `env` without
-/// GUST_PIPELINE_CACHE unless `env` sets it.
+/// GUST_PIPELINE_CACHE unless `env` sets it. The grid goes to a file of this process, removed after.
 CliRun voxelize_bunny(const std::string& env, const std::string& options = "") {
-    return gust("voxelize " + asset("scans/bunny.ply") + " --res 24 --validation --out " +
-                    temp_vdb("cache").string() + " " + options,
-                "-u GUST_PIPELINE_CACHE " + env);
+    const fs::path out = temp_vdb("cache_" + std::to_string(::getpid()));
+    CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 24 --validation --out " +
+                          out.string() + " " + options,
+                      "-u GUST_PIPELINE_CACHE " + env);
+    fs::remove(out);
+    return run;
 }
 
 void write_bytes(const fs::path& path, const std::string& bytes) {
