@@ -20,6 +20,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -403,9 +404,13 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
 }
 
 void Game::write_video(const std::vector<std::filesystem::path>& frames, float dt) const {
-    const int frame_ms = static_cast<int>(std::lround(1000.0 * dt * options_.png_every));
+    const double frame_s = double(dt) * options_.png_every;
+    const int frame_ms = static_cast<int>(std::lround(1000.0 * frame_s));
+    // One pass of the tour at the most: a long run's every frame would make a video of hundreds of MB.
+    const std::size_t most = std::max<std::size_t>(2, std::size_t(std::ceil(tour_seconds() / frame_s)));
+    const std::span<const std::filesystem::path> shown(frames.data(), std::min(frames.size(), most));
     const VideoOutcome video =
-        write_animated_webp(frames, frame_ms, options_.out / (options_.tour ? "tour.webp" : "frames.webp"));
+        write_animated_webp(shown, frame_ms, options_.out / (options_.tour ? "tour.webp" : "frames.webp"));
     std::fprintf(stderr, "gust_sample: %s\n", video.message.c_str());
 }
 

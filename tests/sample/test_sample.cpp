@@ -234,6 +234,16 @@ TEST(SampleGame, theDefaultHeadlessRunIsTheTourWithACaptionedShotPerLineAndAnAni
     fs::remove_all(out);
 }
 
+TEST(SampleGame, aRunLongerThanTheTourKeepsEveryFrameButMakesAVideoOfOnePass) {
+    // 40 frames of 0.5 s: every PNG is written, the WebP shows the tour's 15.5 s once (31 frames).
+    const fs::path out = fresh_dir("long_run");
+    const Outcome r = run("--headless --dt 0.5 --frames 40 --out " + out.string() + kSmall);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(out / "frame_0039.png"));
+    EXPECT_NE(r.output.find("tour.webp (31 frames"), std::string::npos) << r.output;
+    fs::remove_all(out);
+}
+
 TEST(SampleGame, withoutTheEncoderTheRunStillSucceedsAndSaysSo) {
     const fs::path out = fresh_dir("no_encoder");
     const fs::path empty_path = fresh_dir("empty_path");
