@@ -111,9 +111,13 @@ TEST_F(WindSolverTest, projectionLeavesNoDivergenceAroundStaticAndMovingSolids) 
 // A step redoes only the cells whose voxels a moving surface reaches now or reached at the last step, and
 // keeps the others' voxel sets (SolidSource::static_generation). After a box slid across cells, jumped
 // away and was removed, the solids a long-running solver sees must be exactly those of a new solver that
-// gathers every cell of the same world frame.
-TEST_F(WindSolverTest, keepingTheCellsNoMovingSurfaceReachesSeesTheSameSolidsAsRedoingEveryCell) {
+// gathers every cell of the same world frame. With 3 and 5 voxels per cell, cells straddle the tree's
+// 4-voxel bricks; with 5, the voxel-set passes run their sixteen-word build.
+class KeptCells : public GpuTestWithParam<std::uint32_t> {};
+
+TEST_P(KeptCells, seeTheSameSolidsAsRedoingEveryCell) {
     SolverDesc desc = projection_only({16, 16, 16});
+    desc.voxels_per_cell = GetParam();
     auto grid = voxel_grid(desc, 4);
     ASSERT_TRUE(grid) << grid.message();
     WorldDesc world_desc;
@@ -176,6 +180,8 @@ TEST_F(WindSolverTest, keepingTheCellsNoMovingSurfaceReachesSeesTheSameSolidsAsR
         }
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(VoxelsPerCell, KeptCells, ::testing::Values(3u, 4u, 5u));
 
 // A closed box moving through the air: every closed face, on its surface and inside it, carries the box's
 // own velocity, and a point inside the box moves with it (no pocket of still or trapped air in it).
