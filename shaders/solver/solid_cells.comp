@@ -4,8 +4,8 @@
 // parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
 // clears what the last step summed here. Only cells whose voxels may have changed are gathered again: with
 // pc.parity 0 (the static solids as at the last step) a cell that held no moving voxels then and whose
-// leaf bricks hold none now keeps its parts and static voxels; pc.parity 1 redoes every cell. Thread 0 also sizes the moving-fragment pass. Every cell also
-// makes its vorticity-confinement force for advection.
+// leaf bricks hold none now keeps its parts and static voxels; pc.parity 1 redoes every cell. Thread 0
+// also sizes the moving-fragment pass. Every cell also makes its vorticity-confinement force for advection.
 #include "../tree/tree_io.h"
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -13,13 +13,15 @@ layout(local_size_x = kSolverGroupSize) in;
 
 // The tree's bindings, loaded once per invocation (as load_bindings does for the others).
 uint64_t tree_nodes, tree_masks;
-uint tree_levels, tree_log2;
+uint tree_levels, tree_log2, leaf_words, leaf_stride;
 ivec3 voxel_offset;
 void load_tree_bindings() {
     tree_nodes = sb().b.tree_nodes;
     tree_masks = sb().b.tree_masks;
     tree_levels = sb().b.tree_levels;
     tree_log2 = sb().b.tree_log2_branching;
+    leaf_words = sb().b.mask_words;
+    leaf_stride = sb().b.mask_stride;
     voxel_offset = sb().b.voxel_offset;
 }
 
@@ -49,8 +51,6 @@ bool in_tree(ivec3 v) {
 bool bricks_dynamic(ivec3 lo, uint v) {
     int shift = int(b_log2());
     ivec3 first = lo >> shift, last = (lo + int(v - 1u)) >> shift;
-    uint words = sb().b.mask_words;
-    uint stride = sb().b.mask_stride;
     for (int z = first.z; z <= last.z; ++z)
         for (int y = first.y; y <= last.y; ++y)
             for (int x = first.x; x <= last.x; ++x) {
@@ -59,8 +59,8 @@ bool bricks_dynamic(ivec3 lo, uint v) {
                 uint node = node_at(corner, tree_levels - 1u);
                 uint block = node == kNone ? 0u : NodesRef(tree_nodes).v[node].x;
                 if (block == 0u) continue;
-                for (uint w = 0u; w < words; ++w)
-                    if (WordsRef(tree_masks).v[block * stride + words + w] != 0u) return true;
+                for (uint w = 0u; w < leaf_words; ++w)
+                    if (WordsRef(tree_masks).v[block * leaf_stride + leaf_words + w] != 0u) return true;
             }
     return false;
 }
@@ -126,8 +126,6 @@ void main() {
         return;
     }
 
-    uint words = sb().b.mask_words;
-    uint stride = sb().b.mask_stride;
     CellBits occupied = bits_none(), held = bits_none();
     bool dynamic = false;
     ivec3 cached_brick = ivec3(-1);
@@ -145,9 +143,9 @@ void main() {
                 }
                 if (block == 0u) continue;
                 uint bit = child_slot(uvec3(voxel), levels - 1u, levels, b_log2());
-                uint base = block * stride + bit / 32u;
+                uint base = block * leaf_stride + bit / 32u;
                 uint static_word = WordsRef(tree_masks).v[base];
-                uint dynamic_word = WordsRef(tree_masks).v[base + words];
+                uint dynamic_word = WordsRef(tree_masks).v[base + leaf_words];
                 uint word = static_word | dynamic_word;
                 uint j = x + v * (y + v * z);
                 if ((dynamic_word >> (bit % 32u) & 1u) != 0u) dynamic = true;
