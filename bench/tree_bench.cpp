@@ -355,7 +355,7 @@ class Walker {
     }
 
     /// The unposed triangles, uploaded once; each frame's pose then replaces their positions.
-    const gust::Mesh& bind_pose() const { return mesh_.bind_pose(); }
+    const gust::Mesh& rest_pose() const { return mesh_.rest_pose(); }
 
     /// World-space box of the pose at time t, printed so that a badly fitted character is obvious.
     std::pair<glm::vec3, glm::vec3> bounds(double t) {
@@ -480,7 +480,7 @@ gust::Result<WorldResult> bench_world(gust::gpu::Context& ctx, const Options& op
         return gust::Status::failure(character_path->string() + ": no animation clip");
     const std::string clip_name = animated->clip_names().front();
     Walker walker(std::move(*animated), 0, 1.5f);
-    result.dynamic_triangles = walker.bind_pose().triangle_count();
+    result.dynamic_triangles = walker.rest_pose().triangle_count();
     const auto [char_lo, char_hi] = walker.bounds(0.0);
     std::cerr << "character at t = 0 spans (" << char_lo.x << ", " << char_lo.y << ", " << char_lo.z
               << ") to (" << char_hi.x << ", " << char_hi.y << ", " << char_hi.z << ") m" << std::endl;
@@ -511,7 +511,7 @@ gust::Result<WorldResult> bench_world(gust::gpu::Context& ctx, const Options& op
     std::vector<gust::GpuInstance> statics;
     for (const auto& [mesh, model] : placed)
         statics.push_back({&uploaded.at(mesh), model, std::nullopt});
-    auto character = (*world)->upload(gust::view_of(walker.bind_pose()));
+    auto character = (*world)->upload(gust::view_of(walker.rest_pose()));
     if (!character) return gust::Status::failure("CesiumMan.glb: upload failed: " + character.message());
     (*world)->set_static(statics);
 

@@ -139,7 +139,7 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
         gust::Result<gust::AnimatedMesh> animated = gust::AnimatedMesh::load(assets / file);
         if (!animated) throw std::runtime_error(animated.message());
         auto shared = std::make_shared<gust::AnimatedMesh>(std::move(*animated));
-        const std::size_t mesh = add_mesh(shared->bind_pose());
+        const std::size_t mesh = add_mesh(shared->rest_pose());
         meshes_[mesh].animation = shared;
         meshes_[mesh].clip = shared->find_clip(clip_name).value_or(0);
         return mesh;

@@ -27,7 +27,7 @@ enum class ObjectKind {
 
 /// One loaded mesh: its triangles and, for skinned ones, the animation.
 struct WorldMesh {
-    gust::Mesh mesh;                               ///< bind pose (skinned) or the only pose
+    gust::Mesh mesh;                               ///< rest pose (skinned) or the only pose
     std::shared_ptr<gust::AnimatedMesh> animation; ///< skinned meshes only
     std::size_t clip = 0;                          ///< the walk clip
 };
@@ -78,7 +78,7 @@ class World {
 
     const std::vector<WorldMesh>& meshes() const { return meshes_; }
     const std::vector<WorldObject>& objects() const { return objects_; }
-    /// The posed vertices of a skinned mesh this frame (its bind pose for other meshes).
+    /// The posed vertices of a skinned mesh this frame (its rest pose for other meshes).
     const std::vector<glm::vec3>& posed(std::size_t mesh) const { return posed_[mesh]; }
     /// Grass blades first, then one entry per tree.
     const std::vector<FoliageSeed>& foliage() const { return foliage_; }

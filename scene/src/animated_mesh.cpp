@@ -77,23 +77,28 @@ struct Influences {
     std::vector<double> weight;       ///< non-zero, normalised to sum 1 per vertex
 };
 
+/// What places every vertex of a glTF scene: the node hierarchy and how each vertex follows it.
+struct Rig {
+    std::vector<glm::vec3> raw; ///< POSITION data of every vertex, before any transform
+    std::vector<Node> nodes;
+    std::vector<int> parent;                  ///< file hierarchy, -1 for roots
+    std::vector<std::size_t> hierarchy_order; ///< every node after its parent
+    std::vector<int> walk_order;              ///< as GltfGeometry
+    std::vector<int> walk_parent;             ///< as GltfGeometry
+    std::vector<Skin> skins;
+    std::vector<Block> blocks;
+    Influences influences; ///< empty ranges for vertices that no skin moves
+    bool skinned = false;  ///< whether any block follows a skin
+};
+
 } // namespace detail::anim
 
 namespace anim = detail::anim;
 
 struct AnimatedMesh::Data {
-    Mesh bind;
-    std::vector<glm::vec3> raw; ///< POSITION data of every vertex, before any transform
-    std::vector<anim::Node> nodes;
-    std::vector<int> parent;                  ///< file hierarchy, -1 for roots
-    std::vector<std::size_t> hierarchy_order; ///< every node after its parent
-    std::vector<int> walk_order;              ///< as GltfGeometry
-    std::vector<int> walk_parent;             ///< as GltfGeometry
-    std::vector<anim::Skin> skins;
-    std::vector<anim::Block> blocks;
-    anim::Influences influences; ///< empty ranges for vertices that no skin moves
+    Mesh bind; ///< the triangles, positions in the rest pose
+    anim::Rig rig;
     std::vector<anim::Clip> clips;
-    bool skinned = false;
 };
 
 namespace {
@@ -500,6 +505,85 @@ Status read_blocks(const tinygltf::Model& model, std::size_t file_size, const de
     return {};
 }
 
+Result<anim::Rig> read_rig(const tinygltf::Model& model, std::size_t file_size,
+                           detail::GltfGeometry& geometry) {
+    Result<std::vector<anim::Skin>> skins = read_skins(model, file_size);
+    if (!skins) return skins.status();
+    anim::Rig rig;
+    rig.nodes = read_nodes(model);
+    if (Status status = read_blocks(model, file_size, geometry, *skins, rig.raw, rig.blocks, rig.influences);
+        !status) {
+        return status;
+    }
+    rig.hierarchy_order = hierarchy_order(model, geometry.parent);
+    rig.parent = std::move(geometry.parent);
+    rig.walk_order = std::move(geometry.walk_order);
+    rig.walk_parent = std::move(geometry.walk_parent);
+    rig.skins = std::move(*skins);
+    rig.skinned = std::any_of(rig.blocks.begin(), rig.blocks.end(),
+                              [](const anim::Block& b) { return b.placement == anim::Placement::skin; });
+    return rig;
+}
+
+std::vector<glm::dmat4> rest_locals(const anim::Rig& rig) {
+    std::vector<glm::dmat4> local(rig.nodes.size());
+    for (std::size_t n = 0; n < rig.nodes.size(); ++n)
+        local[n] = rig.nodes[n].rest;
+    return local;
+}
+
+// Every vertex placed by the nodes' local transforms `local`. Joints are placed by the file's hierarchy;
+// rigid meshes by the same walk that built the geometry, with the same arithmetic, so that the rest pose
+// of an unskinned file reproduces build_gltf's positions exactly.
+void place(const anim::Rig& rig, const std::vector<glm::dmat4>& local, std::vector<glm::vec3>& out) {
+    std::vector<glm::dmat4> global(rig.nodes.size());
+    for (std::size_t n : rig.hierarchy_order) {
+        const int p = rig.parent[n];
+        global[n] = p < 0 ? local[n] : global[static_cast<std::size_t>(p)] * local[n];
+    }
+    std::vector<glm::dmat4> walk(rig.nodes.size());
+    for (int node : rig.walk_order) {
+        const auto n = static_cast<std::size_t>(node);
+        const int from = rig.walk_parent[n];
+        walk[n] = (from < 0 ? glm::dmat4(1.0) : walk[static_cast<std::size_t>(from)]) * local[n];
+    }
+    std::vector<std::vector<glm::dmat4>> joints(rig.skins.size());
+    for (std::size_t s = 0; s < rig.skins.size(); ++s) {
+        const anim::Skin& skin = rig.skins[s];
+        for (std::size_t j = 0; j < skin.joints.size(); ++j)
+            joints[s].push_back(global[skin.joints[j]] * skin.inverse_bind[j]);
+    }
+
+    out.resize(rig.raw.size());
+    const anim::Influences& influences = rig.influences;
+    for (const anim::Block& block : rig.blocks) {
+        const std::uint32_t end = block.first + block.count;
+        switch (block.placement) {
+        case anim::Placement::walk:
+            for (std::uint32_t v = block.first; v < end; ++v)
+                out[v] = glm::vec3(walk[block.node] * glm::dvec4(rig.raw[v], 1.0));
+            break;
+        case anim::Placement::fixed:
+            std::copy(rig.raw.begin() + block.first, rig.raw.begin() + end, out.begin() + block.first);
+            break;
+        case anim::Placement::skin:
+            for (std::uint32_t v = block.first; v < end; ++v) {
+                const std::uint32_t first = influences.begin[v];
+                const std::uint32_t last = influences.begin[v + 1];
+                if (first == last) {
+                    out[v] = rig.raw[v]; // all weights zero: nothing to follow
+                    continue;
+                }
+                glm::dmat4 blend(0.0);
+                for (std::uint32_t i = first; i < last; ++i)
+                    blend += influences.weight[i] * joints[block.skin][influences.joint[i]];
+                out[v] = glm::vec3(blend * glm::dvec4(rig.raw[v], 1.0));
+            }
+            break;
+        }
+    }
+}
+
 double clip_time(double t, double duration, bool loop) {
     if (!std::isfinite(t)) return 0.0;
     if (!loop || duration <= 0.0) return t;
@@ -562,30 +646,17 @@ Result<AnimatedMesh> AnimatedMesh::load(const std::filesystem::path& gltf_or_glb
         if (!model) return model.status();
         Result<detail::GltfGeometry> geometry = detail::build_gltf(*model, file_size);
         if (!geometry) return geometry.status();
-        Result<std::vector<anim::Skin>> skins = read_skins(*model, file_size);
-        if (!skins) return skins.status();
-
-        auto data = std::make_shared<Data>();
-        data->nodes = read_nodes(*model);
-        if (Status status =
-                read_blocks(*model, file_size, *geometry, *skins, data->raw, data->blocks, data->influences);
-            !status) {
-            return status;
-        }
-        Result<std::vector<anim::Clip>> clips = read_clips(*model, file_size, data->nodes);
+        Result<anim::Rig> rig = read_rig(*model, file_size, *geometry);
+        if (!rig) return rig.status();
+        Result<std::vector<anim::Clip>> clips = read_clips(*model, file_size, rig->nodes);
         if (!clips) return clips.status();
 
+        auto data = std::make_shared<Data>();
         data->bind = std::move(geometry->mesh);
         data->bind.name = gltf_or_glb.filename().string();
-        data->hierarchy_order = hierarchy_order(*model, geometry->parent);
-        data->parent = std::move(geometry->parent);
-        data->walk_order = std::move(geometry->walk_order);
-        data->walk_parent = std::move(geometry->walk_parent);
-        data->skins = std::move(*skins);
+        if (rig->skinned) place(*rig, rest_locals(*rig), data->bind.positions);
+        data->rig = std::move(*rig);
         data->clips = std::move(*clips);
-        data->skinned = std::any_of(data->blocks.begin(), data->blocks.end(), [](const anim::Block& b) {
-            return b.placement == anim::Placement::skin;
-        });
         return std::shared_ptr<const Data>(std::move(data));
     };
     std::string reason;
@@ -601,7 +672,7 @@ Result<AnimatedMesh> AnimatedMesh::load(const std::filesystem::path& gltf_or_glb
     return Result<AnimatedMesh>::failure(gltf_or_glb.string() + ": " + reason);
 }
 
-const Mesh& AnimatedMesh::bind_pose() const {
+const Mesh& AnimatedMesh::rest_pose() const {
     return data_->bind;
 }
 
@@ -624,15 +695,12 @@ double AnimatedMesh::clip_duration(std::size_t clip) const {
 }
 
 bool AnimatedMesh::skinned() const {
-    return data_->skinned;
+    return data_->rig.skinned;
 }
 
 void AnimatedMesh::pose(std::size_t clip, double t, bool loop, std::vector<glm::vec3>& out) const {
     const Data& d = *data_;
-    std::vector<glm::dmat4> local(d.nodes.size());
-    for (std::size_t n = 0; n < d.nodes.size(); ++n)
-        local[n] = d.nodes[n].rest;
-
+    std::vector<glm::dmat4> local = rest_locals(d.rig);
     if (clip < d.clips.size()) {
         const anim::Clip& c = d.clips[clip];
         const double time = clip_time(t, c.duration, loop);
@@ -643,8 +711,10 @@ void AnimatedMesh::pose(std::size_t clip, double t, bool loop, std::vector<glm::
         };
         std::vector<Trs> trs;
         trs.reserve(c.targets.size());
-        for (std::size_t node : c.targets)
-            trs.push_back({d.nodes[node].translation, d.nodes[node].rotation, d.nodes[node].scale});
+        for (std::size_t node : c.targets) {
+            const anim::Node& rest = d.rig.nodes[node];
+            trs.push_back({rest.translation, rest.rotation, rest.scale});
+        }
         for (const anim::Channel& channel : c.channels) {
             const glm::dvec4 v = sample(channel, time);
             Trs& target = trs[channel.slot];
@@ -663,55 +733,20 @@ void AnimatedMesh::pose(std::size_t clip, double t, bool loop, std::vector<glm::
         for (std::size_t i = 0; i < c.targets.size(); ++i)
             local[c.targets[i]] = detail::trs_matrix(trs[i].translation, trs[i].rotation, trs[i].scale);
     }
-
-    // Joints are placed by the file's hierarchy; rigid meshes by the same walk that built the bind pose,
-    // with the same arithmetic, so that the rest pose reproduces bind_pose() exactly.
-    std::vector<glm::dmat4> global(d.nodes.size());
-    for (std::size_t n : d.hierarchy_order) {
-        const int p = d.parent[n];
-        global[n] = p < 0 ? local[n] : global[static_cast<std::size_t>(p)] * local[n];
-    }
-    std::vector<glm::dmat4> walk(d.nodes.size());
-    for (int node : d.walk_order) {
-        const auto n = static_cast<std::size_t>(node);
-        const int from = d.walk_parent[n];
-        walk[n] = (from < 0 ? glm::dmat4(1.0) : walk[static_cast<std::size_t>(from)]) * local[n];
-    }
-    std::vector<std::vector<glm::dmat4>> joints(d.skins.size());
-    for (std::size_t s = 0; s < d.skins.size(); ++s) {
-        const anim::Skin& skin = d.skins[s];
-        for (std::size_t j = 0; j < skin.joints.size(); ++j)
-            joints[s].push_back(global[skin.joints[j]] * skin.inverse_bind[j]);
-    }
-
-    out.resize(d.raw.size());
-    const anim::Influences& influences = d.influences;
-    for (const anim::Block& block : d.blocks) {
-        const std::uint32_t end = block.first + block.count;
-        switch (block.placement) {
-        case anim::Placement::walk:
-            for (std::uint32_t v = block.first; v < end; ++v)
-                out[v] = glm::vec3(walk[block.node] * glm::dvec4(d.raw[v], 1.0));
-            break;
-        case anim::Placement::fixed:
-            std::copy(d.raw.begin() + block.first, d.raw.begin() + end, out.begin() + block.first);
-            break;
-        case anim::Placement::skin:
-            for (std::uint32_t v = block.first; v < end; ++v) {
-                const std::uint32_t first = influences.begin[v];
-                const std::uint32_t last = influences.begin[v + 1];
-                if (first == last) {
-                    out[v] = d.raw[v]; // all weights zero: nothing to follow
-                    continue;
-                }
-                glm::dmat4 blend(0.0);
-                for (std::uint32_t i = first; i < last; ++i)
-                    blend += influences.weight[i] * joints[block.skin][influences.joint[i]];
-                out[v] = glm::vec3(blend * glm::dvec4(d.raw[v], 1.0));
-            }
-            break;
-        }
-    }
+    place(d.rig, local, out);
 }
+
+namespace detail {
+
+Result<Mesh> gltf_rest_pose(const tinygltf::Model& model, std::size_t file_size) {
+    Result<GltfGeometry> geometry = build_gltf(model, file_size);
+    if (!geometry) return geometry.status();
+    Result<anim::Rig> rig = read_rig(model, file_size, *geometry);
+    if (!rig) return rig.status();
+    if (rig->skinned) place(*rig, rest_locals(*rig), geometry->mesh.positions);
+    return std::move(geometry->mesh);
+}
+
+} // namespace detail
 
 } // namespace gust

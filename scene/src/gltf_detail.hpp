@@ -46,6 +46,12 @@ struct GltfGeometry {
 /// skinned meshes as raw POSITION data, points and lines dropped. Checks the node hierarchy first.
 Result<GltfGeometry> build_gltf(const tinygltf::Model& model, std::size_t file_size);
 
+/// The triangles of the default scene of `model` as a glTF viewer shows the file without animation:
+/// build_gltf's, with every skinned mesh in its rest pose (its joints placed by the nodes' own
+/// transforms, then linear-blend skinning as glTF 2.0 section 3.7.3 defines it). Checks the skins too.
+/// Defined in animated_mesh.cpp, beside the skinning.
+Result<Mesh> gltf_rest_pose(const tinygltf::Model& model, std::size_t file_size);
+
 /// The node's local transform: its matrix, or translation · rotation (normalised) · scale.
 glm::dmat4 local_transform(const tinygltf::Node& node);
 

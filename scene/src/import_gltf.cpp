@@ -780,9 +780,7 @@ Result<GltfGeometry> build_gltf(const tinygltf::Model& model, std::size_t file_s
 Result<Mesh> load_gltf(const std::vector<unsigned char>& bytes, const std::filesystem::path& path) {
     Result<tinygltf::Model> model = parse_gltf(bytes, path);
     if (!model) return model.status();
-    Result<GltfGeometry> geometry = build_gltf(*model, bytes.size());
-    if (!geometry) return geometry.status();
-    return std::move(geometry->mesh);
+    return gltf_rest_pose(*model, bytes.size());
 }
 
 } // namespace gust::detail

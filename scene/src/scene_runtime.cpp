@@ -31,7 +31,7 @@ Result<SceneRuntime> SceneRuntime::load(const SceneDesc& scene) {
     using R = Result<SceneRuntime>;
     try {
         // A file that any object animates is loaded as an AnimatedMesh, and every object using that
-        // file shares its bind pose, so that one file is read and triangulated once.
+        // file shares its rest pose, so that one file is read and triangulated once.
         std::map<std::filesystem::path, std::shared_ptr<const AnimatedMesh>> animated;
         for (std::size_t i = 0; i < scene.objects.size(); ++i) {
             const SceneObject& object = scene.objects[i];
@@ -42,7 +42,7 @@ Result<SceneRuntime> SceneRuntime::load(const SceneDesc& scene) {
         }
         std::map<std::filesystem::path, std::shared_ptr<const Mesh>> meshes;
         for (const auto& [path, mesh] : animated)
-            meshes.emplace(path, std::shared_ptr<const Mesh>(mesh, &mesh->bind_pose()));
+            meshes.emplace(path, std::shared_ptr<const Mesh>(mesh, &mesh->rest_pose()));
 
         SceneRuntime runtime;
         for (std::size_t i = 0; i < scene.objects.size(); ++i) {

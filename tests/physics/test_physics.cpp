@@ -299,7 +299,7 @@ TEST_F(Physics, aSkinnedCharacterWalksAThousandFramesWithABoundedResidual) {
     create({24, 12, 24}, 0.5f, glm::vec3(0.0f, 2.0f, 0.0f), 2);
     auto walker = AnimatedMesh::load(GUST_ASSETS_DIR "/characters/CesiumMan.glb");
     ASSERT_TRUE(walker) << walker.message();
-    const MeshId body = mesh(walker->bind_pose(), true);
+    const MeshId body = mesh(walker->rest_pose(), true);
     ASSERT_NE(body, 0u);
     InstanceId instance = 0;
     ASSERT_TRUE(system_->create_instance(body, {}, true, instance));

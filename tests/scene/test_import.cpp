@@ -168,11 +168,14 @@ TEST(LoadMesh, loadsFoxGlbInBindPose) {
     expect_bounds(mesh, {-12.59272f, -0.12174f, -88.095f}, {12.59272f, 78.90719f, 66.62486f}, 1e-3f);
 }
 
-TEST(LoadMesh, loadsCesiumManGlbInBindPose) {
+TEST(LoadMesh, loadsCesiumManGlbStandingInItsRestPose) {
     const gust::Mesh mesh = load_ok(kAssets / "characters/CesiumMan.glb");
     EXPECT_EQ(mesh.triangle_count(), 4672u);
-    // Raw POSITION data: Z-up, the Z_UP node's rotation is not applied to a skinned mesh.
-    expect_bounds(mesh, {-0.131f, -0.56914f, 0.0f}, {0.18095f, 0.56914f, 1.50655f}, 1e-3f);
+    // The raw POSITION data spans x [-0.131, 0.181], y [-0.569, 0.569], z [0, 1.507] (Z-up). The joints
+    // hang under the file's Z_UP node, (x, y, z) -> (x, z, -y), and its Armature node,
+    // (x, y, z) -> (y, -x, z), and its inverse bind matrices undo only the joints' own placement, so at
+    // rest the figure stands as every glTF viewer shows it: both turns applied to the raw box.
+    expect_bounds(mesh, {-0.56914f, 0.0f, -0.131f}, {0.56914f, 1.50655f, 0.18095f}, 1e-3f);
 }
 
 TEST(LoadMesh, loadsPalmTreeGltfWithExternalBin) {
@@ -268,11 +271,12 @@ TEST(LoadMesh, loadsTheSameBoxFromGlbExternalBinAndDataUri) {
     EXPECT_NEAR(total_area(glb), 6.0, 1e-5) << "unit cube";
 }
 
-TEST(LoadMesh, loadsSkinnedMeshFromRawPositions) {
-    // The skinned node's child nodes translate by (0,1,0); none of that applies to the skinned mesh.
+TEST(LoadMesh, loadsSkinnedMeshInItsRestPose) {
+    // Raw positions span (0, 0, 0)-(1, 2, 0). The joints sit at (0, 1, 0) at rest and their inverse
+    // bind matrices take off (0.5, 1, 0), so skinning at rest moves the figure by -0.5 along x.
     const gust::Mesh mesh = load_ok(kModels / "glTF2/simple_skin/simple_skin.gltf");
     EXPECT_EQ(mesh.triangle_count(), 8u);
-    expect_bounds(mesh, {0, 0, 0}, {1, 2, 0}, 1e-6f);
+    expect_bounds(mesh, {-0.5f, 0, 0}, {0.5f, 2, 0}, 1e-6f);
 }
 
 TEST(LoadMesh, keepsNonFinitePositionsOfBoxWithInfinites) {

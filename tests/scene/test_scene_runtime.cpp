@@ -114,7 +114,7 @@ TEST_F(SceneRuntimeTest, loadsTheDesignExampleWithRealMeshes) {
     EXPECT_EQ(runtime.mesh(1).triangle_count(), 3674u);
     EXPECT_FALSE(runtime.deforms(0));
     EXPECT_FALSE(runtime.deforms(1));
-    EXPECT_EQ(&runtime.positions(1, 1.0), &runtime.mesh(1).positions) << "rigid objects use the bind pose";
+    EXPECT_EQ(&runtime.positions(1, 1.0), &runtime.mesh(1).positions) << "rigid objects use the rest pose";
     EXPECT_EQ(runtime.model(1, 1.0), gust::object_matrix(desc.objects[1], 1.0));
     EXPECT_EQ(runtime.model(0, 5.0), desc.objects[0].transform.matrix());
 }
@@ -138,8 +138,8 @@ TEST_F(SceneRuntimeTest, posesAnimatedObjectsAtOffsetPlusSpeedTimesSceneTime) {
 
     EXPECT_TRUE(runtime.deforms(0));
     EXPECT_FALSE(runtime.deforms(1));
-    EXPECT_EQ(runtime.mesh(0).positions, animated->bind_pose().positions);
-    EXPECT_EQ(&runtime.mesh(0), &runtime.mesh(1)) << "the unanimated fox shares the animated one's bind pose";
+    EXPECT_EQ(runtime.mesh(0).positions, animated->rest_pose().positions);
+    EXPECT_EQ(&runtime.mesh(0), &runtime.mesh(1)) << "the unanimated fox shares the animated one's rest pose";
     for (double t : {0.0, 0.13, 0.3, 50.0}) {
         std::vector<glm::vec3> expected;
         animated->pose(run, 0.1 + 2.0 * t, false, expected);

@@ -24,9 +24,10 @@ class AnimatedMesh {
     /// failure the message is "<path>: <reason>"; it never throws.
     static Result<AnimatedMesh> load(const std::filesystem::path& gltf_or_glb);
 
-    /// The triangles exactly as load_mesh returns them (file's scene space and units; skinned meshes as
-    /// raw POSITION data). pose() writes positions for the same vertices in the same order.
-    const Mesh& bind_pose() const;
+    /// The triangles exactly as load_mesh returns them, in the file's scene space and units, as a glTF
+    /// viewer shows the file without animation: skinned meshes in their rest pose (joints placed by the
+    /// nodes' own transforms). pose() writes positions for the same vertices in the same order.
+    const Mesh& rest_pose() const;
 
     /// The names of the file's animation clips in file order; unnamed clips are "clip<index>".
     std::vector<std::string> clip_names() const;
@@ -41,11 +42,10 @@ class AnimatedMesh {
     /// Whether any vertex follows joints of a skin (otherwise only rigid node animation moves it).
     bool skinned() const;
 
-    /// Posed positions at time `t` (seconds) of `clip`, in the space of bind_pose(), written into `out`
-    /// (resized to bind_pose().positions.size()). With `loop`, t wraps into [0, duration); otherwise the
-    /// clip holds its first and last keys outside its range. A clip index out of range gives the rest
-    /// pose (nodes as the file places them), which for a file whose inverse bind matrices invert its
-    /// joints' placement equals bind_pose() up to rounding. Non-finite t is taken as 0.
+    /// Posed positions at time `t` (seconds) of `clip`, in the space of rest_pose(), written into `out`
+    /// (resized to rest_pose().positions.size()). With `loop`, t wraps into [0, duration); otherwise the
+    /// clip holds its first and last keys outside its range. A clip index out of range gives
+    /// rest_pose()'s positions exactly. Non-finite t is taken as 0.
     void pose(std::size_t clip, double t, bool loop, std::vector<glm::vec3>& out) const;
 
   private:

@@ -37,7 +37,7 @@ class SceneRuntime {
     glm::mat4 model(std::size_t object, double t) const;
 
     /// Mesh-space positions at time t (seconds): posed at clip time offset + speed · t for animated
-    /// objects, the bind pose otherwise. Same order and count as mesh(object).positions. The reference
+    /// objects, the rest pose otherwise. Same order and count as mesh(object).positions. The reference
     /// stays valid until the next call for that object.
     const std::vector<glm::vec3>& positions(std::size_t object, double t);
 
@@ -49,7 +49,7 @@ class SceneRuntime {
   private:
     struct Object {
         SceneObject desc;
-        std::shared_ptr<const Mesh> mesh;             ///< bind pose (shared with `animated` when set)
+        std::shared_ptr<const Mesh> mesh;             ///< rest pose (shared with `animated` when set)
         std::shared_ptr<const AnimatedMesh> animated; ///< set when the object plays a clip
         std::size_t clip = 0;                         ///< index into animated's clips
         std::vector<glm::vec3> posed;                 ///< positions() buffer
