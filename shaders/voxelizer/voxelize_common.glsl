@@ -61,13 +61,27 @@ void flush_voxels() {
     pending_count = 0u;
 }
 
+/// The largest velocity component the fragment list keeps (m/s): half floats end at 65504, and a larger
+/// value would become infinite there and NaN in the solver's clamp. Faster surfaces keep their direction.
+const float kMaxStoredSpeed = 60000.0;
+
+/// `velocity` as the fragment list can hold it: scaled down to kMaxStoredSpeed in its largest component,
+/// 0 when not finite. The solver clamps it further (max_solid_speed).
+vec3 storable_velocity(vec3 velocity) {
+    float largest = max(max(abs(velocity.x), abs(velocity.y)), abs(velocity.z));
+    if (!is_finite(velocity)) return vec3(0.0);
+    return largest > kMaxStoredSpeed ? velocity * (kMaxStoredSpeed / largest) : velocity;
+}
+
 /// Queues one voxel and its surface velocity for the fragment list (call flush_voxels() before the
 /// invocation ends).
 void emit_voxel(uvec3 ijk, vec3 velocity) {
     if (any(greaterThanEqual(ijk, pc.keep))) return;
     pending[pending_count] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
-    if (kVelocities)
-        pending_velocity[pending_count] = uvec2(packHalf2x16(velocity.xy), packHalf2x16(vec2(velocity.z, 0.0)));
+    if (kVelocities) {
+        vec3 v = storable_velocity(velocity);
+        pending_velocity[pending_count] = uvec2(packHalf2x16(v.xy), packHalf2x16(vec2(v.z, 0.0)));
+    }
     if (++pending_count == kPendingCapacity) flush_voxels();
 }
 
