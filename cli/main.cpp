@@ -111,8 +111,16 @@ int run_voxelize(const VoxelizeArgs& args) {
     } else {
         const auto [lo, hi] = gust::mesh_bounds(gust::view_of(*mesh));
         grid = gust::grid_around(lo, hi, args.res);
+        if (!std::isfinite(grid.voxel_size)) {
+            return fail(args.mesh + ": its bounding box is too large for float coordinates (the voxel size " +
+                        "overflows); give --origin and --size around the part to voxelize");
+        }
     }
     if (gust::Status s = gust::validate_grid(grid); !s) return fail(s.message());
+    if (gust::Status s = gust::vdb::check_voxel_size(grid.voxel_size); !s) {
+        return fail(args.mesh + ": " + s.message() + "; use a lower --res or a larger --size, or scale the " +
+                    "mesh up");
+    }
 
     std::string error;
     start = Clock::now();
@@ -270,7 +278,9 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // --help prints the usage and succeeds; every other parse error is ours to report.
+        if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+        return fail(std::string(e.what()) + " (see gust --help)");
     }
     if (voxelize->parsed()) return run_voxelize(vox);
     if (simulate->parsed()) return gust::cli::run_simulate(sim);

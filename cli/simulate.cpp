@@ -25,6 +25,11 @@ int fail(const std::string& message) {
     return 1;
 }
 
+/// "<scene>: objects[i].mesh: <mesh>: ", the start of an error about object i.
+std::string object_at(const std::string& scene, std::size_t i, const std::filesystem::path& mesh) {
+    return scene + ": objects[" + std::to_string(i) + "].mesh: " + mesh.string() + ": ";
+}
+
 std::string frame_file(std::uint64_t frame) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame_%04llu.vdb", static_cast<unsigned long long>(frame));
@@ -199,7 +204,7 @@ int run_simulate(const SimulateArgs& args) {
         } else {
             const std::vector<glm::vec3>& positions = runtime->positions(i, -dt);
             if (Outcome o = system->create_mesh(mesh_desc(source, positions, deforms), meshes[i]); !o)
-                return fail(scene->objects[i].mesh.string() + ": " + o.message());
+                return fail(object_at(args.scene, i, scene->objects[i].mesh) + o.message());
             if (!deforms) shared.emplace(&source, meshes[i]);
         }
         const Outcome placed =
@@ -207,13 +212,15 @@ int run_simulate(const SimulateArgs& args) {
                 ? system->create_instance(meshes[i], to_mat4(runtime->model(i, 0.0)), false, instances[i])
                 : system->create_moving_instance(meshes[i], to_mat4(runtime->model(i, 0.0)),
                                                  to_mat4(runtime->model(i, -dt)), instances[i]);
-        if (!placed) return fail(scene->objects[i].mesh.string() + ": " + placed.message());
+        if (!placed) return fail(object_at(args.scene, i, scene->objects[i].mesh) + placed.message());
     }
 
     VoxelGridInfo grid;
     static_cast<void>(system->debug_voxel_grid(grid));
     std::cerr << "gust: simulating " << args.frames << " frames of " << args.scene << " ("
-              << grid.resolution[0] << "^3 voxels, " << system->device_name() << ")\n";
+              << scene->domain.cells.x << "x" << scene->domain.cells.y << "x" << scene->domain.cells.z
+              << " cells in a tree of " << grid.resolution[0] << "^3 voxels, " << system->device_name()
+              << ")\n";
     const auto start = std::chrono::steady_clock::now();
     for (std::uint64_t frame = 0; frame < args.frames; ++frame) {
         const double t = double(frame) * dt;

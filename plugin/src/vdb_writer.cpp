@@ -1,6 +1,8 @@
 #include "vdb_writer.hpp"
 
+#include <algorithm>
 #include <openvdb/openvdb.h>
+#include <sstream>
 
 namespace gust::vdb {
 
@@ -27,31 +29,9 @@ openvdb::BoolGrid::Ptr occupancy_grid(std::span<const std::uint32_t> voxels, con
     return occupancy;
 }
 
-Status write_grids(const std::filesystem::path& path, const openvdb::GridPtrVec& grids) {
-    try {
-        openvdb::io::File file(path.string());
-        file.write(grids);
-        file.close();
-    } catch (const std::exception& e) {
-        return Status::failure(path.string() + ": cannot write OpenVDB file: " + e.what());
-    }
-    return {};
-}
-
-} // namespace
-
-Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
-                           const GridDesc& grid) {
-    openvdb::initialize();
-    return write_grids(path, {occupancy_grid(voxels, grid)});
-}
-
-Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
-                       const GridDesc& grid, const WindGrids& wind) {
-    const std::size_t cells = std::size_t(wind.cells.x) * wind.cells.y * wind.cells.z;
-    if (wind.solid.size() != cells || wind.velocity.size() != cells || wind.pressure.size() != cells)
-        return Status::failure(path.string() + ": wind grids do not match the domain's cells");
-    openvdb::initialize();
+/// The four grids of a simulated frame.
+openvdb::GridPtrVec frame_grids(std::span<const std::uint32_t> voxels, const GridDesc& grid,
+                                const WindGrids& wind) {
     const auto transform = centred_transform(wind.origin, wind.cell_size);
     auto solid = openvdb::FloatGrid::create(0.0f);
     solid->setName("solid");
@@ -76,7 +56,49 @@ Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::u
                 v.setValueOn(c, openvdb::Vec3s(wind.velocity[i].x, wind.velocity[i].y, wind.velocity[i].z));
                 p.setValueOn(c, wind.pressure[i]);
             }
-    return write_grids(path, {occupancy_grid(voxels, grid), solid, velocity, pressure});
+    return {occupancy_grid(voxels, grid), solid, velocity, pressure};
+}
+
+/// Writes `grids` to `path`, turning what OpenVDB throws (while the grids are made or written) into a
+/// failure naming the file.
+template <class MakeGrids>
+Status write_grids(const std::filesystem::path& path, double voxel_size, MakeGrids make_grids) {
+    if (Status s = check_voxel_size(voxel_size); !s)
+        return Status::failure(path.string() + ": " + s.message());
+    try {
+        openvdb::initialize();
+        openvdb::io::File file(path.string());
+        file.write(make_grids());
+        file.close();
+    } catch (const std::exception& e) {
+        return Status::failure(path.string() + ": cannot write OpenVDB file: " + e.what());
+    }
+    return {};
+}
+
+} // namespace
+
+Status check_voxel_size(double size) {
+    if (size >= kSmallestVoxelSize) return {};
+    std::ostringstream text;
+    text << "voxel size " << size << " is below " << kSmallestVoxelSize
+         << ", the smallest an OpenVDB transform holds";
+    return Status::failure(text.str());
+}
+
+Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
+                           const GridDesc& grid) {
+    return write_grids(path, grid.voxel_size,
+                       [&] { return openvdb::GridPtrVec{occupancy_grid(voxels, grid)}; });
+}
+
+Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
+                       const GridDesc& grid, const WindGrids& wind) {
+    const std::size_t cells = std::size_t(wind.cells.x) * wind.cells.y * wind.cells.z;
+    if (wind.solid.size() != cells || wind.velocity.size() != cells || wind.pressure.size() != cells)
+        return Status::failure(path.string() + ": wind grids do not match the domain's cells");
+    return write_grids(path, std::min<double>(grid.voxel_size, wind.cell_size),
+                       [&] { return frame_grids(voxels, grid, wind); });
 }
 
 } // namespace gust::vdb

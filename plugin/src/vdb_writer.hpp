@@ -22,6 +22,13 @@ struct WindGrids {
     std::span<const float> pressure;     ///< Pa
 };
 
+/// The smallest voxel or cell size the files hold: OpenVDB's linear transforms need the cube of their
+/// scale to be at least 3e-15 (openvdb::math::ScaleMap), so 1.45e-5, with a margin.
+inline constexpr double kSmallestVoxelSize = 1.5e-5;
+
+/// Fails with the reason unless `size` (a voxel or cell edge) is at least kSmallestVoxelSize.
+Status check_voxel_size(double size);
+
 /// Writes the packed voxel keys (any order, duplicates allowed) as grid "occupancy" to `path`.
 Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
                            const GridDesc& grid);

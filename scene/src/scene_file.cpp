@@ -4,6 +4,7 @@
 // its key path, and no exception leaves this file.
 #include "gust/scene/scene_file.hpp"
 
+#include "gust/scene/domain_grid.hpp"
 #include "import_detail.hpp"
 
 #include <algorithm>
@@ -33,6 +34,9 @@ using nlohmann::json;
 constexpr std::uintmax_t kMaxFileBytes = 64u << 20;
 // Deeper nesting than any scene needs; the limit keeps recursive JSON copies and frees shallow.
 constexpr std::size_t kMaxDepth = 64;
+// The smallest voxel, metres: a tenth of a millimetre is far below any wind's use, and OpenVDB's
+// transforms (gust simulate's frames) cannot hold voxels below about 1.45e-5.
+constexpr double kMinVoxelSize = 1e-4;
 
 /// A failed check: "<key path>: <reason>" (load_scene adds the file).
 struct Invalid {
@@ -52,7 +56,8 @@ std::string index_path(const std::string& at, std::size_t index) {
 }
 
 /// Shortest text that reads back as `value`, with ".0" on whole numbers so they read as numbers.
-std::string format(double value) {
+/// The shortest text that reads back as `value` (float or double), with ".0" on whole numbers.
+template <class Real> std::string format(Real value) {
     std::array<char, 32> buffer{};
     const auto [end, error] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
     std::string text = error == std::errc{} ? std::string(buffer.data(), end) : std::to_string(value);
@@ -345,6 +350,12 @@ DomainDesc read_domain(const json& value, const std::string& at) {
         domain.hysteresis =
             integer(*v, key_path(at, "hysteresis"), 0, std::numeric_limits<std::uint32_t>::max());
     }
+    const float voxel = domain.cell_size / float(domain.voxels_per_cell);
+    if (voxel < kMinVoxelSize) {
+        fail(key_path(at, "cell_size"), "voxels of cell_size / voxels_per_cell = " + format(voxel) +
+                                            " m are below the smallest, " + format(kMinVoxelSize) + " m");
+    }
+    if (Result<GridDesc> grid = domain_grid(domain); !grid) fail(at, grid.message());
     return domain;
 }
 
@@ -455,13 +466,20 @@ EmitterDesc read_emitter(const json& value, const std::string& at) {
         emitter.direction = glm::vec3(direction / length);
     }
     if (const json* v = member(value, "radius")) emitter.radius = positive_float(*v, key_path(at, "radius"));
-    if (const json* v = member(value, "strength"))
-        emitter.strength = float_number(*v, key_path(at, "strength"));
+    if (const json* v = member(value, "strength")) {
+        const std::string strength_at = key_path(at, "strength");
+        emitter.strength = float_number(*v, strength_at);
+        if (std::abs(emitter.strength) > kMaxEmitterStrength) {
+            fail(strength_at, "must be within ±" + format(kMaxEmitterStrength) + " m/s (found " +
+                                  format(emitter.strength) + ")");
+        }
+    }
     if (const json* v = member(value, "falloff")) {
         const std::string falloff_at = key_path(at, "falloff");
         emitter.falloff = float_number(*v, falloff_at);
-        if (emitter.falloff < 0.0f)
-            fail(falloff_at, "must not be negative (found " + format(emitter.falloff) + ")");
+        if (emitter.falloff < 0.0f || emitter.falloff > kMaxEmitterFalloff)
+            fail(falloff_at, "must be in [0, " + format(kMaxEmitterFalloff) + "] (found " +
+                                 format(emitter.falloff) + ")");
     }
     const bool motor = emitter.type == "motor";
     if (const json* v = member(value, "shape")) {
@@ -568,7 +586,8 @@ SceneDesc read_scene(const json& root, const fs::path& file) {
 
     if (const json* v = member(root, "dt")) {
         scene.dt = number(*v, "dt");
-        if (!(scene.dt > 0.0)) fail("dt", "must be greater than 0 (found " + format(scene.dt) + ")");
+        if (!(scene.dt > 0.0 && scene.dt <= kMaxStep))
+            fail("dt", "must be in (0, " + format(kMaxStep) + "] seconds (found " + format(scene.dt) + ")");
     }
     if (const json* v = member(root, "domain")) scene.domain = read_domain(*v, "domain");
     if (const json* v = member(root, "ambient")) {

@@ -97,8 +97,9 @@ float emitter_rate(float dt, float response) {
 }
 
 Status validate_dt(float dt) {
-    if (!std::isfinite(dt) || !(dt > 0.0f) || dt > 10.0f)
-        return Status::failure("dt must be a finite number of seconds in (0, 10], got " + std::to_string(dt));
+    if (!std::isfinite(dt) || !(dt > 0.0f) || dt > kMaxStep)
+        return Status::failure("dt must be a finite number of seconds in (0, " + std::to_string(kMaxStep) +
+                               "], got " + std::to_string(dt));
     return Status{};
 }
 
@@ -208,10 +209,12 @@ Status validate(std::span<const Emitter> emitters) {
             return Status::failure(at + "direction must be a finite unit vector");
         if (!std::isfinite(e.radius) || !(e.radius > 0.0f))
             return Status::failure(at + "radius must be finite and > 0");
-        if (!std::isfinite(e.strength) || std::abs(e.strength) > 1e4f)
-            return Status::failure(at + "strength must be finite, within ±10000 m/s");
-        if (!std::isfinite(e.falloff) || e.falloff < 0.0f || e.falloff > 64.0f)
-            return Status::failure(at + "falloff must be finite, in [0, 64]");
+        if (!std::isfinite(e.strength) || std::abs(e.strength) > kMaxEmitterStrength)
+            return Status::failure(at + "strength must be finite, within ±" +
+                                   std::to_string(int(kMaxEmitterStrength)) + " m/s");
+        if (!std::isfinite(e.falloff) || e.falloff < 0.0f || e.falloff > kMaxEmitterFalloff)
+            return Status::failure(at + "falloff must be finite, in [0, " +
+                                   std::to_string(int(kMaxEmitterFalloff)) + "]");
         if (!std::isfinite(e.length) || e.length < 0.0f)
             return Status::failure(at + "length must be finite and >= 0");
         const bool motor = e.type == EmitterType::CapsuleMotor || e.type == EmitterType::ConeMotor;

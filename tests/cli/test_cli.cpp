@@ -176,11 +176,40 @@ TEST(CliVoxelize, rejectsBadArguments) {
           "voxelize " + bunny + " --res 16 --origin 0,0 --size 1 --out /tmp/x.vdb",
           "voxelize " + bunny + " --res 16 --origin 0,0,0 --size -1 --out /tmp/x.vdb",
           "voxelize " + bunny + " --res 16 --origin nan,0,0 --size 1 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16"}) {
+          "voxelize " + bunny + " --res -5 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16.5 --out /tmp/x.vdb",
+          "voxelize " + bunny + " --res 16 --out /tmp/x.vdb --colour red", "voxelize " + bunny + " --res 16",
+          std::string("simulate scene.json --frames -1 --out /tmp/x")}) {
         const CliRun run = gust(args);
-        EXPECT_NE(run.code, 0) << args;
-        EXPECT_FALSE(run.err.empty()) << args;
+        EXPECT_EQ(run.code, 1) << args;
+        EXPECT_NE(run.err.find("gust: error: "), std::string::npos) << args << ": " << run.err;
+        EXPECT_FALSE(fs::exists("/tmp/x.vdb")) << args;
     }
+    const CliRun help = gust("voxelize --help");
+    EXPECT_EQ(help.code, 0);
+    EXPECT_NE(help.out.find("--res"), std::string::npos) << help.out;
+}
+
+// OpenVDB's transforms hold no voxel below 1.5e-5 (it threw, and the CLI aborted), and a bounding box
+// near the float range makes no voxel size at all: both fail, naming the mesh, before any work.
+TEST(CliVoxelize, aVoxelTooSmallOrABoundingBoxTooLargeFailsNamingTheMesh) {
+    const fs::path dir = fs::temp_directory_path() / ("gust_cli_tiny_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string triangle = "f 1 2 3\n";
+    std::ofstream(dir / "tiny.obj") << "v 0 0 0\nv 0.001 0 0\nv 0 0.001 0\n" << triangle;
+    std::ofstream(dir / "huge.obj") << "v -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\n" << triangle;
+    const std::string out = (dir / "out.vdb").string();
+    for (const std::string& args : {(dir / "tiny.obj").string() + " --res 128",
+                                    (dir / "tiny.obj").string() + " --res 16 --origin 0,0,0 --size 1e-4",
+                                    (dir / "huge.obj").string() + " --res 16"}) {
+        const CliRun run = gust("voxelize " + args + " --out " + out);
+        EXPECT_EQ(run.code, 1) << args;
+        EXPECT_NE(run.err.find("gust: error: " + dir.string()), std::string::npos) << args << ": " << run.err;
+        EXPECT_FALSE(fs::exists(out)) << args;
+    }
+    const CliRun fine = gust("voxelize " + (dir / "tiny.obj").string() + " --res 32 --out " + out);
+    EXPECT_EQ(fine.code, 0) << fine.err;
+    fs::remove_all(dir);
 }
 
 TEST(CliVoxelize, unwritableOutputFailsNamingIt) {
@@ -378,6 +407,15 @@ TEST(CliSimulate, badSceneFailsNamingTheFileAndKey) {
         gust("simulate /nonexistent/scene.json --frames 2 --out " + (dir / "out").string());
     EXPECT_NE(missing.code, 0);
     EXPECT_NE(missing.err.find("/nonexistent/scene.json"), std::string::npos) << missing.err;
+    // A mesh the System refuses (a vertex not finite) is named by the object's key path too.
+    std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream(dir / "nan.json") << R"({"objects": [{"mesh": "nan.obj"}]})";
+    const CliRun nan =
+        gust("simulate " + (dir / "nan.json").string() + " --frames 2 --out " + (dir / "out").string());
+    EXPECT_EQ(nan.code, 1);
+    EXPECT_NE(nan.err.find("nan.json: objects[0].mesh: " + (dir / "nan.obj").string() + ": "),
+              std::string::npos)
+        << nan.err;
     fs::remove_all(dir);
 }
 

@@ -114,7 +114,7 @@ TEST_F(SceneFile, anEmptyObjectIsTheDefaultScene) {
 
 TEST_F(SceneFile, readsTheExtensions) {
     const gust::SceneDesc scene = load_ok(R"({
-      "domain": { "hysteresis": 0, "branching": 8, "voxels_per_cell": 8, "cells": [8, 256, 16.0] },
+      "domain": { "hysteresis": 0, "branching": 8, "voxels_per_cell": 2, "cells": [8, 256, 16.0] },
       "objects": [
         { "mesh": "fox.glb", "animation": { "clip": "Walk", "speed": -1.5, "loop": false, "offset": 0.25 } },
         { "mesh": "man.GLTF", "animation": { "clip": "clip0" } },
@@ -128,7 +128,7 @@ TEST_F(SceneFile, readsTheExtensions) {
     })");
     EXPECT_EQ(scene.domain.hysteresis, 0u);
     EXPECT_EQ(scene.domain.branching, 8u);
-    EXPECT_EQ(scene.domain.voxels_per_cell, 8u);
+    EXPECT_EQ(scene.domain.voxels_per_cell, 2u);
     EXPECT_EQ(scene.domain.cells, glm::uvec3(8, 256, 16));
     ASSERT_EQ(scene.objects.size(), 3u);
     ASSERT_TRUE(scene.objects[0].animation.has_value());
@@ -477,8 +477,9 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "objects[0].animation.rate: unknown key (expected one of: clip, speed, loop, offset)"},
     BadScene{"UnknownAmbientKey", R"({"ambient": {"speed": 1}})", "ambient.speed: unknown key"},
     BadScene{"DtAsString", R"({"dt": "0.02"})", "dt: expected a number (found string)"},
-    BadScene{"ZeroDt", R"({"dt": 0})", "dt: must be greater than 0 (found 0.0)"},
-    BadScene{"NegativeDt", R"({"dt": -0.5})", "dt: must be greater than 0 (found -0.5)"},
+    BadScene{"ZeroDt", R"({"dt": 0})", "dt: must be in (0, 10.0] seconds (found 0.0)"},
+    BadScene{"NegativeDt", R"({"dt": -0.5})", "dt: must be in (0, 10.0] seconds (found -0.5)"},
+    BadScene{"DtPastTheSolversLongestStep", R"({"dt": 11})", "dt: must be in (0, 10.0] seconds (found 11.0)"},
     BadScene{"DomainNotObject", R"({"domain": [1]})", "domain: expected an object (found array)"},
     BadScene{"CellsTooMany", R"({"domain": {"cells": [300, 16, 16]}})",
              "domain.cells[0]: must be an integer from 8 to 256 (found 300.0)"},
@@ -550,7 +551,11 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
     BadScene{"ZeroEmitterRadius", R"({"emitters": [{"type": "omni", "radius": 0}]})",
              "emitters[0].radius: must be greater than 0 (found 0.0)"},
     BadScene{"NegativeFalloff", R"({"emitters": [{"type": "omni", "falloff": -1}]})",
-             "emitters[0].falloff: must not be negative (found -1.0)"},
+             "emitters[0].falloff: must be in [0, 64.0] (found -1.0)"},
+    BadScene{"SteepFalloff", R"({"emitters": [{"type": "omni", "falloff": 65}]})",
+             "emitters[0].falloff: must be in [0, 64.0] (found 65.0)"},
+    BadScene{"StrongEmitter", R"({"emitters": [{"type": "omni"}, {"type": "vortex", "strength": -10001}]})",
+             "emitters[1].strength: must be within ±10000.0 m/s (found -10001.0)"},
     BadScene{"EmitterStrengthOverflow", R"({"emitters": [{"type": "omni", "strength": -4e38}]})",
              "emitters[0].strength: number -4e+38 is too large for a 32-bit float"},
     BadScene{"ShapeOnNonMotor", R"({"emitters": [{"type": "omni", "shape": "cone"}]})",
@@ -574,7 +579,13 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
     BadScene{"BudgetTooLarge", R"({"solver": {"cycles_per_step": 1001}})", "solver.cycles_per_step: must be an integer from 0 to 1000 (found 1001.0)"},
     BadScene{"NegativeViscosity", R"({"solver": {"viscosity": -1}})", "solver.viscosity: must not be negative (found -1.0)"},
     BadScene{"NineVoxelsPerCell", R"({"domain": {"voxels_per_cell": 9}})",
-             "domain.voxels_per_cell: must be an integer from 1 to 8 (found 9.0)"}),
+             "domain.voxels_per_cell: must be an integer from 1 to 8 (found 9.0)"},
+    BadScene{"VoxelsBelowATenthOfAMillimetre", R"({"domain": {"cell_size": 0.0002, "voxels_per_cell": 4}})",
+             "domain.cell_size: voxels of cell_size / voxels_per_cell = 5e-05 m are below the smallest, 1e-04 m"},
+    BadScene{"TreeBeyond1024VoxelsPerAxis", R"({"domain": {"cells": [256, 8, 8], "voxels_per_cell": 8}})",
+             "domain: the domain needs 2048 voxels along its longest axis; with branching 4 the tree would exceed 1024 per axis"},
+    BadScene{"TreeBeyond1024AtBranchingEight", R"({"domain": {"cells": [8, 8, 130], "voxels_per_cell": 4, "branching": 8}})",
+             "domain: the domain needs 520 voxels along its longest axis; with branching 8 the tree would exceed 1024 per axis"}),
     [](const testing::TestParamInfo<BadScene>& param) { return std::string(param.param.name); });
 // clang-format on
 

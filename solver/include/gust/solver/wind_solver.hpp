@@ -33,6 +33,12 @@ enum class PressureSolver {
     Jacobi        ///< the baseline
 };
 
+/// The longest step a solver takes, seconds.
+inline constexpr float kMaxStep = 10.0f;
+/// An emitter's largest |strength|, m/s, and largest falloff exponent.
+inline constexpr float kMaxEmitterStrength = 1e4f;
+inline constexpr float kMaxEmitterFalloff = 64.0f;
+
 /// Wind-source profiles (see emitter_velocity in shaders/solver/solver_io.h).
 enum class EmitterType { Directional, Omni, Vortex, CapsuleMotor, ConeMotor };
 
@@ -43,8 +49,8 @@ struct Emitter {
     glm::vec3 position{0.0f};     ///< metres, world: centre, or a motor's start
     glm::vec3 direction{1, 0, 0}; ///< unit: flow (directional, motors) or axis (vortex)
     float radius = 1.0f;          ///< metres, > 0
-    float strength = 0.0f;        ///< m/s at the centre (negative reverses: pull, clockwise, suck)
-    float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p, >= 0 (0: uniform)
+    float strength = 0.0f;        ///< m/s at the centre, within ±kMaxEmitterStrength (negative reverses)
+    float falloff = 1.0f;         ///< exponent p of (1 − d/radius)^p, 0..kMaxEmitterFalloff (0: uniform)
     float length = 0.0f;          ///< motors: metres along `direction`, >= 0
 };
 
