@@ -783,7 +783,7 @@ Traffic fill_traffic(const Workload& w) {
     return t;
 }
 
-/// The "faces" pass: solid_faces, then coarse_weights per coarser level.
+/// The "faces" pass: solid_faces, fluid_link and fluid_finish, then coarse_weights per coarser level.
 Traffic faces_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), air = 4.0 * w.cut_cells * w.cell_words;
@@ -791,6 +791,12 @@ Traffic faces_traffic(const Workload& w) {
     // per cut cell) also reads both cells' air. The motion sums of moving cells are left out (at most
     // 6 x 16 B per fragment).
     t.add(13 * F + 6 * 2 * air, 4 * C + 5 * F + air);
+    // fluid_link and fluid_finish run in this scene: the ground slab, which the domain's sides cut, holds
+    // outside air below the air above it in the lowest cells. fluid_link: per cell the flags, six open
+    // counts (a word each) and about three unions (two finds of two loads each); fluid_finish: the flags and
+    // a find per cell.
+    t.add(C * (4 + 6 * 4 + 3 * 2 * 8), 8 * C + F);
+    t.add(C * (4 + 2 * 4), 8 * C);
     // coarse_weights: the fine faces a coarse face covers (each read by one coarse face) and the store.
     for (std::size_t l = 1; l < w.levels.size(); ++l) {
         double accessed = 0.0, unique = 0.0;

@@ -4,20 +4,28 @@
 // domain side), else sealed. The cell's air is its first part that is air (kCellSecondPart when that is
 // part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
 // and adds a moving cell's mean fragment velocity to each sealed region it borders, so the air sealed
-// inside a moving solid moves with it (solid_motion_of).
+// inside a moving solid moves with it (solid_motion_of). A cell whose two parts both reach the outside
+// turns on fluid_link.comp and fluid_finish.comp (SolverState::fluid_dispatch), whose nodes start here.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
 shared uint group_sealed;
+shared bool group_ambiguous;
 
 void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = hot.dims;
-    if (gl_LocalInvocationIndex == 0u) group_sealed = 0u;
+    uint cells = uint(n.x * n.y * n.z);
+    if (gl_LocalInvocationIndex == 0u) {
+        group_sealed = 0u;
+        group_ambiguous = false;
+    }
     barrier();
-    if (i < n.x * n.y * n.z) {
+    if (uint(i) < cells) {
+        uint fluid = fluid_node(uint(i), cells);
+        LabelsRef(hot.labels).v[fluid] = fluid;
         uint v = hot.voxels_per_cell;
         uint flags = flags_at(i);
         uint counts[2];
@@ -31,6 +39,8 @@ void main() {
             if (roots[k] != kOutsideNode && roots[k] != node) atomicMin(LabelsRef(hot.labels).v[node], roots[k]);
         }
         uint add = 0u, air = 0u;
+        if (counts[0] != 0u && roots[0] == kOutsideNode && counts[1] != 0u && roots[1] == kOutsideNode)
+            group_ambiguous = true;
         if (counts[0] != 0u && roots[0] == kOutsideNode) {
             air = counts[0];
         } else if (counts[1] != 0u && roots[1] == kOutsideNode) {
@@ -59,4 +69,8 @@ void main() {
     }
     barrier();
     if (gl_LocalInvocationIndex == 0u && group_sealed > 0u) atomicAdd(state().s.sealed_cells, group_sealed);
+    if (gl_LocalInvocationIndex == 0u && group_ambiguous) {
+        uint groups = (cells + kSolverGroupSize - 1u) / kSolverGroupSize;
+        state().s.fluid_dispatch = LevelDispatch(min(groups, 65535u), (groups + 65534u) / 65535u, 1u);
+    }
 }

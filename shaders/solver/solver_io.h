@@ -103,7 +103,8 @@ struct SolverState {
     uint x_slot;                      ///< which of the two iterates holds x (0: kCellSolution, 1: ...B)
     uint p_slot;                      ///< which of the two search directions holds p
     uint reduce_count;                ///< workgroups done with the current reduction (last_group())
-    uint pad;
+    LevelDispatch fluid_dispatch;     ///< over the cells when a cell has two parts of outside air, else none
+    uint pad[2];
 };
 
 /// Slots of the dispatch buffer: per multigrid level the level's cells (restriction into it) and its
@@ -128,6 +129,12 @@ GUST_CONST uint kCellDynamic = 128u;  ///< held voxels of moving surfaces: the n
 GUST_CONST uint kOutsideNode = 0u;
 GUST_INLINE uint part_node(uint cell, uint k) {
     return 1u + kCellParts * cell + k;
+}
+
+/// Union-find node of cell `cell` (of `cells`) in the pressure equation's own connectivity
+/// (fluid_link.comp), after the part nodes; it shares node 0 with them.
+GUST_INLINE uint fluid_node(uint cell, uint cells) {
+    return 1u + kCellParts * cells + cell;
 }
 
 GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face(): the velocity (SolverPush::swap)
@@ -700,7 +707,7 @@ GUST_NAMESPACE_END
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
-static_assert(sizeof(gust::shaderio::SolverState) == 96);
+static_assert(sizeof(gust::shaderio::SolverState) == 112);
 #endif
 
 #endif

@@ -79,6 +79,8 @@ struct CpuWind::Impl {
     void solid_pass(const CpuSolid* solid, WindStats& stats);
     /// The outside-air fill: roots per part node, and each cell's air (flags, solid fraction).
     void fill(std::uint32_t& sealed_cells);
+    /// Seals the cells whose open faces reach no open side (pockets of the pressure equation).
+    void seal_pockets(std::uint32_t& sealed_cells);
     CellBits part_of(std::size_t cell, std::uint32_t part) const;
     CellBits air_of(std::size_t cell) const;
     glm::ivec4 solid_motion_of(std::size_t cell) const;
@@ -375,6 +377,54 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         }
         k.face[kFieldSolid][std::size_t(i)] =
             m.w > 0 ? share * float(m[int(axis)]) / (kVelocityScale * float(m.w)) : 0.0f;
+    });
+    seal_pockets(stats.sealed_cells);
+}
+
+// fluid_link.comp and fluid_finish.comp as a flood fill from the open sides over open faces. The GPU runs
+// them only when a cell has two parts of outside air, the only case that leaves such pockets, so running
+// it always finds the same cells.
+void CpuWind::Impl::seal_pockets(std::uint32_t& sealed_cells) {
+    using namespace shaderio;
+    const glm::ivec3 n = k.dims;
+    auto open = [&](std::uint32_t axis, glm::ivec3 f) {
+        return k.weights[std::size_t(face_index(n, axis, f))] > 0.0f;
+    };
+    auto has_air = [&](int i) { return (flags[std::size_t(i)] & kCellNoAir) == 0; };
+    std::vector<std::uint8_t> reached(flags.size(), 0);
+    std::vector<int> queue;
+    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        if (!has_air(i)) return;
+        for (std::uint32_t a = 0; a < 3; ++a) {
+            const glm::ivec3 high = c + axis_unit(a);
+            if ((c[int(a)] == 0 && (k.open_sides >> (2 * a) & 1) != 0 && open(a, c)) ||
+                (high[int(a)] == n[int(a)] && (k.open_sides >> (2 * a + 1) & 1) != 0 && open(a, high))) {
+                reached[std::size_t(i)] = 1;
+                queue.push_back(i);
+                return;
+            }
+        }
+    });
+    for (std::size_t at = 0; at < queue.size(); ++at) {
+        const glm::ivec3 c = cell_from_index(n, queue[at]);
+        for (std::uint32_t a = 0; a < 3; ++a)
+            for (int side = 0; side < 2; ++side) {
+                const glm::ivec3 nb = c + (2 * side - 1) * axis_unit(a);
+                if (!inside_cells(n, nb) || !open(a, side == 0 ? c : nb)) continue;
+                const int j = cell_index(n, nb);
+                if (reached[std::size_t(j)] || !has_air(j)) continue;
+                reached[std::size_t(j)] = 1;
+                queue.push_back(j);
+            }
+    }
+    each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
+        if (!has_air(i) || reached[std::size_t(i)]) return;
+        flags[std::size_t(i)] |= kCellNoAir;
+        solid_fraction[std::size_t(i)] = 1.0f;
+        for (std::uint32_t a = 0; a < 3; ++a)
+            for (int side = 0; side < 2; ++side)
+                k.weights[std::size_t(face_index(n, a, c + side * axis_unit(a)))] = 0.0f;
+        ++sealed_cells;
     });
 }
 

@@ -21,6 +21,8 @@ namespace {
 #include "gust_shaders/fill_link_comp.h"
 #include "gust_shaders/fill_link_small_comp.h"
 #include "gust_shaders/finish_comp.h"
+#include "gust_shaders/fluid_finish_comp.h"
+#include "gust_shaders/fluid_link_comp.h"
 #include "gust_shaders/jacobi_comp.h"
 #include "gust_shaders/project_comp.h"
 #include "gust_shaders/restrict_comp.h"
@@ -75,8 +77,9 @@ struct WindSolver::Impl : gpu::HostObject {
     /// advect.comp and smooth.comp specialized to each mode (SolverPush::parity) the solver uses.
     std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
     std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
-    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, coarse_weights, diffuse,
-        start, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll, sample;
+    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_link, fluid_finish,
+        coarse_weights, diffuse, start, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll,
+        sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
         pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
         cell_motion, labels, region_motion, vorticity_buf, confinement, emitters, state, dispatch, bindings,
@@ -159,6 +162,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.fill_link, small ? words(fill_link_small_comp) : words(fill_link_comp), "gust fill_link"},
         {&m.fill_finish, small ? words(fill_finish_small_comp) : words(fill_finish_comp), "gust fill_finish"},
         {&m.solid_faces, small ? words(solid_faces_small_comp) : words(solid_faces_comp), "gust solid_faces"},
+        {&m.fluid_link, words(fluid_link_comp), "gust fluid_link"},
+        {&m.fluid_finish, words(fluid_finish_comp), "gust fluid_finish"},
         {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
         {&m.diffuse, words(diffuse_comp), "gust diffuse"},
         {&m.start, words(start_comp), "gust start"},
@@ -220,7 +225,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t faces = solver->face_count(), cells = solver->cell_count();
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
     const std::uint64_t open_words = shaderio::open_count_words(std::uint32_t(faces));
-    const std::uint64_t nodes = 1 + shaderio::kCellParts * cells;
+    const std::uint64_t nodes = 1 + shaderio::kCellParts * cells; // the fill's; fluid_node() adds one a cell
     // Partial sums: one per workgroup of the widest reducing pass (level-0 cells or level-0 tiles).
     const LevelDispatch level0_groups = groups_for(cells), level0_tiles = tiles_for(m.levels[0].dims);
     const std::uint64_t partials =
@@ -254,7 +259,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.cell_static, cells * words_per_cell * 4, 0, "gust cell static voxels"},
         {&m.cell_flags, cells * 4, 0, "gust cell flags"},
         {&m.cell_motion, cells * 16, 0, "gust cell motion"},
-        {&m.labels, nodes * 4, 0, "gust fill labels"},
+        {&m.labels, (nodes + cells) * 4, 0, "gust fill labels"},
         {&m.region_motion, nodes * 16, 0, "gust region motion"},
         {&m.vorticity_buf, cells * 16, 0, "gust vorticity"},
         {&m.confinement, cells * 16, 0, "gust confinement"},
@@ -633,6 +638,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.end(cmd);
     m.profiler.begin(cmd, "faces");
     run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
+    for (const gpu::Pipeline* p : {&m.fluid_link, &m.fluid_finish}) {
+        p->bind(cmd, &push, sizeof(push));
+        p->dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fluid_dispatch));
+        gpu::barrier(ctx_, cmd);
+    }
     if (levels > 1) {
         const GridLevel& last = m.levels.back();
         run(m.coarse_weights,
