@@ -718,6 +718,10 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
             "frame " + std::to_string(world_frame.frame) +
                 ": a fragment list or tree pool ran out, so its solids were partial; grown "
                 "for the frames recorded from now on");
+    if (wind.diverged)
+        log(LogLevel::Warning, "frame " + std::to_string(world_frame.frame) +
+                                   ": the pressure solve diverged and was stopped, so the frame's wind was not "
+                                   "projected (docs/solver.md, \"Stability\")");
 }
 
 Outcome System::step(float dt) {
