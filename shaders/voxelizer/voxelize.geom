@@ -24,6 +24,11 @@ layout(location = 7) flat out vec3 out_vc;
 // tests, which reject them.
 const float kDilation = 0.5 + 1.0 / 16.0;
 
+// How far past the viewport (pixels) a dilated vertex may lie. Rasterizers clip and snap vertices in
+// fixed point, and far beyond this lavapipe lost parts of triangles that reach 1e8 voxels out; such a
+// triangle is drawn as its bounding box cut to the viewport instead, and the exact tests keep its voxels.
+const float kFarPixels = 16384.0;
+
 void emit(vec2 p, Setup s, vec4 clip) {
     out_a = s.a;
     out_b = s.b;
@@ -52,6 +57,7 @@ void main() {
     vec2 hi = max(p[0], max(p[1], p[2]));
     // A pixel's square meets the bounding box exactly when its centre is within half a pixel of it.
     vec4 clip = vec4(lo - kDilation, hi + kDilation);
+    float res = float(pc.res);
 
     float area = (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[1].y - p[0].y) * (p[2].x - p[0].x);
     if (area < 0.0) {
@@ -75,14 +81,18 @@ void main() {
         else dilated[i] = vec2(l1.z * l2.y - l1.y * l2.z, l1.x * l2.z - l1.z * l2.x) / det;
         if (ok && !is_finite(vec3(dilated[i], 0.0))) ok = false;
     }
+    for (int i = 0; i < 3 && ok; ++i)
+        if (any(greaterThan(abs(dilated[i] - 0.5 * res), vec2(0.5 * res + kFarPixels)))) ok = false;
     if (ok) {
         for (int i = 0; i < 3; ++i) emit(dilated[i], s, clip);
     } else {
-        // Nearly degenerate in projection: rasterize the clip box itself.
-        emit(clip.xy, s, clip);
-        emit(vec2(clip.z, clip.y), s, clip);
-        emit(vec2(clip.x, clip.w), s, clip);
-        emit(clip.zw, s, clip);
+        // Nearly degenerate in projection, or reaching far past the viewport: rasterize the clip box, cut
+        // to the viewport (and a pixel around it).
+        vec4 box = clamp(clip, vec4(-1.0), vec4(res + 1.0));
+        emit(box.xy, s, clip);
+        emit(vec2(box.z, box.y), s, clip);
+        emit(vec2(box.x, box.w), s, clip);
+        emit(box.zw, s, clip);
     }
     EndPrimitive();
 }

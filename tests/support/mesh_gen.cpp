@@ -184,6 +184,15 @@ TestMesh huge_triangles(const GridDesc& grid) {
     return builder.take();
 }
 
+TestMesh vast_triangles(const GridDesc& grid) {
+    const double res = grid.res, far = 1e8 * res;
+    GridMeshBuilder builder(grid);
+    const double y = 0.3721 * res, x = 0.6133 * res;
+    builder.triangle({-far, y, -far}, {far, y, -far}, {0.0, y, far});
+    builder.triangle({x, -far, -far}, {x, -far, far}, {x, far, 0.0});
+    return builder.take();
+}
+
 TestMesh partly_outside(const GridDesc& grid, std::uint32_t seed, std::size_t count) {
     Rng rng(seed);
     GridMeshBuilder builder(grid);

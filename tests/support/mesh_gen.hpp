@@ -33,6 +33,11 @@ TestMesh grid_aligned_boxes(const GridDesc& grid, std::size_t count, std::uint32
 /// so large that the triangle covers its whole plane's section of the grid.
 TestMesh huge_triangles(const GridDesc& grid);
 
+/// Two triangles reaching 1e8 grid widths out, lying in planes of constant y and of constant x (off the
+/// voxel planes), so that single precision keeps the planes exact: each covers its plane's whole section
+/// of the grid. A rasterizer must clip them.
+TestMesh vast_triangles(const GridDesc& grid);
+
 /// `count` triangles straddling the grid's boundary: each has a vertex inside and one outside the grid.
 TestMesh partly_outside(const GridDesc& grid, std::uint32_t seed, std::size_t count);
 

@@ -67,6 +67,7 @@ Case make_case(const std::string& name, std::uint32_t res) {
     if (name == "soup") return {random_soup(res, 3000, g), g};
     if (name == "boxes") return {grid_aligned_boxes(g, 12, res), g};
     if (name == "huge") return {huge_triangles(g), g};
+    if (name == "vast") return {vast_triangles(g), g};
     return {partly_outside(g, res, 400), g};
 }
 
@@ -124,12 +125,13 @@ std::string param_name(const ::testing::TestParamInfo<Param>& info) {
            to_string(std::get<2>(info.param));
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Meshes, MatchesReference,
-    ::testing::Combine(::testing::Values("bunny", "dragon_res3", "fox", "soup", "boxes", "huge", "outside"),
-                       ::testing::Values(8u, 37u, 64u, 128u),
-                       ::testing::Values(VoxelizeMethod::Raster, VoxelizeMethod::Compute)),
-    param_name);
+INSTANTIATE_TEST_SUITE_P(Meshes, MatchesReference,
+                         ::testing::Combine(::testing::Values("bunny", "dragon_res3", "fox", "soup", "boxes",
+                                                              "huge", "vast", "outside"),
+                                            ::testing::Values(8u, 37u, 64u, 128u),
+                                            ::testing::Values(VoxelizeMethod::Raster,
+                                                              VoxelizeMethod::Compute)),
+                         param_name);
 
 // The largest grid: grid-aligned boxes and plane sections spanning all 1024^2 columns.
 INSTANTIATE_TEST_SUITE_P(LargestGrid, MatchesReference,
