@@ -603,6 +603,10 @@ SceneDesc read_scene(const json& root, const fs::path& file) {
     }
     if (const json* v = member(root, "emitters")) {
         array(*v, "emitters");
+        if (v->size() > kMaxEmitterCount) {
+            fail("emitters", "at most " + std::to_string(kMaxEmitterCount) + " emitters (found " +
+                                 std::to_string(v->size()) + ")");
+        }
         for (std::size_t i = 0; i < v->size(); ++i)
             scene.emitters.push_back(read_emitter((*v)[i], index_path("emitters", i)));
     }

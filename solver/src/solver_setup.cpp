@@ -198,8 +198,9 @@ Status validate(const SolverDesc& desc) {
 }
 
 Status validate(std::span<const Emitter> emitters) {
-    if (emitters.size() > shaderio::kMaxEmitters)
-        return Status::failure("at most " + std::to_string(shaderio::kMaxEmitters) + " emitters, got " +
+    static_assert(kMaxEmitterCount == shaderio::kMaxEmitters);
+    if (emitters.size() > kMaxEmitterCount)
+        return Status::failure("at most " + std::to_string(kMaxEmitterCount) + " emitters, got " +
                                std::to_string(emitters.size()));
     for (std::size_t i = 0; i < emitters.size(); ++i) {
         const Emitter& e = emitters[i];

@@ -552,6 +552,13 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "emitters[0].radius: must be greater than 0 (found 0.0)"},
     BadScene{"NegativeFalloff", R"({"emitters": [{"type": "omni", "falloff": -1}]})",
              "emitters[0].falloff: must be in [0, 64.0] (found -1.0)"},
+    BadScene{"SixtyFiveEmitters",
+             [] {
+                 std::string text = R"({"emitters": [{"type": "omni"})";
+                 for (int i = 1; i < 65; ++i) text += R"(, {"type": "omni"})";
+                 return text + "]}";
+             }(),
+             "emitters: at most 64 emitters (found 65)"},
     BadScene{"SteepFalloff", R"({"emitters": [{"type": "omni", "falloff": 65}]})",
              "emitters[0].falloff: must be in [0, 64.0] (found 65.0)"},
     BadScene{"StrongEmitter", R"({"emitters": [{"type": "omni"}, {"type": "vortex", "strength": -10001}]})",

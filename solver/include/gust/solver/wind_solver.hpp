@@ -35,6 +35,8 @@ enum class PressureSolver {
 
 /// The longest step a solver takes, seconds.
 inline constexpr float kMaxStep = 10.0f;
+/// The most emitters a solver takes.
+inline constexpr std::size_t kMaxEmitterCount = 64;
 /// An emitter's largest |strength|, m/s, and largest falloff exponent.
 inline constexpr float kMaxEmitterStrength = 1e4f;
 inline constexpr float kMaxEmitterFalloff = 64.0f;
