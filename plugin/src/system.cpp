@@ -380,6 +380,13 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         world_desc.grid = *grid;
         world_desc.tree.branching = b;
         world_desc.tree.hysteresis = desc.domain.hysteresis;
+        // TreeDesc's first pools suit branching 4. An octree's bricks are 2^3 voxels, so the same surface
+        // takes four times as many bricks, and blocks above them; a tiny scene at 8 voxels per cell ran
+        // out in its eighth frame (a warning, and that frame's solids partial).
+        if (b == 2) {
+            world_desc.tree.node_blocks *= 4;
+            world_desc.tree.mask_blocks *= 4;
+        }
         world_desc.method = desc.voxelize == VoxelizePath::Raster    ? VoxelizeMethod::Raster
                             : desc.voxelize == VoxelizePath::Compute ? VoxelizeMethod::Compute
                                                                      : VoxelizeMethod::Auto;
