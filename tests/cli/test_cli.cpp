@@ -333,6 +333,43 @@ TEST(CliSimulate, framesHoldTheWindGridsOnCellCentresAndStatsTheSolve) {
     fs::remove_all(out);
 }
 
+// An octree (branching 2) at 8 voxels per cell: a static rod and a box sliding and turning past it. The
+// octree's first pools ran out in its eighth frame (a warning, that frame's solids partial); they must last.
+TEST(CliSimulate, anOctreeAtEightVoxelsPerCellDoesNotRunOutOfItsFirstPools) {
+    const fs::path dir = fs::temp_directory_path() / ("gust_cli_octree_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string faces = "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::ofstream(dir / "rod.obj")
+        << "v 0.03 0.05 0.07\nv 2.01 0.05 0.07\nv 0.03 0.52 0.07\nv 2.01 0.52 0.07\n"
+           "v 0.03 0.05 0.29\nv 2.01 0.05 0.29\nv 0.03 0.52 0.29\nv 2.01 0.52 0.29\n"
+        << faces;
+    std::ofstream(dir / "cube.obj") << "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv -0.5 0.5 -0.5\nv 0.5 0.5 -0.5\n"
+                                       "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv -0.5 0.5 0.5\nv 0.5 0.5 0.5\n"
+                                    << faces;
+    std::ofstream(dir / "scene.json") << R"({
+      "dt": 0.05,
+      "domain": {"center": [0.3, 0.1, -0.2], "cells": [17, 8, 23], "cell_size": 0.41, "voxels_per_cell": 8,
+                 "branching": 2},
+      "ambient": {"velocity": [3, 0, 1]},
+      "objects": [
+        {"mesh": "rod.obj", "static": true, "transform": {"translate": [-1.2, -0.6, 1.1], "rotate_deg": [0, 25, 10]}},
+        {"mesh": "cube.obj", "keyframes": [{"t": 0, "translate": [-2.5, 0.1, -3]},
+                                           {"t": 1.45, "translate": [2.9, 0.2, 3.1], "rotate_deg": [30, 60, 90],
+                                            "scale": 0.7}]}]})";
+    const fs::path out = dir / "out";
+    const CliRun run =
+        gust("simulate " + (dir / "scene.json").string() + " --frames 12 --out " + out.string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(run.err.find("warning"), std::string::npos) << run.err;
+    std::ifstream stats(out / "stats.jsonl");
+    int frames = 0;
+    for (std::string line; std::getline(stats, line); ++frames)
+        EXPECT_EQ(nlohmann::json::parse(line)["exhausted"].get<int>(), 0) << line;
+    EXPECT_EQ(frames, 12);
+    fs::remove_all(dir);
+}
+
 // The issue's reproduction through the scene file and the VDB frames: a closed box is solid inside (solid 1,
 // the air in it still), occupancy stays the tree's surface voxels, and a box whose keyframes jump 20 m
 // within a millisecond (a teleport) leaves the wind calm and every solve converged.
