@@ -714,6 +714,18 @@ Status Context::save_pipeline_cache() const {
     // never sees half a cache, nor two writers one file.
     const std::filesystem::path path{std::string(pipeline_cache_path_)};
     std::error_code ec;
+    // Only a missing or empty file, or one of ours (whole or damaged), is replaced: a path that names
+    // anything else is a mistake, and the file is the user's.
+    if (std::filesystem::exists(path, ec)) {
+        if (!std::filesystem::is_regular_file(path, ec))
+            return Status::failure(path.string() + ": not a regular file, so no pipeline cache was written");
+        char magic[sizeof(kCacheMagic)] = {};
+        std::ifstream in(path, std::ios::binary);
+        in.read(magic, sizeof(magic));
+        if (in.gcount() > 0 && (in.gcount() < std::streamsize(sizeof(magic)) ||
+                                std::memcmp(magic, kCacheMagic, sizeof(magic)) != 0))
+            return Status::failure(path.string() + ": not a gust pipeline cache, so it was left as it is");
+    }
     if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
     const std::filesystem::path partial = path.string() + "." + std::to_string(getpid()) + ".partial";
     CacheFileHeader header{};

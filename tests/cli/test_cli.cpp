@@ -550,8 +550,15 @@ TEST(CliPipelineCache, aFileCutShortOrOfGarbageIsIgnoredAndTheRunIsTheSame) {
         EXPECT_EQ(run.err.find("vulkan"), std::string::npos) << name << ": " << run.err;
         const CliRun next = voxelize_bunny(env);
         ASSERT_EQ(next.code, 0) << next.err;
-        EXPECT_EQ(nlohmann::json::parse(next.out)["pipeline_cache"]["loaded"], true)
-            << "the run after " << name << " reads the file that run wrote";
+        // A file that is not a gust cache may be the user's: it is left as it is, and no cache is read.
+        const bool ours = damaged.empty() || damaged.rfind("gustpc01", 0) == 0;
+        EXPECT_EQ(nlohmann::json::parse(next.out)["pipeline_cache"]["loaded"], ours)
+            << "the run after " << name << " reads the file that run wrote, when it could write it";
+        if (!ours) {
+            std::ifstream kept(file, std::ios::binary);
+            EXPECT_EQ(std::string(std::istreambuf_iterator<char>(kept), std::istreambuf_iterator<char>()),
+                      damaged);
+        }
     }
     fs::remove_all(dir);
 }

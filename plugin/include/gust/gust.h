@@ -184,6 +184,7 @@ typedef struct gust_system_desc {
     gust_hooks hooks;             ///< host hooks (copied; the functions must stay valid until destroy)
     /// Own device: a pipeline cache file, read in create (when it holds this device's cache) and written by
     /// gust_system_destroy, so the next process need not compile its pipelines; NULL keeps it in memory.
+    /// Only a missing or empty file or a gust cache is replaced; any other file is left as it is.
     const char* pipeline_cache;
 } gust_system_desc;
 

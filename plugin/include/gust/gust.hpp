@@ -189,8 +189,10 @@ struct SystemDesc {
     Hooks hooks;
     /// Own device: a file the Vulkan pipeline cache is read from at creation (when it holds this device's
     /// cache, whole; any other file, a missing one included, is ignored) and written to when the System is
-    /// destroyed (replaced whole; a failure to write is ignored), so the next process creates its pipelines
-    /// from it instead of compiling them. Null: the cache stays in memory. Read during create().
+    /// destroyed, so the next process creates its pipelines from it instead of compiling them. Only a
+    /// missing or empty file or a gust cache (even a damaged one) is replaced, whole; any other file is
+    /// left as it is. Its folder is created when missing; a failure to write is ignored. Null: the cache
+    /// stays in memory. Read during create().
     const char* pipeline_cache = nullptr;
 };
 

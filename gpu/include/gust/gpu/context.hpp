@@ -38,7 +38,8 @@ struct ContextDesc {
     /// new/delete (and the driver's own allocator). Must outlive the Context.
     std::pmr::memory_resource* memory = nullptr;
     /// A file the pipeline cache is read from (when it is whole and holds this device's cache; any other
-    /// file, a missing one included, is ignored) and written to by Context::save_pipeline_cache(); empty
+    /// file, a missing one included, is ignored) and written to by Context::save_pipeline_cache() when it is
+    /// missing, empty or a gust cache (any other file is left alone); empty
     /// keeps the cache in memory only. Tools that run once per call (gust voxelize) create their
     /// pipelines from it instead of compiling them.
     std::string pipeline_cache;
