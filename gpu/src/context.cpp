@@ -646,11 +646,23 @@ Status Context::finish_device(std::uint32_t queue_index) {
     return {};
 }
 
+void Context::wait_idle() const {
+    if (!device_) return;
+    // An adopted device is not waited on as a whole (its other queues are the host's), but the queue gust
+    // was given is, as gust's blocking calls use it: commands gust recorded into the host's command
+    // buffers (Submission::HostCommands) may still be running there, on gust's resources.
+    if (owns_device_) {
+        vk_.vkDeviceWaitIdle(device_);
+    } else if (queue_) {
+        std::unique_lock<std::mutex> lock;
+        if (queue_mutex_) lock = std::unique_lock<std::mutex>(*queue_mutex_);
+        vk_.vkQueueWaitIdle(queue_);
+    }
+}
+
 Context::~Context() {
     if (device_ && vk_.vkDestroyDevice) {
-        // An adopted device is never waited on: that would touch the host's queues, which the host
-        // synchronizes, and every gust submission has completed when submit_and_wait returns.
-        if (owns_device_) vk_.vkDeviceWaitIdle(device_);
+        wait_idle();
         retire(UINT64_MAX);
         if (fence_) vk_.vkDestroyFence(device_, fence_, allocator());
         if (pipeline_cache_) vk_.vkDestroyPipelineCache(device_, pipeline_cache_, allocator());

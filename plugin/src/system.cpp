@@ -147,6 +147,8 @@ struct System::Impl {
 
     ~Impl() {
         if (!ctx) return;
+        // Frames recorded into the host's command buffers may still run on what is destroyed below.
+        ctx->wait_idle();
         if (sampler) ctx->vk().vkDestroySampler(ctx->device(), sampler, ctx->allocator());
         // SystemDesc::pipeline_cache: the cache only saves time, so failing to write it fails nothing.
         static_cast<void>(ctx->save_pipeline_cache());
@@ -726,9 +728,10 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
                 ": a fragment list or tree pool ran out, so its solids were partial; grown "
                 "for the frames recorded from now on");
     if (wind.diverged)
-        log(LogLevel::Warning, "frame " + std::to_string(world_frame.frame) +
-                                   ": the pressure solve diverged and was stopped, so the frame's wind was not "
-                                   "projected (docs/solver.md, \"Stability\")");
+        log(LogLevel::Warning,
+            "frame " + std::to_string(world_frame.frame) +
+                ": the pressure solve diverged and was stopped, so the frame's wind was not "
+                "projected (docs/solver.md, \"Stability\")");
 }
 
 Outcome System::step(float dt) {

@@ -544,6 +544,23 @@ class HostFrames : public ::testing::Test {
     std::unique_ptr<System> system_;
 };
 
+// Destroying a System right after the engine submitted the frames it recorded: the destructor waits for the
+// queue it was given, so nothing it destroys is still in use (45 validation errors, then a crash in the
+// driver, before it waited).
+TEST_F(HostFrames, destroyingTheSystemWithFramesInFlightWaitsForThem) {
+    start(2);
+    Box box(1.0f);
+    MeshId mesh = 0;
+    InstanceId instance = 0;
+    ASSERT_TRUE(system_->create_mesh(box.desc(), mesh));
+    ASSERT_TRUE(system_->create_instance(mesh, translation(0.0f, 2.0f, 0.0f), true, instance));
+    ASSERT_TRUE(system_->set_ambient({2.0f, 0.0f, 1.0f}));
+    frame();
+    frame();
+    system_.reset();
+    EXPECT_EQ(host_.messages(), 0);
+}
+
 TEST_F(HostFrames, statsAndAsyncAnswersArriveFramesInFlightStepsLater) {
     const std::uint32_t frames = 3;
     start(frames);

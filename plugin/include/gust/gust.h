@@ -333,7 +333,8 @@ gust_result gust_wind_emitter_defaults(gust_wind_emitter* emitter);
 /// `*system` is NULL and gust_last_create_error() says why. Any thread.
 gust_result gust_system_create(const gust_system_desc* desc, gust_system* system);
 
-/// Waits for the GPU and destroys `system` and everything it owns; the handle is dead afterwards.
+/// Waits for the GPU (its own device, or on a host device the queue it was given) and destroys `system`
+/// and everything it owns; the handle is dead afterwards.
 gust_result gust_system_destroy(gust_system system);
 
 /// The message of the last failed call on `system` ("" if none), owned by the system and valid until the

@@ -336,6 +336,8 @@ class System {
     /// Creates the device (or adopts desc.host), the voxel tree and the solver. On failure `out` stays
     /// null and the Outcome says why.
     static Outcome create(const SystemDesc& desc, std::unique_ptr<System>& out);
+    /// Waits until the GPU is done with the System's resources (its own device, or on a host device the
+    /// queue it was given, where the engine submits the frames recorded for it), then destroys them.
     ~System();
     System(const System&) = delete;
     System& operator=(const System&) = delete;

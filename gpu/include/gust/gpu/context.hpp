@@ -175,6 +175,9 @@ class Context : public HostObject {
     /// Internal: a dispatch or draw was recorded.
     void count_dispatch() { ++work_.dispatches; }
 
+    /// Waits until nothing runs on gust's resources: the whole device when gust owns it, else the queue it
+    /// was given (HostDevice::queue_mutex held), where the host submits what gust recorded for it.
+    void wait_idle() const;
     /// The pipeline cache every pipeline is created through (ContextDesc::pipeline_cache).
     VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
     /// Writes the pipeline cache to ContextDesc::pipeline_cache (nothing when none was named), so the

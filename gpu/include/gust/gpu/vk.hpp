@@ -45,6 +45,7 @@ namespace gust::gpu {
     X(vkGetPipelineCacheData)                                                                                \
     X(vkGetDeviceQueue)                                                                                      \
     X(vkDeviceWaitIdle)                                                                                      \
+    X(vkQueueWaitIdle)                                                                                       \
     X(vkCreateBuffer)                                                                                        \
     X(vkDestroyBuffer)                                                                                       \
     X(vkGetBufferMemoryRequirements)                                                                         \
