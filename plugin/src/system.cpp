@@ -144,6 +144,9 @@ struct System::Impl {
     WindTexture texture;
     FrameStats stats;
     std::uint64_t frame = 0;
+    /// Why a step failed on the device or the host's memory, part-way through: the System's state is not
+    /// known after that, so later steps refuse to run (never a frame of wrong wind).
+    std::pmr::string failure{&memory};
 
     ~Impl() {
         if (!ctx) return;
@@ -208,6 +211,10 @@ struct System::Impl {
     /// Reads a completed frame's slot: stats (with `work`, the frame's GPU work), async answers, growth
     /// for later frames.
     Outcome collect(Slot& slot, const gpu::WorkCounts& work);
+    /// Keeps a step's DeviceFailure in `failure`; returns the step's outcome.
+    Outcome remember(Outcome stepped);
+    /// DeviceFailure once a step has failed part-way (`failure`), else success.
+    Outcome refuse_after_failure() const;
 
     /// create_instance() and create_moving_instance(): `previous` (or null) is the transform one step before.
     Outcome add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,
@@ -734,11 +741,24 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
                 "projected (docs/solver.md, \"Stability\")");
 }
 
+Outcome System::Impl::remember(Outcome stepped) {
+    if (stepped.code() == ErrorCode::DeviceFailure) failure.assign(stepped.message());
+    return stepped;
+}
+
+Outcome System::Impl::refuse_after_failure() const {
+    if (failure.empty()) return {};
+    return Outcome(ErrorCode::DeviceFailure, "an earlier step failed (" + std::string(failure) +
+                                                 "), so the System's state is unknown: destroy it and create "
+                                                 "another");
+}
+
 Outcome System::step(float dt) {
     if (impl_->submission == Submission::HostCommands)
         return invalid("with Submission::HostCommands, call step(dt, commands)");
     if (Outcome o = check_dt(dt); !o) return o;
-    return guarded([&]() -> Outcome {
+    if (Outcome o = impl_->refuse_after_failure(); !o) return o;
+    return impl_->remember(guarded([&]() -> Outcome {
         Impl& m = *impl_;
         const gpu::WorkCounts before = m.ctx->work();
         glm::ivec3 shift;
@@ -756,7 +776,7 @@ Outcome System::step(float dt) {
         const gpu::WorkCounts& after = m.ctx->work();
         return m.collect(m.blocking, {after.dispatches - before.dispatches,
                                       after.submissions - before.submissions, after.waits - before.waits});
-    });
+    }));
 }
 
 std::size_t System::Impl::answers_offset() {
@@ -789,7 +809,8 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         return invalid("step(dt, commands) needs Submission::HostCommands");
     if (commands == VK_NULL_HANDLE) return invalid("commands is null");
     if (Outcome o = check_dt(dt); !o) return o;
-    return guarded([&]() -> Outcome {
+    if (Outcome o = impl_->refuse_after_failure(); !o) return o;
+    return impl_->remember(guarded([&]() -> Outcome {
         Impl& m = *impl_;
         glm::ivec3 shift;
         if (Outcome o = m.scroll_cells(shift); !o) return o;
@@ -802,7 +823,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         m.ctx->begin_frame(n);
 
         return m.record_frame(commands, dt, shift, slot);
-    });
+    }));
 }
 
 Outcome System::Impl::record_frame(VkCommandBuffer commands, float dt, glm::ivec3 shift, Slot& slot) {

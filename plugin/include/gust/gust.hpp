@@ -380,6 +380,7 @@ class System {
 
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
     /// the wind texture and answer pending queries. Blocks until the GPU is done (Submission::OwnQueue).
+    /// After a step fails with DeviceFailure, every later step does too: destroy the System.
     Outcome step(float dt);
     /// The same with Submission::HostCommands: records the whole frame into the host's `commands` (in the
     /// recording state, outside a render pass) and returns without waiting. The host submits the buffers
