@@ -35,6 +35,9 @@ namespace {
 Outcome invalid(std::string message) {
     return Outcome(ErrorCode::InvalidArgument, std::move(message));
 }
+/// The most cells set_focus moves the focus at once.
+constexpr float kMaxFocusMoveCells = 1e6f;
+
 Outcome device_failure(const Status& s) {
     return Outcome(ErrorCode::DeviceFailure, s.message());
 }
@@ -413,7 +416,10 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         gpu::ImageDesc image;
         image.extent = {solver_desc.cells.x, solver_desc.cells.y, solver_desc.cells.z};
         image.format = VK_FORMAT_R16G16B16A16_SFLOAT;
-        image.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+        // Sampled by the engine, written by gust's copy, and copied out by an engine that exports or
+        // captures it.
+        image.usage =
+            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
         image.volume = true;
         auto created = gpu::Image::create(*m.ctx, image);
         if (!created) return device_failure(created.status());
@@ -640,6 +646,13 @@ Outcome System::set_ambient(const Vec3& velocity) {
 
 Outcome System::set_focus(const Vec3& position) {
     if (!finite(position)) return invalid("focus must be finite");
+    // The next step scrolls by whole cells, counted in 32-bit integers: a move it could not make is
+    // refused here, keeping the old focus, rather than failing every step after.
+    const float h = impl_->solver_desc.cell_size;
+    const glm::vec3 centre = impl_->solver->origin() + 0.5f * glm::vec3(impl_->solver_desc.cells) * h;
+    if (glm::any(glm::greaterThan(glm::abs(to_glm(position) - centre) / h, glm::vec3(kMaxFocusMoveCells))))
+        return invalid("focus is more than a million cells from the domain's centre; move it in smaller "
+                       "steps or create the System at the new place");
     impl_->focus = to_glm(position);
     return {};
 }
@@ -657,7 +670,7 @@ Outcome System::Impl::scroll_cells(glm::ivec3& cells) const {
     const float h = solver_desc.cell_size;
     const glm::vec3 wanted = focus - 0.5f * glm::vec3(solver_desc.cells) * h;
     const glm::vec3 shift = glm::round((wanted - solver->origin()) / h);
-    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(1e6f))))
+    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(kMaxFocusMoveCells + 1.0f))))
         return invalid("the focus moved more than a million cells in one step");
     cells = glm::ivec3(shift);
     return {};

@@ -405,6 +405,10 @@ TEST_F(SystemTest, rejectsBadTimeStepsPointsAndEmittersAndKeepsWorking) {
     EXPECT_EQ(system_->set_emitters({&bad, 1}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->set_ambient({kNaN, 0, 0}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->set_focus({0, kNaN, 0}).code(), ErrorCode::InvalidArgument);
+    // A focus the next step could not scroll to is refused at once, keeping the old one (it made every later
+    // step fail).
+    EXPECT_EQ(system_->set_focus({2e6f, 0, 0}).code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(system_->set_focus({0, 0, -1e30f}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->step(0.05f, VK_NULL_HANDLE).code(), ErrorCode::InvalidArgument) << "own-queue system";
     EXPECT_EQ(system_->export_vdb(nullptr).code(), ErrorCode::InvalidArgument);
     ASSERT_TRUE(system_->step(0.05f));

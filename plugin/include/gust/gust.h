@@ -354,7 +354,9 @@ gust_result gust_system_set_vertices(gust_system system, gust_mesh mesh, const f
                                      uint32_t vertex_count, uint32_t stride, bool teleport);
 
 /// The same from a host VkBuffer (host device only): vertex_count packed float3 at `offset` bytes, copied on
-/// gust's queue at the next step; the host keeps the buffer unchanged until gust_system_step returns.
+/// gust's queue at the next step; the host keeps those bytes unchanged until that step's copy has run
+/// (gust_system_step returns, or with host commands the frame completes). gust cannot know the buffer's size:
+/// the range [offset, offset + 12 vertex_count) must lie inside it.
 gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, VkBuffer buffer,
                                             VkDeviceSize offset, uint32_t vertex_count, bool teleport);
 
@@ -384,7 +386,8 @@ gust_result gust_system_set_emitters(gust_system system, const gust_wind_emitter
 /// Prevailing wind, m/s world: enters through the upwind sides of the domain.
 gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
 
-/// Centre of interest (world m); the domain follows it in whole cells at the next step.
+/// Centre of interest (world m); the domain follows it in whole cells at the next step. Invalid (the old
+/// focus kept) for a point more than a million cells from the domain's centre.
 gust_result gust_system_set_focus(gust_system system, gust_vec3 position);
 
 /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh the wind

@@ -353,7 +353,9 @@ class System {
     Outcome set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
                          std::uint32_t stride = 12, bool teleport = false);
     /// The same from a host VkBuffer (host device only): vertex_count tightly packed float3 at `offset`,
-    /// copied on gust's queue at the next step; the host keeps the buffer unchanged until step() returns.
+    /// copied at the next step; the host keeps those bytes unchanged until that step's copy has run: until
+    /// step() returns (OwnQueue), or the frame it recorded completes (HostCommands). gust cannot know the
+    /// buffer's size: the range [offset, offset + 12 vertex_count) must lie inside it.
     Outcome set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
                          bool teleport = false);
 
@@ -375,7 +377,8 @@ class System {
     Outcome set_emitters(std::span<const WindEmitter> emitters);
     /// Prevailing wind, m/s: enters through the upwind sides of the domain.
     Outcome set_ambient(const Vec3& velocity);
-    /// Centre of interest; the domain follows it in whole cells at the next step.
+    /// Centre of interest; the domain follows it in whole cells at the next step. InvalidArgument (the old
+    /// focus kept) for a point more than a million cells from the domain's centre.
     Outcome set_focus(const Vec3& position);
 
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
