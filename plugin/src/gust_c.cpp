@@ -21,6 +21,7 @@
 static_assert(GUST_VERSION_MAJOR == gust::kVersionMajor && GUST_VERSION_MINOR == gust::kVersionMinor &&
               GUST_VERSION_PATCH == gust::kVersionPatch);
 static_assert(GUST_HEADER_VERSION == gust::kHeaderVersion);
+static_assert(GUST_MAX_QUERY_POINTS == gust::kMaxQueryPoints);
 
 static_assert(GUST_OK == static_cast<int>(gust::ErrorCode::Ok));
 static_assert(GUST_ERROR_INVALID_ARGUMENT == static_cast<int>(gust::ErrorCode::InvalidArgument));
@@ -771,6 +772,8 @@ gust_result gust_system_query(gust_system system, const gust_vec3* points, size_
         if (count > 0 && !points) return invalid("points is NULL but count is " + std::to_string(count));
         if (count > 0 && !velocities)
             return invalid("velocities is NULL but count is " + std::to_string(count));
+        if (count > gust::kMaxQueryPoints)
+            return invalid(std::to_string(count) + " points, more than GUST_MAX_QUERY_POINTS");
         const std::vector<gust::Vec3> in = to_cpp(points, count);
         std::vector<gust::Vec3> out(count);
         gust::Outcome outcome = s.query(in, out);
@@ -785,6 +788,8 @@ gust_result gust_system_query_async(gust_system system, const gust_vec3* points,
         if (!query) return invalid("query (the output) is NULL");
         *query = 0;
         if (count > 0 && !points) return invalid("points is NULL but count is " + std::to_string(count));
+        if (count > gust::kMaxQueryPoints)
+            return invalid(std::to_string(count) + " points, more than GUST_MAX_QUERY_POINTS");
         const std::vector<gust::Vec3> in = to_cpp(points, count);
         gust::QueryId id = 0;
         gust::Outcome outcome = s.query_async(in, id);

@@ -35,6 +35,9 @@ namespace {
 Outcome invalid(std::string message) {
     return Outcome(ErrorCode::InvalidArgument, std::move(message));
 }
+/// Frames an answer of query_async waits to be fetched before it is dropped.
+constexpr std::uint64_t kKeepAnswers = 64;
+
 /// The most cells set_focus moves the focus at once.
 constexpr float kMaxFocusMoveCells = 1e6f;
 
@@ -130,7 +133,8 @@ struct System::Impl {
         std::pmr::vector<glm::vec3> points;
         std::pmr::vector<glm::vec3> answer;
         bool ready = false;
-        bool asked = false; ///< HostCommands: recorded into a frame, answered when it completes
+        bool asked = false;         ///< HostCommands: recorded into a frame, answered when it completes
+        std::uint64_t answered = 0; ///< the frame whose stats brought the answer
     };
     std::pmr::map<MeshId, Mesh> meshes;
     std::pmr::map<InstanceId, Instance> instances;
@@ -809,7 +813,20 @@ Outcome System::Impl::collect(Slot& slot, const gpu::WorkCounts& work) {
         Pending& pending = queries.at(id);
         pending.answer.assign(answers + at, answers + at + pending.points.size());
         pending.ready = true;
+        pending.answered = slot.frame;
         at += pending.points.size();
+    }
+    // An answer left unfetched for kKeepAnswers frames is dropped, so an engine that abandons its tickets
+    // does not hold their memory for the rest of the session.
+    for (auto it = queries.begin(); it != queries.end();) {
+        if (it->second.ready && slot.frame >= it->second.answered + kKeepAnswers) {
+            log(LogLevel::Warning, "query " + std::to_string(it->first) + " was answered " +
+                                       std::to_string(kKeepAnswers) +
+                                       " frames ago and never fetched; dropped");
+            it = queries.erase(it);
+        } else {
+            ++it;
+        }
     }
     slot.asked.clear();
     slot.used = false;
@@ -906,6 +923,9 @@ Outcome System::Impl::record_frame(VkCommandBuffer commands, float dt, glm::ivec
 
 namespace {
 Outcome check_points(std::span<const Vec3> points) {
+    if (points.size() > kMaxQueryPoints)
+        return invalid(std::to_string(points.size()) + " points, more than the " +
+                       std::to_string(kMaxQueryPoints) + " a query takes");
     for (std::size_t i = 0; i < points.size(); ++i)
         if (!finite(points[i])) return invalid("point " + std::to_string(i) + " is not finite");
     return {};

@@ -444,6 +444,9 @@ static void rejects_bad_queries(gust_system system) {
     CHECK_RESULT(system, gust_system_query(system, points, 2, velocities), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_query(system, NULL, 2, velocities), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_query(system, points, 1, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    /* A count past the limit is refused before anything is read (it was an out-of-memory DeviceFailure). */
+    CHECK_RESULT(system, gust_system_query(system, points, (size_t)GUST_MAX_QUERY_POINTS + 1, velocities),
+                 GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_query_async(system, points, 2, &query), GUST_ERROR_INVALID_ARGUMENT);
     CHECK(query == 0);
     CHECK_RESULT(system, gust_system_query_async(system, points, 1, NULL), GUST_ERROR_INVALID_ARGUMENT);

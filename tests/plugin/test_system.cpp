@@ -565,6 +565,27 @@ TEST_F(HostFrames, destroyingTheSystemWithFramesInFlightWaitsForThem) {
     EXPECT_EQ(host_.messages(), 0);
 }
 
+// An engine that asks and never fetches does not grow gust's memory for the rest of its session: an answer
+// left 64 frames is dropped, with a warning, and its ticket is dead.
+TEST_F(SystemTest, anAnswerNeverFetchedIsDroppedAfterSixtyFourFrames) {
+    const Vec3 points[] = {{0.0f, 1.0f, 0.0f}};
+    QueryId kept = 0, abandoned = 0;
+    ASSERT_TRUE(system_->query_async(points, abandoned));
+    for (int frame = 0; frame < 64; ++frame) {
+        ASSERT_TRUE(system_->step(0.05f));
+        if (frame == 62) {
+            ASSERT_TRUE(system_->query_async(points, kept));
+        }
+    }
+    EXPECT_EQ(watch_.warnings, 0) << "63 frames after its answer the ticket is still good";
+    ASSERT_TRUE(system_->step(0.05f));
+    EXPECT_GE(watch_.warnings, 1);
+    Vec3 answer[1];
+    EXPECT_EQ(system_->fetch(abandoned, answer).code(), ErrorCode::InvalidHandle);
+    EXPECT_TRUE(system_->fetch(kept, answer));
+    watch_.warnings = 0; // the one expected
+}
+
 TEST_F(HostFrames, statsAndAsyncAnswersArriveFramesInFlightStepsLater) {
     const std::uint32_t frames = 3;
     start(frames);

@@ -43,6 +43,8 @@ extern "C" {
      ((uint32_t)GUST_VERSION_PATCH))
 /// Most emitters gust_system_set_emitters takes at once.
 #define GUST_MAX_EMITTERS 64
+/// Most points one query (gust_system_query, gust_system_query_async) takes.
+#define GUST_MAX_QUERY_POINTS (1u << 24)
 
 /// What went wrong; the same numbers as gust::ErrorCode.
 typedef enum gust_result {

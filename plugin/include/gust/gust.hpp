@@ -247,7 +247,7 @@ struct WindTexture {
     std::uint32_t extent[3] = {};
     /// World position → texture coordinates in [0, 1]^3 (uvw = world_to_texture · (p, 1)).
     Mat4 world_to_texture;
-    /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step (and after record()).
+    /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step.
     VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     std::uint64_t frame = 0; ///< steps taken when it was written (0 before the first)
 };
@@ -298,6 +298,8 @@ struct FrameStats {
 
 /// Ticket of an asynchronous query (0 is never valid).
 using QueryId = std::uint64_t;
+/// Most points one query (query, query_async) takes; equal to GUST_MAX_QUERY_POINTS.
+inline constexpr std::size_t kMaxQueryPoints = std::size_t(1) << 24;
 
 /// The voxel grid of the solid boundary (System::debug_voxel_grid). Voxel (i, j, k) is the world-space box
 /// origin + [(i, j, k), (i + 1, j + 1, k + 1)] · voxel_size.
