@@ -53,6 +53,15 @@ bool finite(const Mat4& m) {
         if (!std::isfinite(f)) return false;
     return true;
 }
+/// Finite and affine: the last row is (0, 0, 0, 1). A projective matrix would voxelize a distorted mesh.
+Outcome check_transform(const Mat4& m, const char* name) {
+    if (!finite(m)) return invalid(std::string(name) + " must be finite");
+    if (m.m[3] != 0.0f || m.m[7] != 0.0f || m.m[11] != 0.0f || m.m[15] != 1.0f)
+        return invalid(std::string(name) +
+                       " must be affine: its last row (m[3], m[7], m[11], m[15]) must be 0, "
+                       "0, 0, 1");
+    return {};
+}
 glm::vec3 to_glm(const Vec3& v) {
     return {v.x, v.y, v.z};
 }
@@ -582,8 +591,9 @@ Outcome System::Impl::add_instance(MeshId mesh, const Mat4& transform, const Mat
     Outcome error;
     Mesh* m = find_mesh(mesh, error);
     if (!m) return error;
-    if (!finite(transform)) return invalid("transform must be finite");
-    if (previous && !finite(*previous)) return invalid("previous must be finite");
+    if (Outcome o = check_transform(transform, "transform"); !o) return o;
+    if (previous)
+        if (Outcome o = check_transform(*previous, "previous"); !o) return o;
     return guarded([&]() -> Outcome {
         const InstanceId next = next_id++;
         const bool dynamic = moving || m->deforming;
@@ -610,7 +620,7 @@ Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool t
     auto it = impl_->instances.find(instance);
     if (it == impl_->instances.end())
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
-    if (!finite(transform)) return invalid("transform must be finite");
+    if (Outcome o = check_transform(transform, "transform"); !o) return o;
     it->second.model = to_glm(transform);
     it->second.teleport = it->second.teleport || teleport;
     if (!it->second.dynamic) impl_->static_dirty = true;

@@ -363,6 +363,12 @@ TEST_F(SystemTest, rejectsBadHandlesTransformsAndVertexArrays) {
     EXPECT_EQ(system_->create_instance(999, Mat4{}, true, instance).code(), ErrorCode::InvalidHandle);
     ASSERT_TRUE(system_->create_instance(mesh, Mat4{}, true, instance));
     EXPECT_EQ(system_->set_transform(instance, nan).code(), ErrorCode::InvalidArgument);
+    Mat4 projective = translation(0, 0, 0);
+    projective.m[3] = 1.0f;
+    projective.m[15] = 0.0f;
+    EXPECT_EQ(system_->set_transform(instance, projective).code(), ErrorCode::InvalidArgument) << "not affine";
+    InstanceId refused = 0;
+    EXPECT_EQ(system_->create_instance(mesh, projective, false, refused).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->destroy_mesh(mesh).code(), ErrorCode::InvalidHandle) << "a mesh in use stays";
     ASSERT_TRUE(system_->destroy_instance(instance));
     EXPECT_EQ(system_->destroy_instance(instance).code(), ErrorCode::InvalidHandle);

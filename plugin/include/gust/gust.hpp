@@ -60,7 +60,8 @@ struct Vec3 {
     float x = 0.0f, y = 0.0f, z = 0.0f;
 };
 
-/// Column-major 4x4 matrix (m[12..14] is the translation); identity by default.
+/// Column-major 4x4 matrix (m[12..14] is the translation); identity by default. Transforms are affine: the
+/// last row (m[3], m[7], m[11], m[15]) is 0, 0, 0, 1.
 struct Mat4 {
     float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
