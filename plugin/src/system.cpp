@@ -338,7 +338,12 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
         return invalid("wind.pressure must be MultigridPCG, Multigrid or Jacobi");
     }
     if (!finite(d.focus)) return invalid("domain.focus must be finite");
-    if (!std::isfinite(d.cell_size) || !(d.cell_size > 0.0f)) return invalid("domain.cell_size must be > 0");
+    // Voxels of a tenth of a millimetre up to cells of a kilometre: wind has no use beyond, and single
+    // precision places nothing beyond (a cell of 1e-30 m made every solve diverge; one of 1e30 m overflows).
+    if (!std::isfinite(d.cell_size) || !(d.cell_size >= 1e-4f * float(d.voxels_per_cell)) ||
+        d.cell_size > 1000.0f)
+        return invalid("domain.cell_size must be from 1e-4 m x voxels_per_cell to 1000 m, got " +
+                       std::to_string(d.cell_size));
     out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
     if (Status s = validate(out); !s) return invalid(s.message());
     return {};

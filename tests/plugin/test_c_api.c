@@ -285,6 +285,14 @@ static void rejects_bad_creation_without_touching_the_device(void) {
     desc = small_world_desc(NULL);
     desc.domain.cell_size = NAN;
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
+    /* Cells whose voxels are below 1e-4 m, or cells above 1000 m (a cell of 1e-30 m made every solve
+       diverge). */
+    desc.domain.cell_size = 1e-30f;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
+    desc.domain.cell_size = 3e-4f;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
+    desc.domain.cell_size = 1e30f;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);
     desc = small_world_desc(NULL);
     desc.domain.branching = 3;
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_ERROR_INVALID_ARGUMENT);

@@ -122,10 +122,11 @@ typedef struct gust_device_requirements {
     const char* const* features;            ///< names of required VkPhysicalDevice*Features members
 } gust_device_requirements;
 
-/// Where the wind is simulated and how finely.
+/// Where the wind is simulated and how finely. The longest axis in voxels (cells x voxels_per_cell), rounded
+/// up to a power of the branching, must be at most 1024.
 typedef struct gust_wind_domain {
     uint32_t cells[3];        ///< wind cells per axis, each 8..256
-    float cell_size;          ///< metres
+    float cell_size;          ///< metres, from 1e-4 x voxels_per_cell to 1000
     uint32_t voxels_per_cell; ///< voxels of the solid boundary per cell per axis, 1..8
     uint32_t branching;       ///< the voxel tree's branching per axis: 2, 4 or 8
     gust_vec3 focus;          ///< the domain's first centre (player or camera), world m

@@ -115,10 +115,12 @@ DeviceRequirements device_requirements();
 /// chain (which must hold both), leaving the host's other flags as they are.
 Outcome add_required_features(VkPhysicalDeviceFeatures2& features);
 
-/// Where the wind is simulated and how finely.
+/// Where the wind is simulated and how finely. The longest axis in voxels (cells × voxels_per_cell), rounded
+/// up to a power of `branching`, must be at most 1024 (256 cells take 4 voxels per cell at branching 4, 2 at
+/// branching 8).
 struct WindDomain {
     std::uint32_t cells[3] = {32, 16, 32}; ///< wind cells per axis, each 8..256
-    float cell_size = 1.0f;                ///< metres
+    float cell_size = 1.0f;                ///< metres, from 1e-4 · voxels_per_cell to 1000
     std::uint32_t voxels_per_cell = 4;     ///< voxels of the solid boundary per cell per axis, 1..8
     std::uint32_t branching = 4;           ///< the voxel tree's branching per axis: 2, 4 or 8
     Vec3 focus{};                          ///< the domain's first centre (player or camera)
