@@ -338,10 +338,8 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
         return invalid("wind.pressure must be MultigridPCG, Multigrid or Jacobi");
     }
     if (!finite(d.focus)) return invalid("domain.focus must be finite");
-    // Voxels of a tenth of a millimetre up to cells of a kilometre: wind has no use beyond, and single
-    // precision places nothing beyond (a cell of 1e-30 m made every solve diverge; one of 1e30 m overflows).
-    if (!std::isfinite(d.cell_size) || !(d.cell_size >= 1e-4f * float(d.voxels_per_cell)) ||
-        d.cell_size > 1000.0f)
+    if (!std::isfinite(d.cell_size) || !(d.cell_size >= kMinVoxelSize * float(d.voxels_per_cell)) ||
+        d.cell_size > kMaxCellSize)
         return invalid("domain.cell_size must be from 1e-4 m x voxels_per_cell to 1000 m, got " +
                        std::to_string(d.cell_size));
     out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
@@ -410,13 +408,6 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         world_desc.grid = *grid;
         world_desc.tree.branching = b;
         world_desc.tree.hysteresis = desc.domain.hysteresis;
-        // TreeDesc's first pools suit branching 4. An octree's bricks are 2^3 voxels, so the same surface
-        // takes four times as many bricks, and blocks above them; a tiny scene at 8 voxels per cell ran
-        // out in its eighth frame (a warning, and that frame's solids partial).
-        if (b == 2) {
-            world_desc.tree.node_blocks *= 4;
-            world_desc.tree.mask_blocks *= 4;
-        }
         world_desc.method = desc.voxelize == VoxelizePath::Raster    ? VoxelizeMethod::Raster
                             : desc.voxelize == VoxelizePath::Compute ? VoxelizeMethod::Compute
                                                                      : VoxelizeMethod::Auto;

@@ -34,9 +34,6 @@ using nlohmann::json;
 constexpr std::uintmax_t kMaxFileBytes = 64u << 20;
 // Deeper nesting than any scene needs; the limit keeps recursive JSON copies and frees shallow.
 constexpr std::size_t kMaxDepth = 64;
-// The smallest voxel, metres: a tenth of a millimetre is far below any wind's use, and OpenVDB's
-// transforms (gust simulate's frames) cannot hold voxels below about 1.45e-5.
-constexpr double kMinVoxelSize = 1e-4;
 
 /// A failed check: "<key path>: <reason>" (load_scene adds the file).
 struct Invalid {

@@ -64,8 +64,10 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
         return Result<std::unique_ptr<SparseTree>>::failure(
             "fragment_shift " + std::to_string(desc.fragment_shift) + " puts the fragment grid beyond " +
             std::to_string(kMaxRes) + " voxels per axis");
-    if (desc.node_blocks < 1 || desc.mask_blocks < 1)
-        return Result<std::unique_ptr<SparseTree>>::failure("pool capacities must be at least one block");
+    // A tiny scene at 8 voxels per cell ran out of the branching-4 sizes in an octree in its eighth frame.
+    const std::uint32_t octree = desc.branching == 2 ? 4u : 1u;
+    const std::uint32_t node_blocks = desc.node_blocks != 0 ? desc.node_blocks : 1024u * octree;
+    const std::uint32_t mask_blocks = desc.mask_blocks != 0 ? desc.mask_blocks : 4096u * octree;
 
     std::unique_ptr<SparseTree> tree(new (ctx.memory()) SparseTree(ctx));
     tree->log2_b_ = log2_b;
@@ -103,7 +105,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     auto profiler = gpu::Profiler::create(ctx);
     if (!profiler) return profiler.status();
     tree->profiler_ = std::move(*profiler);
-    if (Status s = tree->allocate_pools(desc.node_blocks, desc.mask_blocks, false); !s) return s;
+    if (Status s = tree->allocate_pools(node_blocks, mask_blocks, false); !s) return s;
     if (Status s = tree->ensure_scratch(kMinScratch); !s) return s;
     TreeState empty{};
     empty.node_blocks_used = 1;

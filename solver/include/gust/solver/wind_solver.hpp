@@ -33,6 +33,11 @@ enum class PressureSolver {
     Jacobi        ///< the baseline
 };
 
+/// The smallest voxel (cell_size / voxels_per_cell) and the largest cell, metres: wind has no use beyond,
+/// single precision places nothing beyond (cells of 1e-30 m made every solve diverge; 1e30 m overflows),
+/// and OpenVDB's transforms (gust simulate's frames) hold no voxel below about 1.45e-5 m.
+inline constexpr float kMinVoxelSize = 1e-4f;
+inline constexpr float kMaxCellSize = 1000.0f;
 /// The longest step a solver takes, seconds.
 inline constexpr float kMaxStep = 10.0f;
 /// The most emitters a solver takes.

@@ -22,10 +22,14 @@ struct TreeState;
 
 /// Shape and initial capacity of a tree.
 struct TreeDesc {
-    std::uint32_t branching = 4;      ///< children per axis: 2 (octree), 4 or 8
-    std::uint32_t res = 256;          ///< voxels per axis, a power of `branching` in [branching, 1024]
-    std::uint32_t node_blocks = 1024; ///< initial node-pool capacity, in blocks of branching^3 nodes
-    std::uint32_t mask_blocks = 4096; ///< initial leaf-mask capacity, in blocks (one per leaf brick)
+    std::uint32_t branching = 4; ///< children per axis: 2 (octree), 4 or 8
+    std::uint32_t res = 256;     ///< voxels per axis, a power of `branching` in [branching, 1024]
+    /// Initial node-pool capacity, in blocks of branching^3 nodes; 0: sized for the branching (1,024 blocks,
+    /// four times as many for an octree, whose 2^3-voxel bricks take four times as many for one surface).
+    std::uint32_t node_blocks = 0;
+    /// Initial leaf-mask capacity, in blocks (one per leaf brick); 0: sized for the branching (4,096, four
+    /// times as many for an octree).
+    std::uint32_t mask_blocks = 0;
     std::uint32_t hysteresis = 8; ///< K: blocks whose owner went more than K frames unreached are coarsened
     /// Fragments come from a grid finer by 2^fragment_shift per axis (a shallower tree over the same
     /// fragments, as the seed's depth table builds); 0 for fragments at `res`.
