@@ -352,6 +352,10 @@ DomainDesc read_domain(const json& value, const std::string& at) {
         fail(key_path(at, "cell_size"), "voxels of cell_size / voxels_per_cell = " + format(voxel) +
                                             " m are below the smallest, " + format(kMinVoxelSize) + " m");
     }
+    if (domain.cell_size > kMaxCellSize) {
+        fail(key_path(at, "cell_size"),
+             "must be at most " + format(kMaxCellSize) + " m (found " + format(domain.cell_size) + ")");
+    }
     if (Result<GridDesc> grid = domain_grid(domain); !grid) fail(at, grid.message());
     return domain;
 }

@@ -589,6 +589,8 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "domain.voxels_per_cell: must be an integer from 1 to 8 (found 9.0)"},
     BadScene{"VoxelsBelowATenthOfAMillimetre", R"({"domain": {"cell_size": 0.0002, "voxels_per_cell": 4}})",
              "domain.cell_size: voxels of cell_size / voxels_per_cell = 5e-05 m are below the smallest, 1e-04 m"},
+    BadScene{"CellsAboveAKilometre", R"({"domain": {"cell_size": 1500}})",
+             "domain.cell_size: must be at most 1000.0 m (found 1500.0)"},
     BadScene{"TreeBeyond1024VoxelsPerAxis", R"({"domain": {"cells": [256, 8, 8], "voxels_per_cell": 8}})",
              "domain: the domain needs 2048 voxels along its longest axis; with branching 4 the tree would exceed 1024 per axis"},
     BadScene{"TreeBeyond1024AtBranchingEight", R"({"domain": {"cells": [8, 8, 130], "voxels_per_cell": 4, "branching": 8}})",
