@@ -2,6 +2,7 @@
 #pragma once
 
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace sample {
 
@@ -11,12 +12,18 @@ struct Actor {
     glm::vec3 forward{0.0f, 0.0f, 1.0f};
 };
 
+/// A world-space box that a camera should not look through (a building or a tree).
+struct Obstacle {
+    glm::vec3 lo{0.0f}, hi{0.0f}; ///< corners, m
+};
+
 /// The actors the tour films (World::stage).
 struct Stage {
-    Actor fox;           ///< walking a circle through the grass
-    Actor walker;        ///< CesiumMan, walking an ellipse
-    Actor flyer;         ///< the bunny with a motor, flying a figure of eight
-    glm::vec3 fan{0.0f}; ///< the fan's head
+    Actor fox;                       ///< walking a circle through the grass
+    Actor walker;                    ///< CesiumMan, walking an ellipse
+    Actor flyer;                     ///< the bunny with a motor, flying a figure of eight
+    glm::vec3 fan{0.0f};             ///< the fan's head
+    std::vector<Obstacle> obstacles; ///< the bounds of what stands still and hides what is behind it
 };
 
 } // namespace sample

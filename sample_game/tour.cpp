@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace sample {
 
@@ -20,6 +21,44 @@ OrbitCamera looking_at(glm::vec3 target, glm::vec3 towards_eye, float distance) 
     return camera;
 }
 
+/// Whether the segment from `a` to `b` passes through `box` (slabs).
+bool crosses(glm::vec3 a, glm::vec3 b, const Obstacle& box) {
+    float enter = 0.0f, leave = 1.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float d = b[axis] - a[axis];
+        if (std::abs(d) < 1e-6f) {
+            if (a[axis] < box.lo[axis] || a[axis] > box.hi[axis]) return false;
+            continue;
+        }
+        float t0 = (box.lo[axis] - a[axis]) / d, t1 = (box.hi[axis] - a[axis]) / d;
+        if (t0 > t1) std::swap(t0, t1);
+        enter = std::max(enter, t0);
+        leave = std::min(leave, t1);
+        if (enter > leave) return false;
+    }
+    return true;
+}
+
+/// `looking_at`, turned about the vertical by the least angle (in 20-degree steps, either way) that leaves
+/// no obstacle between the eye and the target; unturned when every direction is blocked. A shot keeps
+/// its own direction whenever that is clear, and turns only while something stands in the way.
+OrbitCamera clear_view(const Stage& stage, glm::vec3 target, glm::vec3 towards_eye, float distance) {
+    constexpr float kStep = 20.0f * std::numbers::pi_v<float> / 180.0f;
+    for (int turn = 0; turn <= 9; ++turn) {
+        for (const float sign : {1.0f, -1.0f}) {
+            const float a = sign * kStep * static_cast<float>(turn);
+            const glm::vec3 d(std::cos(a) * towards_eye.x - std::sin(a) * towards_eye.z, towards_eye.y,
+                              std::sin(a) * towards_eye.x + std::cos(a) * towards_eye.z);
+            const OrbitCamera camera = looking_at(target, d, distance);
+            const glm::vec3 eye = camera.eye();
+            if (std::none_of(stage.obstacles.begin(), stage.obstacles.end(),
+                             [&](const Obstacle& box) { return crosses(target, eye, box); }))
+                return camera;
+        }
+    }
+    return looking_at(target, towards_eye, distance);
+}
+
 /// Right of a horizontal heading.
 glm::vec3 right_of(glm::vec3 forward) {
     return {-forward.z, 0.0f, forward.x};
@@ -35,7 +74,7 @@ void overview(const Stage&, float u, OrbitCamera& camera, Views&) {
 void grass(const Stage& stage, float u, OrbitCamera& camera, Views&) {
     // To one side and a little ahead of the fox, closing in: the blades are as tall as its legs.
     const Actor& fox = stage.fox;
-    camera = looking_at(fox.position + glm::vec3(0.0f, 0.25f, 0.0f),
+    camera = clear_view(stage, fox.position + glm::vec3(0.0f, 0.25f, 0.0f),
                         right_of(fox.forward) + 0.7f * fox.forward + 0.55f * kUp, 4.2f - 1.0f * u);
 }
 
@@ -51,7 +90,7 @@ void fan(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
 void wake(const Stage& stage, float, OrbitCamera& camera, Views& views) {
     // A fixed direction, so the flyer crosses the frame with its wake behind it, and the wind's speed
     // and arrows at the height of its motor (World: 0.6 m above the bunny).
-    camera = looking_at(stage.flyer.position, glm::vec3(0.25f, 0.9f, 1.0f), 9.0f);
+    camera = clear_view(stage, stage.flyer.position, glm::vec3(0.25f, 0.9f, 1.0f), 9.0f);
     views.slice = true;
     views.arrows = true;
     views.slice_height = stage.flyer.position.y + 0.6f;
@@ -60,10 +99,10 @@ void wake(const Stage& stage, float, OrbitCamera& camera, Views& views) {
 void tree(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
     // gust's voxels instead of the triangles and grass, and only the tree nodes that change: those moving
     // meshes reach, made or freed (the ground's and the buildings' would hide them).
-    // Seen from the middle of the field, where no palm or building stands in the way.
+    // Seen from the middle of the field, turned where a palm or a building would stand in the way.
     const Actor& walker = stage.walker;
     const glm::vec3 inwards = glm::normalize(glm::vec3(-walker.position.x, 0.0f, -walker.position.z));
-    camera = looking_at(walker.position + glm::vec3(0.0f, 0.7f, 0.0f),
+    camera = clear_view(stage, walker.position + glm::vec3(0.0f, 0.7f, 0.0f),
                         inwards + 0.4f * walker.forward + 0.8f * kUp, 6.5f - 1.0f * u);
     views.triangles = false;
     views.grass = false;

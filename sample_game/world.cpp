@@ -6,6 +6,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <gust/scene/import.hpp>
 #include <gust/scene/primitives.hpp>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -93,7 +94,7 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
         glm::vec3 color;
     };
     const Building buildings[] = {
-        {"architecture/building-garage.glb", {6.0f, 0.0f, -6.0f}, 0.0f, 5.0f, {0.62f, 0.55f, 0.48f}},
+        {"architecture/building-garage.glb", {6.5f, 0.0f, -8.5f}, 0.0f, 5.0f, {0.62f, 0.55f, 0.48f}},
         {"architecture/building-small-a.glb", {-7.0f, 0.0f, -7.0f}, 90.0f, 4.0f, {0.70f, 0.66f, 0.60f}},
         {"architecture/building-small-c.glb", {7.5f, 0.0f, 6.0f}, 0.0f, 3.5f, {0.55f, 0.58f, 0.66f}},
     };
@@ -160,6 +161,17 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
                         glm::mat4(1.0f),
                         {0.85f, 0.82f, 0.78f}});
 
+    for (const WorldObject& o : objects_) {
+        if ((o.kind != ObjectKind::Static && o.kind != ObjectKind::Tree) || o.name == "ground") continue;
+        Obstacle box{glm::vec3(std::numeric_limits<float>::max()),
+                     glm::vec3(std::numeric_limits<float>::lowest())};
+        for (const glm::vec3& p : meshes_[o.mesh].mesh.positions) {
+            const glm::vec3 w(o.model * glm::vec4(p, 1.0f));
+            box.lo = glm::min(box.lo, w);
+            box.hi = glm::max(box.hi, w);
+        }
+        stage_.obstacles.push_back(box);
+    }
     plant_grass();
     // Tree crowns follow the blades in the foliage state, in the order the trees were placed.
     for (WorldObject& o : objects_)
