@@ -400,7 +400,8 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     const auto [mean, largest] = renderer_->grass_bend();
     line["grass_bend_mean"] = mean;
     line["grass_bend_max"] = largest;
-    stats << line.dump() << "\n";
+    // Flushed each frame: a run stopped from outside (or watched while it runs) keeps every frame's line.
+    stats << line.dump() << "\n" << std::flush;
 }
 
 void Game::write_video(const std::vector<std::filesystem::path>& frames, float dt) const {

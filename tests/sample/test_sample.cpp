@@ -318,17 +318,26 @@ TEST(SampleGame, theWindowedTourUnderXvfbPlaysEveryShotAndExitsCleanly) {
 
 TEST(SampleGame, aPersonAtTheWindowTakesTheCameraFromTheTourAndCGivesItBack) {
     // Under Xvfb, xdotool drags across the window (the tour stops), presses F and W (follow the fox, voxels
-    // on), then C (the tour again) and Esc (quit). Each step waits a second: several frames at any speed.
+    // on), then C (the tour again) and Esc (quit). After each step the script waits until the game has
+    // written five more frames to stats.jsonl (at most a minute), so a slow or busy machine still sees
+    // every step land in its own frames.
     const fs::path out = fresh_dir("person");
+    const std::string stats_file = (out / "stats.jsonl").string();
     const std::string game =
         std::string(GUST_SAMPLE_BINARY) + " --frames 3000 --dt 0.1 --out " + out.string() + kSmall;
-    const std::string script = game + " & game=$!; "
-                                      "win=$(xdotool search --sync --name \"gust sample\"); "
-                                      "xdotool mousemove --window $win 96 54; sleep 1; "
-                                      "xdotool mousedown 1 mousemove_relative 30 10 mouseup 1; sleep 1; "
-                                      "xdotool key f key w; sleep 1; "
-                                      "xdotool key c; sleep 1; "
-                                      "xdotool key Escape; wait $game";
+    const std::string script =
+        "frames() { cat " + stats_file +
+        " 2>/dev/null | wc -l; }; "
+        "advance() { n=$(frames); i=0; while [ $(frames) -lt $((n + 5)) ] && [ $i -lt 600 ]; do "
+        "sleep 0.1; i=$((i + 1)); done; }; " +
+        game +
+        " & game=$!; "
+        "win=$(xdotool search --sync --name \"gust sample\"); "
+        "xdotool mousemove --window $win 96 54; advance; "
+        "xdotool mousedown 1 mousemove_relative 30 10 mouseup 1; advance; "
+        "xdotool key f key w; advance; "
+        "xdotool key c; advance; "
+        "xdotool key Escape; wait $game";
     // Single quotes: the script's variables belong to the shell inside xvfb-run, which has the display.
     const Outcome r = run_command("xvfb-run -a -s \"-screen 0 640x480x24\" sh -c '" + script + "'");
     ASSERT_EQ(r.exit_code, 0) << r.output;
