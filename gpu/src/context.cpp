@@ -42,6 +42,9 @@ std::uint64_t fnv1a(const char* data, std::size_t bytes) {
 std::pmr::vector<char> read_pipeline_cache(const std::string& path, const VkPhysicalDeviceProperties& props,
                                            std::pmr::memory_resource* memory) {
     std::pmr::vector<char> file(memory);
+    std::error_code ec;
+    // A folder or a device file is no cache (and reading a folder throws).
+    if (!std::filesystem::is_regular_file(path, ec)) return file;
     std::ifstream in(path, std::ios::binary);
     file.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     std::pmr::vector<char> blob(memory);
@@ -683,13 +686,30 @@ Status Context::begin_one_time(VkCommandBuffer& cmd) {
         return Status::failure(std::string("vkAllocateCommandBuffers failed: ") + to_string(r));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    vk_.vkBeginCommandBuffer(cmd, &begin);
+    spoiled_ = false;
+    if (VkResult r = vk_.vkBeginCommandBuffer(cmd, &begin); r != VK_SUCCESS) {
+        vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
+        cmd = VK_NULL_HANDLE;
+        return Status::failure(std::string("vkBeginCommandBuffer failed: ") + to_string(r));
+    }
     if (!owns_device_) barrier(*this, cmd);
     return {};
 }
 
+void Context::abandon_one_time(VkCommandBuffer cmd) {
+    vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
+}
+
 Status Context::end_one_time(VkCommandBuffer cmd) {
-    vk_.vkEndCommandBuffer(cmd);
+    // A recording that failed (out of memory part-way) is never submitted: the buffer is invalid.
+    if (VkResult r = vk_.vkEndCommandBuffer(cmd); r != VK_SUCCESS) {
+        vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
+        return Status::failure(std::string("vkEndCommandBuffer failed: ") + to_string(r));
+    }
+    if (take_spoiled()) {
+        vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
+        return Status::failure("host memory ran out while recording: a buffer the commands use was freed");
+    }
 
     VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
     cmd_info.commandBuffer = cmd;
@@ -785,6 +805,7 @@ void Context::end_label(VkCommandBuffer cmd) const {
 
 void Context::begin_frame(std::uint64_t frame) {
     deferred_ = true;
+    spoiled_ = false;
     recording_frame_ = frame;
 }
 
@@ -801,8 +822,21 @@ void Context::retire(std::uint64_t completed) {
     released_.resize(kept);
 }
 
-void Context::release_later(VkBuffer buffer, VkDeviceMemory memory) {
-    released_.push_back({recording_frame_, buffer, memory});
+void Context::release_later(VkBuffer buffer, VkDeviceMemory memory) noexcept {
+    try {
+        released_.push_back({recording_frame_, buffer, memory});
+    } catch (const std::bad_alloc&) {
+        // No memory to keep it for later: it is freed once the queue is idle, and the commands recorded
+        // since the last submission, which may name it, are spoiled (take_spoiled).
+        wait_idle();
+        vk_.vkDestroyBuffer(device_, buffer, allocator());
+        vk_.vkFreeMemory(device_, memory, allocator());
+        spoiled_ = true;
+    }
+}
+
+bool Context::take_spoiled() {
+    return std::exchange(spoiled_, false);
 }
 
 std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags required,

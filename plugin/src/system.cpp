@@ -6,6 +6,7 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -40,6 +41,18 @@ constexpr std::uint64_t kKeepAnswers = 64;
 
 /// The most cells set_focus moves the focus at once.
 constexpr float kMaxFocusMoveCells = 1e6f;
+/// The farthest the focus may be from the world's origin, in cells: 2^19, where a float's step is 1/16 of
+/// a cell (a quarter voxel at 4 voxels per cell). Beyond it positions lose the voxels (a focus of 1e30
+/// made every voxel and query land in the wrong place).
+constexpr float kMaxFocusCells = 524288.0f;
+
+/// Whether `focus` lies too far from the world's origin for cells of `h` m (kMaxFocusCells).
+bool too_far_out(const glm::vec3& focus, float h) {
+    return glm::any(glm::greaterThan(glm::abs(focus) / h, glm::vec3(kMaxFocusCells)));
+}
+
+const char* const kTooFarOut = "is more than 2^19 cells from the world's origin, where floats cannot place "
+                               "voxels; move the world's origin nearer (origin rebasing)";
 
 Outcome device_failure(const Status& s) {
     return Outcome(ErrorCode::DeviceFailure, s.message());
@@ -160,9 +173,11 @@ struct System::Impl {
     WindTexture texture;
     FrameStats stats;
     std::uint64_t frame = 0;
-    /// Why a step failed on the device or the host's memory, part-way through: the System's state is not
-    /// known after that, so later steps refuse to run (never a frame of wrong wind).
-    std::pmr::string failure{&memory};
+    /// Whether a step failed on the device or the host's memory part-way through, and why (cut to fit): the
+    /// System's state is not known after that, so later steps refuse to run (never a frame of wrong wind).
+    /// Kept without allocating, since memory may be what ran out.
+    bool failed = false;
+    std::array<char, 256> failure{};
 
     ~Impl() {
         if (!ctx) return;
@@ -342,6 +357,7 @@ Outcome solver_desc_from(const SystemDesc& desc, SolverDesc& out) {
         d.cell_size > kMaxCellSize)
         return invalid("domain.cell_size must be from 1e-4 m x voxels_per_cell to 1000 m, got " +
                        std::to_string(d.cell_size));
+    if (too_far_out(to_glm(d.focus), d.cell_size)) return invalid(std::string("domain.focus ") + kTooFarOut);
     out.origin = to_glm(d.focus) - 0.5f * glm::vec3(out.cells) * d.cell_size;
     if (Status s = validate(out); !s) return invalid(s.message());
     return {};
@@ -659,6 +675,7 @@ Outcome System::set_focus(const Vec3& position) {
     // The next step scrolls by whole cells, counted in 32-bit integers: a move it could not make is
     // refused here, keeping the old focus, rather than failing every step after.
     const float h = impl_->solver_desc.cell_size;
+    if (too_far_out(to_glm(position), h)) return invalid(std::string("focus ") + kTooFarOut);
     const glm::vec3 centre = impl_->solver->origin() + 0.5f * glm::vec3(impl_->solver_desc.cells) * h;
     if (glm::any(glm::greaterThan(glm::abs(to_glm(position) - centre) / h, glm::vec3(kMaxFocusMoveCells))))
         return invalid("focus is more than a million cells from the domain's centre; move it in smaller "
@@ -765,13 +782,19 @@ void System::Impl::take_stats(const WorldFrame& world_frame, const WindStats& wi
 }
 
 Outcome System::Impl::remember(Outcome stepped) {
-    if (stepped.code() == ErrorCode::DeviceFailure) failure.assign(stepped.message());
+    if (stepped.code() == ErrorCode::DeviceFailure && !failed) {
+        const std::string_view why = stepped.message();
+        const std::size_t n = std::min(why.size(), failure.size() - 1);
+        std::copy_n(why.data(), n, failure.data());
+        failure[n] = '\0';
+        failed = true;
+    }
     return stepped;
 }
 
 Outcome System::Impl::refuse_after_failure() const {
-    if (failure.empty()) return {};
-    return Outcome(ErrorCode::DeviceFailure, "an earlier step failed (" + std::string(failure) +
+    if (!failed) return {};
+    return Outcome(ErrorCode::DeviceFailure, "an earlier step failed (" + std::string(failure.data()) +
                                                  "), so the System's state is unknown: destroy it and create "
                                                  "another");
 }
@@ -858,7 +881,11 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
         m.ctx->begin_frame(n);
 
-        return m.record_frame(commands, dt, shift, slot);
+        Outcome recorded = m.record_frame(commands, dt, shift, slot);
+        if (recorded && m.ctx->take_spoiled())
+            return Outcome(ErrorCode::DeviceFailure, "host memory ran out while recording the frame: do not "
+                                                     "submit these commands");
+        return recorded;
     }));
 }
 

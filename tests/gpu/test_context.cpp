@@ -263,5 +263,18 @@ TEST(PipelineCacheFile, thatCannotBeWrittenFailsNamingIt) {
     fs::remove_all(folder);
 }
 
+TEST(PipelineCacheFile, thatNamesAFolderIsNoCacheAndTheFolderIsLeftAlone) {
+    const fs::path folder = fresh_folder("cache_is_a_folder");
+    write_bytes(folder / "inside", "the user's");
+    auto ctx = context_with_cache(folder);
+    ASSERT_TRUE(ctx) << "reading a folder threw, and the System's creation failed with DeviceFailure";
+    EXPECT_FALSE(ctx->pipeline_cache_loaded());
+    const Status saved = ctx->save_pipeline_cache();
+    ASSERT_FALSE(saved);
+    EXPECT_NE(saved.message().find("not a regular file"), std::string::npos) << saved.message();
+    EXPECT_EQ(read_bytes(folder / "inside"), "the user's");
+    fs::remove_all(folder);
+}
+
 } // namespace
 } // namespace gust::test

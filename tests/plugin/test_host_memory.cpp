@@ -283,6 +283,65 @@ TEST(HostMemory, aStepWhoseAllocationFailsLeavesTheSystemRefusingLaterSteps) {
     EXPECT_EQ(failed_steps, 1) << "no allocation of a step could be made to fail";
 }
 
+// gust's own memory may run out at any of its allocations in a step, once or for good. The step then
+// fails with DeviceFailure; it never throws (a failure kept by allocating threw std::bad_alloc out of
+// step) and later steps refuse to run. The driver's allocations through the hook are left alone here:
+// lavapipe (Mesa 22.3) crashes inside vkCmdPipelineBarrier2 when its own allocation there fails, a fault
+// of the driver's; for drivers that report a failed recording, vkEndCommandBuffer's result is checked and
+// such a buffer is never submitted (docs/api.md, "Errors").
+TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {
+    struct Failing {
+        long ours = 0, fail_at = -1; // allocations gust's own code made, and the first to fail
+        bool forever = false;
+    };
+    const auto make = [](Failing& failing, std::unique_ptr<System>& system) {
+        Watch unused;
+        SystemDesc desc = small_desc(unused);
+        desc.hooks.user = &failing;
+        desc.hooks.allocate = [](void* user, std::size_t bytes, std::size_t alignment) -> void* {
+            auto* f = static_cast<Failing*>(user);
+            const long n = only_gust_on_stack() ? f->ours++ : -1;
+            if (n >= 0 && f->fail_at >= 0 && (n == f->fail_at || (f->forever && n > f->fail_at)))
+                return nullptr;
+            return std::aligned_alloc(alignment, (bytes + alignment - 1) / alignment * alignment);
+        };
+        desc.hooks.free = [](void*, void* memory) { std::free(memory); };
+        desc.hooks.log = nullptr;
+        ASSERT_TRUE(System::create(desc, system));
+        const Box box(1.0f);
+        MeshId mesh = 0;
+        InstanceId instance = 0;
+        ASSERT_TRUE(system->create_mesh(box.desc(), mesh));
+        ASSERT_TRUE(system->create_instance(mesh, translation(0, 2, 0), true, instance));
+    };
+    long per_step = 0;
+    {
+        Failing counting;
+        std::unique_ptr<System> system;
+        make(counting, system);
+        const long before = counting.ours;
+        ASSERT_TRUE(system->step(1.0f / 30.0f));
+        per_step = counting.ours - before;
+    }
+    ASSERT_GT(per_step, 4);
+    for (const bool forever : {false, true})
+        for (const long at : {0L, 1L, 2L, 3L, per_step / 4, per_step / 2, 3 * per_step / 4, per_step - 1}) {
+            SCOPED_TRACE((forever ? "from allocation " : "at allocation ") + std::to_string(at) + " of " +
+                         std::to_string(per_step));
+            Failing failing;
+            std::unique_ptr<System> system;
+            make(failing, system);
+            failing.forever = forever;
+            failing.fail_at = failing.ours + at;
+            const Outcome stepped = system->step(1.0f / 30.0f);
+            failing.fail_at = -1;
+            EXPECT_EQ(stepped.code(), ErrorCode::DeviceFailure) << stepped.message();
+            const Outcome again = system->step(1.0f / 30.0f);
+            EXPECT_NE(std::string(again.message()).find("an earlier step failed"), std::string::npos)
+                << again.message();
+        }
+}
+
 TEST(HostMemory, recordingFramesIntoTheHostsCommandBuffersAllocatesNothingElse) {
     g_gust_news = 0;
     HostVulkan host;

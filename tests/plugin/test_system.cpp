@@ -366,7 +366,8 @@ TEST_F(SystemTest, rejectsBadHandlesTransformsAndVertexArrays) {
     Mat4 projective = translation(0, 0, 0);
     projective.m[3] = 1.0f;
     projective.m[15] = 0.0f;
-    EXPECT_EQ(system_->set_transform(instance, projective).code(), ErrorCode::InvalidArgument) << "not affine";
+    EXPECT_EQ(system_->set_transform(instance, projective).code(), ErrorCode::InvalidArgument)
+        << "not affine";
     InstanceId refused = 0;
     EXPECT_EQ(system_->create_instance(mesh, projective, false, refused).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->destroy_mesh(mesh).code(), ErrorCode::InvalidHandle) << "a mesh in use stays";
@@ -415,6 +416,10 @@ TEST_F(SystemTest, rejectsBadTimeStepsPointsAndEmittersAndKeepsWorking) {
     // step fail).
     EXPECT_EQ(system_->set_focus({2e6f, 0, 0}).code(), ErrorCode::InvalidArgument);
     EXPECT_EQ(system_->set_focus({0, 0, -1e30f}).code(), ErrorCode::InvalidArgument);
+    // Far from the world's origin floats cannot place voxels (1 m cells here: 2^19 m), however it is reached.
+    ASSERT_TRUE(system_->set_focus({0, 0, 524000.0f}));
+    EXPECT_EQ(system_->set_focus({0, 0, 525000.0f}).code(), ErrorCode::InvalidArgument);
+    ASSERT_TRUE(system_->set_focus({0, 4, 0}));
     EXPECT_EQ(system_->step(0.05f, VK_NULL_HANDLE).code(), ErrorCode::InvalidArgument) << "own-queue system";
     EXPECT_EQ(system_->export_vdb(nullptr).code(), ErrorCode::InvalidArgument);
     ASSERT_TRUE(system_->step(0.05f));
@@ -424,6 +429,11 @@ TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {
     Watch watch;
     std::unique_ptr<System> system;
     SystemDesc desc = small_desc(watch);
+    desc.domain.focus = {1e30f, 0.0f, 0.0f};
+    const Outcome far = System::create(desc, system);
+    EXPECT_EQ(far.code(), ErrorCode::InvalidArgument) << "a focus of 1e30 put every voxel in the wrong place";
+    EXPECT_NE(far.message().find("domain.focus"), std::string::npos) << far.message();
+    desc = small_desc(watch);
     desc.header_version = kHeaderVersion + (1u << 12);
     EXPECT_EQ(System::create(desc, system).code(), ErrorCode::VersionMismatch);
     desc = small_desc(watch);

@@ -129,7 +129,7 @@ typedef struct gust_wind_domain {
     float cell_size;          ///< metres, from 1e-4 x voxels_per_cell to 1000
     uint32_t voxels_per_cell; ///< voxels of the solid boundary per cell per axis, 1..8
     uint32_t branching;       ///< the voxel tree's branching per axis: 2, 4 or 8
-    gust_vec3 focus;          ///< the domain's first centre (player or camera), world m
+    gust_vec3 focus;          ///< first centre (player or camera), world m, within 2^19 cells of 0
     uint32_t hysteresis;      ///< steps a tree node stays refined after a moving surface left it (default 8)
 } gust_wind_domain;
 
@@ -390,7 +390,8 @@ gust_result gust_system_set_emitters(gust_system system, const gust_wind_emitter
 gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
 
 /// Centre of interest (world m); the domain follows it in whole cells at the next step. Invalid (the old
-/// focus kept) for a point more than a million cells from the domain's centre.
+/// focus kept) for a point more than a million cells from the domain's centre, or more than 2^19 cells
+/// from the world's origin (where floats cannot place voxels; the domain's first focus likewise).
 gust_result gust_system_set_focus(gust_system system, gust_vec3 position);
 
 /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh the wind

@@ -123,7 +123,7 @@ struct WindDomain {
     float cell_size = 1.0f;                ///< metres, from 1e-4 · voxels_per_cell to 1000
     std::uint32_t voxels_per_cell = 4;     ///< voxels of the solid boundary per cell per axis, 1..8
     std::uint32_t branching = 4;           ///< the voxel tree's branching per axis: 2, 4 or 8
-    Vec3 focus{};                          ///< the domain's first centre (player or camera)
+    Vec3 focus{};                          ///< first centre (player or camera), within 2^19 cells of 0
     /// Steps a tree node stays refined after a moving or deforming surface last reached it (0: coarsened at
     /// the next step); longer keeps the tree steady under surfaces that come and go, at the cost of nodes.
     std::uint32_t hysteresis = 8;
@@ -383,7 +383,8 @@ class System {
     /// Prevailing wind, m/s: enters through the upwind sides of the domain.
     Outcome set_ambient(const Vec3& velocity);
     /// Centre of interest; the domain follows it in whole cells at the next step. InvalidArgument (the old
-    /// focus kept) for a point more than a million cells from the domain's centre.
+    /// focus kept) for a point more than a million cells from the domain's centre, or more than 2^19 cells
+    /// from the world's origin (where floats cannot place voxels; WindDomain::focus likewise).
     Outcome set_focus(const Vec3& position);
 
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh

@@ -206,7 +206,12 @@ class Context : public HostObject {
     template <class Record> Status submit_and_wait(Record&& record) {
         VkCommandBuffer cmd = VK_NULL_HANDLE;
         if (Status s = begin_one_time(cmd); !s) return s;
-        record(cmd);
+        try {
+            record(cmd);
+        } catch (...) {
+            abandon_one_time(cmd); // a recording cut short (host memory ran out) is freed, never submitted
+            throw;
+        }
         return end_one_time(cmd);
     }
 
@@ -221,8 +226,12 @@ class Context : public HostObject {
     bool deferred() const { return deferred_; }
     /// The frame begin_frame() last named (0 before the first call).
     std::uint64_t recording_frame() const { return recording_frame_; }
-    /// Internal: called by Buffer when it is released while deferred().
-    void release_later(VkBuffer buffer, VkDeviceMemory memory);
+    /// Internal: called by Buffer when it is released while deferred(). Never throws: without the host
+    /// memory to keep it, the buffer is freed once the queue is idle and the recording is spoiled.
+    void release_later(VkBuffer buffer, VkDeviceMemory memory) noexcept;
+    /// True (once) when commands recorded since the last call may name a buffer already freed: they must
+    /// not be submitted.
+    bool take_spoiled();
 
     /// Index of a memory type allowed by `type_bits` having all of `required` (and as many of
     /// `preferred` as possible); UINT32_MAX if none.
@@ -240,6 +249,7 @@ class Context : public HostObject {
     /// ended, submitted, waited for and freed.
     Status begin_one_time(VkCommandBuffer& cmd);
     Status end_one_time(VkCommandBuffer cmd);
+    void abandon_one_time(VkCommandBuffer cmd);
     Status init(const ContextDesc& desc);
     Status init_adopted(const HostDevice& host);
     Status pick_device(std::string_view override_spec);
@@ -274,6 +284,7 @@ class Context : public HostObject {
     };
     bool deferred_ = false;
     std::uint64_t recording_frame_ = 0;
+    bool spoiled_ = false;
     std::pmr::vector<Released> released_;
     WorkCounts work_;
     std::atomic<std::uint32_t> validation_messages_{0};
