@@ -3,8 +3,9 @@
 // The outside-air fill's end, per wind cell: a part is air when its set holds node 0 (it reaches an open
 // domain side), else sealed. The cell's air is its first part that is air (kCellSecondPart when that is
 // part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
-// and adds a moving cell's mean fragment velocity to each sealed region it borders, so the air sealed
-// inside a moving solid moves with it (solid_motion_of). A cell whose two parts both reach the outside
+// and adds a moving cell's mean fragment velocity to each sealed region it borders, weighted by the share
+// of the solid its part touches that is not static (region_weight), so the air sealed inside a moving
+// solid moves with it and the air inside a static one stays still (solid_motion_of). A cell whose two parts both reach the outside
 // turns on fluid_link.comp and fluid_finish.comp (SolverState::fluid_dispatch), whose nodes start here.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -53,14 +54,20 @@ void main() {
         FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
         if ((flags & kCellMoving) != 0u) {
             ivec4 m = IVec4Ref(hot.cell_motion).v[i];
-            ivec4 mean = ivec4(m.xyz / m.w, 1);
+            ivec3 mean = m.xyz / m.w;
+            CellBits faces[6];
+            load_face_masks(faces);
+            CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(i, flags, 0u)), part_of(i, flags, 1u));
+            CellBits still = static_of(i, flags);
             for (uint k = 0u; k < kCellParts; ++k) {
                 if (counts[k] == 0u || roots[k] == kOutsideNode) continue;
+                int weight = int(region_weight(part_of(i, flags, k), solid, still, v, faces));
+                if (weight == 0) continue;
                 IVec4Ref region = IVec4Ref(hot.region_motion);
-                atomicAdd(region.v[roots[k]].x, mean.x);
-                atomicAdd(region.v[roots[k]].y, mean.y);
-                atomicAdd(region.v[roots[k]].z, mean.z);
-                atomicAdd(region.v[roots[k]].w, mean.w);
+                atomicAdd(region.v[roots[k]].x, mean.x * weight);
+                atomicAdd(region.v[roots[k]].y, mean.y * weight);
+                atomicAdd(region.v[roots[k]].z, mean.z * weight);
+                atomicAdd(region.v[roots[k]].w, weight);
                 uint root_cell = (roots[k] - 1u) / kCellParts, root_part = (roots[k] - 1u) % kCellParts;
                 atomicOr(WordsRef(hot.cell_flags).v[root_cell], kCellRegion << root_part);
             }

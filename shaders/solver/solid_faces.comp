@@ -21,12 +21,7 @@ ivec4 motion_of(ivec3 c, uint flags) {
 
 CellBits static_at(ivec3 c, uint flags) {
     ivec3 n = hot.dims;
-    if (!inside_cells(n, c) || (flags & kCellStatic) == 0u) return bits_none();
-    CellBits b = bits_none();
-    uint cw = hot.cell_words;
-    int i = cell_index(n, c);
-    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(hot.cell_static).v[uint(i) * cw + w];
-    return b;
+    return inside_cells(n, c) ? static_of(cell_index(n, c), flags) : bits_none();
 }
 
 CellBits air_at(ivec3 c, uint flags) {

@@ -257,6 +257,15 @@ CellBits part_of(int i, uint flags, uint k) {
     return b;
 }
 
+/// The static solid voxels of level-0 cell i (none unless it is kCellStatic).
+CellBits static_of(int i, uint flags) {
+    if ((flags & kCellStatic) == 0u) return bits_none();
+    CellBits b = bits_none();
+    uint cw = hot.cell_words;
+    for (uint w = 0u; w < cw; ++w) b.w[w] = WordsRef(hot.cell_static).v[uint(i) * cw + w];
+    return b;
+}
+
 /// The air of cell i: the part whose air reaches an open side; none in a kCellNoAir cell.
 CellBits air_of(int i, uint flags) {
     if ((flags & kCellNoAir) != 0u) return bits_none();

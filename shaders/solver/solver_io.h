@@ -420,6 +420,19 @@ GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
     return r;
 }
 
+/// The weight, in quarters (0..4), a moving cell's mean fragment velocity carries in the sealed region its
+/// part `part` belongs to: the share of the cell's solid voxels (`solid`) that the part touches which are
+/// not static (`still`). The air sealed inside a static building stays still when a moving body brushes
+/// its wall from outside (the part touches only the wall's static voxels: that cell gave the whole inside
+/// the body's velocity), and the inside of a crate sliding on a static floor moves with the crate's walls
+/// that touch no floor.
+GUST_INLINE uint region_weight(CellBits part, CellBits solid, CellBits still, uint v, CellBits faces[6]) {
+    CellBits ring = bits_and(bits_dilate(part, v, faces), solid);
+    uint touched = bits_count(ring);
+    uint moving = touched - bits_count(bits_and(ring, still));
+    return touched == 0u ? 0u : (4u * moving + touched / 2u) / touched;
+}
+
 /// Keeps `component` (of `count` voxels) if it is among the two largest seen: `first` the largest, `second`
 /// the next (the earlier one wins a tie).
 GUST_INLINE void keep_largest(CellBits component, uint count, GUST_OUT(CellBits) first,

@@ -297,9 +297,14 @@ void CpuWind::Impl::fill(std::uint32_t& sealed_cells) {
         solid_fraction[cell] = 1.0f - float(air) / float(v * v * v);
         if ((flags[cell] & kCellMoving) == 0) return;
         const glm::ivec4 m = motion[cell];
-        const glm::ivec4 mean(glm::ivec3(m) / m.w, 1);
-        for (std::uint32_t part = 0; part < kCellParts; ++part)
-            if (counts[part] != 0 && r[part] != kOutsideNode) region_motion[r[part]] += mean;
+        const glm::ivec3 mean = glm::ivec3(m) / m.w;
+        const CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(cell, 0)), part_of(cell, 1));
+        const CellBits still = (flags[cell] & kCellStatic) != 0 ? fixed[cell] : bits_none();
+        for (std::uint32_t part = 0; part < kCellParts; ++part) {
+            if (counts[part] == 0 || r[part] == kOutsideNode) continue;
+            const int weight = int(region_weight(part_of(cell, part), solid, still, v, layers));
+            if (weight != 0) region_motion[r[part]] += glm::ivec4(mean * weight, weight);
+        }
     });
 }
 
