@@ -65,6 +65,22 @@ GridDesc half_metre_grid() {
     return g;
 }
 
+TEST(MeshSizes, ofATriangleWhoseAreaOverflowsAFloatAreFiniteAndItsWorkIsTheGridsPart) {
+    // Legs of 2e20: the cross product (8e40) passes a float's range, and an infinite area made a moving
+    // mesh's first fragment and velocity lists larger than the device allows (`gust simulate` failed).
+    TestMesh m;
+    m.positions = {{-1e20f, 0.3f, -1e20f}, {1e20f, 0.3f, -1e20f}, {0.0f, 0.3f, 1e20f}};
+    m.indices = {0, 1, 2};
+    const MeshSizes s = measure_mesh(m.view());
+    EXPECT_EQ(s.triangles, 1u);
+    EXPECT_NEAR(s.projected_area, 2e40, 1e34) << "1e20 is a float: 100000002004087734272";
+    EXPECT_TRUE(std::isfinite(s.cube_area) && std::isfinite(s.box_area));
+    const VoxelizeWork w = voxelize_work(s, glm::mat4(1.0f), half_metre_grid());
+    ASSERT_TRUE(std::isfinite(w.fragments));
+    // The plane y = 0.3 crosses the 64 x 64 columns of the grid once: a few thousand fragments, not 2^29.
+    EXPECT_LT(w.fragments, 4.0 * 64.0 * 64.0);
+}
+
 TEST(VoxelizeWork, followsTheTrianglesSizeInVoxels) {
     const TestMesh m = right_triangle();
     // Scaled by 2 on voxels of 0.5 the legs are 8 and 4 voxels: the compute path walks (8 + 1)(4 + 1)

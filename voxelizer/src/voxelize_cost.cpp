@@ -33,28 +33,31 @@ double inside_fraction(const glm::dvec3& lo, const glm::dvec3& hi, double res) {
 } // namespace
 
 MeshSizes measure_mesh(const MeshView& mesh) {
-    // Single precision per triangle (its sizes need no more), double precision in the sums.
+    // Double precision throughout: a float's cross product overflows for edges past about 1.8e19, and an
+    // infinite area made the first fragment list as large as the device allows (and the moving meshes'
+    // velocity list larger).
     MeshSizes s;
     glm::vec3 lo(HUGE_VALF), hi(-HUGE_VALF);
     for (std::size_t t = 0; t + 2 < mesh.index_count; t += 3) {
-        const glm::vec3 p0 = mesh.position(mesh.indices[t]);
-        const glm::vec3 p1 = mesh.position(mesh.indices[t + 1]);
-        const glm::vec3 p2 = mesh.position(mesh.indices[t + 2]);
-        if (!finite(p0) || !finite(p1) || !finite(p2)) continue;
-        const glm::vec3 tlo = glm::min(p0, glm::min(p1, p2));
-        const glm::vec3 thi = glm::max(p0, glm::max(p1, p2));
-        const glm::vec3 size = thi - tlo;
-        const glm::vec3 an = glm::abs(glm::cross(p1 - p0, p2 - p0));
-        if (an.x + an.y + an.z == 0.0f) continue;
+        const glm::vec3 f0 = mesh.position(mesh.indices[t]);
+        const glm::vec3 f1 = mesh.position(mesh.indices[t + 1]);
+        const glm::vec3 f2 = mesh.position(mesh.indices[t + 2]);
+        if (!finite(f0) || !finite(f1) || !finite(f2)) continue;
+        const glm::dvec3 p0(f0), p1(f1), p2(f2);
+        const glm::vec3 tlo = glm::min(f0, glm::min(f1, f2));
+        const glm::vec3 thi = glm::max(f0, glm::max(f1, f2));
+        const glm::dvec3 size = glm::max(p0, glm::max(p1, p2)) - glm::min(p0, glm::min(p1, p2));
+        const glm::dvec3 an = glm::abs(glm::cross(p1 - p0, p2 - p0));
+        if (an.x + an.y + an.z == 0.0) continue;
         // The shaders' dominant_axis (tri_box.h): ties go to the later axis.
         const int w = an.x > an.y && an.x > an.z ? 0 : (an.y > an.z ? 1 : 2);
         const int u = (w + 1) % 3, v = (w + 2) % 3;
         ++s.triangles;
-        s.box_area += double(size[u]) * double(size[v]);
-        s.box_span += double(size[u] + size[v]);
-        s.projected_area += 0.5 * double(an[w]);
-        s.cube_area += 0.5 * double(an.x + an.y + an.z);
-        s.extent += double(size.x + size.y + size.z);
+        s.box_area += size[u] * size[v];
+        s.box_span += size[u] + size[v];
+        s.projected_area += 0.5 * an[w];
+        s.cube_area += 0.5 * (an.x + an.y + an.z);
+        s.extent += size.x + size.y + size.z;
         lo = glm::min(lo, tlo);
         hi = glm::max(hi, thi);
     }

@@ -427,8 +427,11 @@ Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances, const Grid
     VoxelizeWork work;
     for (const GpuInstance& inst : instances)
         work += voxelize_work(inst.mesh->sizes_, inst.model, grid);
+    // Moving meshes keep a velocity (8 bytes) per fragment beside it: the list's first size leaves room
+    // for that list in one allocation too.
+    const std::size_t entry_bytes = inv_dt_ > 0.0f ? sizeof(glm::uvec2) : sizeof(std::uint32_t);
     const double limit =
-        double(std::min<std::uint64_t>(ctx_.info().max_allocation_size / sizeof(std::uint32_t), UINT32_MAX));
+        double(std::min<std::uint64_t>(ctx_.info().max_allocation_size / entry_bytes, UINT32_MAX));
     const double guess = std::min(limit, kFragmentHeadroom * work.fragments + double(kFragmentSlack));
     if (Status s = ensure_capacity(std::uint64_t(guess)); !s) return s;
     if (inv_dt_ > 0.0f)
