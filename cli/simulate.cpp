@@ -204,7 +204,8 @@ int run_simulate(const SimulateArgs& args) {
         } else {
             const std::vector<glm::vec3>& positions = runtime->positions(i, -dt);
             if (Outcome o = system->create_mesh(mesh_desc(source, positions, deforms), meshes[i]); !o)
-                return fail(object_at(args.scene, i, scene->objects[i].mesh) + o.message());
+                return fail(object_at(args.scene, i, scene->objects[i].mesh) +
+                            (deforms ? "posed one step before frame 0: " : "") + o.message());
             if (!deforms) shared.emplace(&source, meshes[i]);
         }
         const Outcome placed =
@@ -233,10 +234,12 @@ int run_simulate(const SimulateArgs& args) {
                 if (Outcome o = system->set_vertices(meshes[i], floats(positions),
                                                      std::uint32_t(positions.size()), 12, jump);
                     !o)
-                    return fail(o.message());
+                    return fail(object_at(args.scene, i, scene->objects[i].mesh) + "posed at frame " +
+                                std::to_string(frame) + ": " + o.message());
             }
             if (Outcome o = system->set_transform(instances[i], to_mat4(runtime->model(i, t)), jump); !o)
-                return fail(o.message());
+                return fail(object_at(args.scene, i, scene->objects[i].mesh) + "placed at frame " +
+                            std::to_string(frame) + ": " + o.message());
         }
         const std::vector<WindEmitter> emitters = emitters_at(*scene, t);
         if (Outcome o = system->set_emitters(emitters); !o) return fail(args.scene + ": " + o.message());

@@ -453,6 +453,18 @@ TEST(CliSimulate, badSceneFailsNamingTheFileAndKey) {
     EXPECT_NE(nan.err.find("nan.json: objects[0].mesh: " + (dir / "nan.obj").string() + ": "),
               std::string::npos)
         << nan.err;
+    // An animation that poses a vertex out of a float's range part-way through a run: the error names the
+    // object, its file and the frame (it said only "vertex 12 is not finite").
+    const std::string skin = std::string(GUST_CLI_TEST_DATA) + "/skin_scaled_to_inf.gltf";
+    std::ofstream(dir / "inf.json") << R"({"dt": 0.1, "domain": {"center": [0, 1, 0], "cells": [16, 16, 16],
+        "cell_size": 0.25}, "objects": [{"mesh": ")" +
+                                           skin + R"(", "animation": {"clip": "A"}}]})";
+    const CliRun inf =
+        gust("simulate " + (dir / "inf.json").string() + " --frames 8 --out " + (dir / "out").string());
+    EXPECT_EQ(inf.code, 1);
+    EXPECT_NE(inf.err.find("inf.json: objects[0].mesh: " + skin + ": posed at frame 4: vertex"),
+              std::string::npos)
+        << inf.err;
     fs::remove_all(dir);
 }
 
