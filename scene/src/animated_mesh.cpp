@@ -434,6 +434,9 @@ Result<std::vector<anim::Clip>> read_clips(const tinygltf::Model& model, std::si
                 path = Path::rotation;
             } else if (source.target_path == "scale") {
                 path = Path::scale;
+            } else if (source.target_path.empty()) {
+                // glTF requires the path (and the target): an exporter's slip, which froze the clip silently.
+                return R::failure(where + " has no target path (glTF requires target.path)");
             } else {
                 continue; // morph target weights and extension-defined targets do not move vertices here
             }

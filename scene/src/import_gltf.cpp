@@ -40,6 +40,7 @@ struct Field {
     const ObjectSchema* object = nullptr; ///< schema of the object, or of each object in the array
     Type item = Type::any;                ///< type of each array item
     std::size_t length = 0;               ///< required array length; 0 for any
+    bool required = false;                ///< the schema requires it (tinygltf drops or fails without a word)
 };
 
 struct ObjectSchema {
@@ -148,19 +149,22 @@ constexpr ObjectSchema kSampler{kSamplerFields};
 constexpr Field kSkinFields[] = {
     {"inverseBindMatrices", Type::index},
     {"skeleton", Type::index},
-    {"joints", Type::array, nullptr, Type::index},
+    {"joints", Type::array, nullptr, Type::index, 0, true},
 };
 constexpr ObjectSchema kSkin{kSkinFields};
-constexpr Field kChannelTargetFields[] = {{"node", Type::index}, {"path", Type::string}};
+constexpr Field kChannelTargetFields[] = {{"node", Type::index},
+                                          {"path", Type::string, nullptr, Type::any, 0, true}};
 constexpr ObjectSchema kChannelTarget{kChannelTargetFields};
-constexpr Field kChannelFields[] = {{"sampler", Type::index}, {"target", Type::object, &kChannelTarget}};
+constexpr Field kChannelFields[] = {{"sampler", Type::index, nullptr, Type::any, 0, true},
+                                    {"target", Type::object, &kChannelTarget, Type::any, 0, true}};
 constexpr ObjectSchema kChannel{kChannelFields};
-constexpr Field kAnimationSamplerFields[] = {
-    {"input", Type::index}, {"interpolation", Type::string}, {"output", Type::index}};
+constexpr Field kAnimationSamplerFields[] = {{"input", Type::index, nullptr, Type::any, 0, true},
+                                             {"interpolation", Type::string},
+                                             {"output", Type::index, nullptr, Type::any, 0, true}};
 constexpr ObjectSchema kAnimationSampler{kAnimationSamplerFields};
 constexpr Field kAnimationFields[] = {
-    {"channels", Type::array, &kChannel, Type::object},
-    {"samplers", Type::array, &kAnimationSampler, Type::object},
+    {"channels", Type::array, &kChannel, Type::object, 0, true},
+    {"samplers", Type::array, &kAnimationSampler, Type::object, 0, true},
 };
 constexpr ObjectSchema kAnimation{kAnimationFields};
 constexpr Field kOrthographicFields[] = {
@@ -268,6 +272,12 @@ Status check_field(const json& value, const Field& field, const std::string& poi
 }
 
 Status check_object(const json& object, const ObjectSchema& schema, const std::string& pointer) {
+    // The animation and skin properties the schema requires: without them tinygltf dropped a channel (the
+    // clip froze) or failed without a reason (a skin without joints).
+    for (const Field& field : schema.fields)
+        if (field.required && !object.contains(field.name))
+            return Status::failure("invalid glTF: " + pointer + "/" + std::string(field.name) +
+                                   " is required");
     for (const auto& [key, value] : object.items()) {
         const std::string at = pointer + "/" + key;
         if (schema.values != Type::any) {

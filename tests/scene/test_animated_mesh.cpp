@@ -480,6 +480,22 @@ TEST_F(AnimatedMeshFile, rejectsUnknownInterpolation) {
     expect_failure(write("smooth.gltf", file.gltf), "unknown interpolation 'SMOOTH'");
 }
 
+TEST_F(AnimatedMeshFile, rejectsAChannelWithoutATargetOrPathAndASkinWithoutJoints) {
+    // glTF requires them; tinygltf dropped such a channel (the clip froze without a word) and failed on
+    // such a skin without saying why.
+    SkinnedTriangle file;
+    file.add_clip("nopath", file.joint_a, "translation", {0, 1}, {0, 0, 0, 1, 0, 0});
+    file.gltf.doc()["animations"][0]["channels"][0]["target"].erase("path");
+    expect_failure(write("nopath.gltf", file.gltf), "/animations/0/channels/0/target/path is required");
+    SkinnedTriangle no_target;
+    no_target.add_clip("notarget", no_target.joint_a, "translation", {0, 1}, {0, 0, 0, 1, 0, 0});
+    no_target.gltf.doc()["animations"][0]["channels"][0].erase("target");
+    expect_failure(write("notarget.gltf", no_target.gltf), "/animations/0/channels/0/target is required");
+    SkinnedTriangle no_joints;
+    no_joints.gltf.doc()["skins"][0].erase("joints");
+    expect_failure(write("nojoints.gltf", no_joints.gltf), "/skins/0/joints is required");
+}
+
 TEST_F(AnimatedMeshFile, rejectsAnimatedMatrixNode) {
     SkinnedTriangle file;
     file.gltf.doc()["nodes"][static_cast<std::size_t>(file.joint_a)]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0,
