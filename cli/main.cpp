@@ -116,7 +116,11 @@ int run_voxelize(const VoxelizeArgs& args) {
                         "overflows); give --origin and --size around the part to voxelize");
         }
     }
-    if (gust::Status s = gust::validate_grid(grid); !s) return fail(s.message());
+    if (gust::Status s = gust::validate_grid(grid); !s) {
+        if (args.size) return fail("--origin and --size: " + s.message());
+        return fail(args.mesh + ": the grid around its bounding box is invalid (" + s.message() +
+                    "); give --origin and --size around the part to voxelize");
+    }
     if (gust::Status s = gust::vdb::check_voxel_size(grid.voxel_size); !s) {
         return fail(args.mesh + ": " + s.message() + "; use a lower --res or a larger --size, or scale the " +
                     "mesh up");

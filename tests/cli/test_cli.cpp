@@ -198,10 +198,15 @@ TEST(CliVoxelize, aVoxelTooSmallOrABoundingBoxTooLargeFailsNamingTheMesh) {
     const std::string triangle = "f 1 2 3\n";
     std::ofstream(dir / "tiny.obj") << "v 0 0 0\nv 0.001 0 0\nv 0 0.001 0\n" << triangle;
     std::ofstream(dir / "huge.obj") << "v -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\n" << triangle;
+    // Finite voxels, but a grid whose far corner (or centre) passes a float's range (no file was named).
+    std::ofstream(dir / "far.obj") << "v 0 0 0\nv 1e38 0 0\nv 0 3e38 1\n" << triangle;
+    std::ofstream(dir / "centre.obj") << "v 3e38 0 0\nv 3.2e38 0 0\nv 3e38 1e37 0\n" << triangle;
     const std::string out = (dir / "out.vdb").string();
-    for (const std::string& args : {(dir / "tiny.obj").string() + " --res 128",
-                                    (dir / "tiny.obj").string() + " --res 16 --origin 0,0,0 --size 1e-4",
-                                    (dir / "huge.obj").string() + " --res 16"}) {
+    for (const std::string& args :
+         {(dir / "tiny.obj").string() + " --res 128",
+          (dir / "tiny.obj").string() + " --res 16 --origin 0,0,0 --size 1e-4",
+          (dir / "huge.obj").string() + " --res 16", (dir / "far.obj").string() + " --res 16",
+          (dir / "centre.obj").string() + " --res 16"}) {
         const CliRun run = gust("voxelize " + args + " --out " + out);
         EXPECT_EQ(run.code, 1) << args;
         EXPECT_NE(run.err.find("gust: error: " + dir.string()), std::string::npos) << args << ": " << run.err;
