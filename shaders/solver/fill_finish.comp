@@ -3,9 +3,9 @@
 // The outside-air fill's end, per wind cell: a part is air when its set holds node 0 (it reaches an open
 // domain side), else sealed. The cell's air is its first part that is air (kCellSecondPart when that is
 // part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
-// and adds a moving cell's mean fragment velocity to each sealed region it borders, weighted by the share
-// of the solid its part touches that is not static (region_weight), so the air sealed inside a moving
-// solid moves with it and the air inside a static one stays still (solid_motion_of). A cell whose two parts both reach the outside
+// and adds to each sealed region the solid its parts touch (add_contacts), so that a region moves with the
+// solid enclosing it (enclosing_motion): the air sealed inside a moving crate with the crate, the inside of
+// a static building not at all. A cell whose two parts both reach the outside
 // turns on fluid_link.comp and fluid_finish.comp (SolverState::fluid_dispatch), whose nodes start here.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -13,6 +13,53 @@ layout(local_size_x = kSolverGroupSize) in;
 
 shared uint group_sealed;
 shared bool group_ambiguous;
+
+/// Adds what sealed part k of cell i touches to its region (root): the solid voxels in its cell and across
+/// its faces, the moving ones with their cell's mean fragment velocity, weighted in quarters of all it
+/// touches, and 4 to the region's border (enclosing_motion).
+void add_contacts(int i, uint flags, uint k, uint root) {
+    uint v = hot.voxels_per_cell;
+    ivec3 n = hot.dims;
+    ivec3 c = cell_from_index(n, i);
+    CellBits faces[6];
+    load_face_masks(faces);
+    CellBits part = part_of(i, flags, k);
+    uvec2 touch[7];
+    ivec3 mean[7];
+    uint total = 0u;
+    for (uint side = 0u; side < 7u; ++side) {
+        touch[side] = uvec2(0u);
+        mean[side] = ivec3(0);
+        ivec3 at = side == 6u ? c : c + ((side & 1u) != 0u ? 1 : -1) * axis_unit(side / 2u);
+        if (!inside_cells(n, at)) continue;
+        int j = cell_index(n, at);
+        uint fj = side == 6u ? flags : flags_at(j);
+        if ((fj & kCellCut) == 0u) continue;
+        CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(j, fj, 0u)), part_of(j, fj, 1u));
+        touch[side] = part_contact(part, solid, static_of(j, fj), side, v, faces);
+        total += touch[side].x;
+        if ((fj & kCellMoving) == 0u) {
+            touch[side].y = touch[side].x; // a solid without moving fragments is still
+        } else {
+            ivec4 m = IVec4Ref(hot.cell_motion).v[j];
+            mean[side] = m.xyz / m.w;
+        }
+    }
+    if (total == 0u) return;
+    ivec4 sum = ivec4(0);
+    for (uint side = 0u; side < 7u; ++side) {
+        int quarters = int((4u * (touch[side].x - touch[side].y) + total / 2u) / total);
+        sum += ivec4(mean[side] * quarters, quarters);
+    }
+    IVec4Ref region = IVec4Ref(hot.region_motion);
+    atomicAdd(region.v[2u * root].x, sum.x);
+    atomicAdd(region.v[2u * root].y, sum.y);
+    atomicAdd(region.v[2u * root].z, sum.z);
+    atomicAdd(region.v[2u * root].w, sum.w);
+    atomicAdd(region.v[2u * root + 1u].x, 4);
+    uint root_cell = (root - 1u) / kCellParts, root_part = (root - 1u) % kCellParts;
+    atomicOr(WordsRef(hot.cell_flags).v[root_cell], kCellRegion << root_part);
+}
 
 void main() {
     load_bindings();
@@ -52,26 +99,8 @@ void main() {
             if (counts[0] != 0u) atomicAdd(group_sealed, 1u);
         }
         FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
-        if ((flags & kCellMoving) != 0u) {
-            ivec4 m = IVec4Ref(hot.cell_motion).v[i];
-            ivec3 mean = m.xyz / m.w;
-            CellBits faces[6];
-            load_face_masks(faces);
-            CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(i, flags, 0u)), part_of(i, flags, 1u));
-            CellBits still = static_of(i, flags);
-            for (uint k = 0u; k < kCellParts; ++k) {
-                if (counts[k] == 0u || roots[k] == kOutsideNode) continue;
-                int weight = int(region_weight(part_of(i, flags, k), solid, still, v, faces));
-                if (weight == 0) continue;
-                IVec4Ref region = IVec4Ref(hot.region_motion);
-                atomicAdd(region.v[roots[k]].x, mean.x * weight);
-                atomicAdd(region.v[roots[k]].y, mean.y * weight);
-                atomicAdd(region.v[roots[k]].z, mean.z * weight);
-                atomicAdd(region.v[roots[k]].w, weight);
-                uint root_cell = (roots[k] - 1u) / kCellParts, root_part = (roots[k] - 1u) % kCellParts;
-                atomicOr(WordsRef(hot.cell_flags).v[root_cell], kCellRegion << root_part);
-            }
-        }
+        for (uint k = 0u; k < kCellParts; ++k)
+            if (counts[k] != 0u && roots[k] != kOutsideNode) add_contacts(i, flags, k, roots[k]);
         if (add != 0u) atomicOr(WordsRef(hot.cell_flags).v[i], add);
     }
     barrier();

@@ -86,7 +86,10 @@ void main() {
     LabelsRef labels = LabelsRef(hot.labels);
     for (uint k = 0u; k < kCellParts; ++k) {
         uint node = part_node(uint(i), k);
-        if ((old & (kCellRegion << k)) != 0u) IVec4Ref(hot.region_motion).v[node] = ivec4(0);
+        if ((old & (kCellRegion << k)) != 0u) {
+            IVec4Ref(hot.region_motion).v[2u * node] = ivec4(0);
+            IVec4Ref(hot.region_motion).v[2u * node + 1u] = ivec4(0);
+        }
         labels.v[node] = node;
     }
     if (i == 0) {

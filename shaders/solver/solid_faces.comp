@@ -3,7 +3,8 @@
 // Per four faces (one word of open_counts): the open voxel pairs between the air of the cells on both
 // sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
 // both cells (or the sealed region a cell without air lies in), over the share of the face's closed pairs
-// that touch no static solid (moving_share).
+// that touch no static solid (moving_share); where one cell has no air, only the solid in the other's layer
+// next to the face (layer_motion).
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -22,6 +23,40 @@ ivec4 motion_of(ivec3 c, uint flags) {
 CellBits static_at(ivec3 c, uint flags) {
     ivec3 n = hot.dims;
     return inside_cells(n, c) ? static_of(cell_index(n, c), flags) : bits_none();
+}
+
+/// For a face between a cell with air and one without: the motion of the solid the air meets there. Where
+/// the air reaches the face, that solid is the airless cell's layer next to it (solid_layer_motion); where it
+/// does not, it is in the air's own cell (air_cell_motion). A static wall between the air and whatever moves
+/// beyond it keeps the air still: a crate moving in a closed static building pushed the air outside through
+/// a wall lying inside such a cell.
+
+/// Cell i's solid in its voxel layer `layer`: its moving fragments where that holds moving voxels, else the
+/// region of a sealed part in it, else none (static).
+ivec4 solid_layer_motion(int i, uint flags, CellBits layer) {
+    uint v = hot.voxels_per_cell;
+    CellBits p0 = part_of(i, flags, 0u), p1 = part_of(i, flags, 1u);
+    CellBits moving = bits_and_not(bits_and_not(bits_and_not(layer, p0), p1), static_of(i, flags));
+    if ((flags & kCellMoving) != 0u && bits_count(moving) != 0u) return IVec4Ref(hot.cell_motion).v[i];
+    LabelsRef labels = LabelsRef(hot.labels);
+    if (bits_count(bits_and(p0, layer)) != 0u) return region_of(labels.v[part_node(uint(i), 0u)]);
+    if (bits_count(bits_and(p1, layer)) != 0u) return region_of(labels.v[part_node(uint(i), 1u)]);
+    return ivec4(0);
+}
+
+/// Cell i's solid as its air meets it, the face layer `layer` holding none of that air: its moving
+/// fragments where its moving voxels touch its air, else the region of its sealed part in the layer, else
+/// none (a static wall).
+ivec4 air_cell_motion(int i, uint flags, CellBits layer, CellBits faces[6]) {
+    uint v = hot.voxels_per_cell;
+    uint air = (flags & kCellSecondPart) != 0u ? 1u : 0u;
+    CellBits p0 = part_of(i, flags, 0u), p1 = part_of(i, flags, 1u);
+    CellBits moving = bits_and_not(bits_and_not(bits_and_not(bits_all(v), p0), p1), static_of(i, flags));
+    if ((flags & kCellMoving) != 0u && bits_count(bits_and(bits_dilate(air == 0u ? p0 : p1, v, faces), moving)) != 0u)
+        return IVec4Ref(hot.cell_motion).v[i];
+    if (bits_count(bits_and(air == 0u ? p1 : p0, layer)) != 0u)
+        return region_of(LabelsRef(hot.labels).v[part_node(uint(i), 1u - air)]);
+    return ivec4(0);
 }
 
 CellBits air_at(ivec3 c, uint flags) {
@@ -55,7 +90,23 @@ void main() {
             open = face_open_count(air_at(lo, flags_lo), air_at(f, flags_hi), axis, v, faces);
         }
         counts |= open << (8 * k);
-        ivec4 m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
+        // Where one cell has air and the other none, the solid that air meets is in its own cell's layer.
+        bool air_lo = (flags_lo & kCellNoAir) == 0u, air_hi = (flags_hi & kCellNoAir) == 0u;
+        ivec4 m;
+        if (air_lo != air_hi) {
+            if (!masks) load_face_masks(faces);
+            masks = true;
+            ivec3 ca = air_lo ? lo : f;
+            int b = cell_index(n, air_lo ? f : lo);
+            uint flags_a = air_lo ? flags_lo : flags_hi, flags_b = air_lo ? flags_hi : flags_lo;
+            CellBits layer_a = faces[air_lo ? 2u * axis + 1u : 2u * axis];
+            CellBits layer_b = faces[air_lo ? 2u * axis : 2u * axis + 1u];
+            // Beyond the domain all is air, which reaches the face.
+            bool reaches = !inside_cells(n, ca) || bits_count(bits_and(air_of(cell_index(n, ca), flags_a), layer_a)) != 0u;
+            m = reaches ? solid_layer_motion(b, flags_b, layer_b) : air_cell_motion(cell_index(n, ca), flags_a, layer_a, faces);
+        } else {
+            m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
+        }
         float share = 1.0;
         if (m.w > 0 && ((flags_lo | flags_hi) & kCellStatic) != 0u) {
             if (!masks) load_face_masks(faces);

@@ -307,17 +307,22 @@ void uf_unite(uint a, uint b) {
     }
 }
 
-/// Fixed-point velocity sums and their count for the solid in cell i: its moving fragments'; in a cell
-/// without air, else, its sealed region's (the summed mean velocities of the region's moving cells); zero
-/// for static solids.
-ivec4 solid_motion_of(int i, uint flags) {
-    if ((flags & kCellMoving) != 0u) return IVec4Ref(hot.cell_motion).v[i];
-    if ((flags & kCellNoAir) == 0u) return ivec4(0);
-    uint root = LabelsRef(hot.labels).v[part_node(uint(i), 0u)];
+/// Fixed-point velocity sums and their weight for the sealed region whose root is `root` (enclosing_motion);
+/// zero for the outside air or a region that touches no solid.
+ivec4 region_of(uint root) {
     if (root == kOutsideNode) return ivec4(0);
     uint part = (root - 1u) % kCellParts;
     if ((flags_at(int((root - 1u) / kCellParts)) & (kCellRegion << part)) == 0u) return ivec4(0);
-    return IVec4Ref(hot.region_motion).v[root];
+    IVec4Ref regions = IVec4Ref(hot.region_motion);
+    return enclosing_motion(regions.v[2u * root], regions.v[2u * root + 1u].x);
+}
+
+/// Fixed-point velocity sums and their count for the solid in cell i: its moving fragments'; in a cell
+/// without air, else, its sealed region's (region_of); zero for static solids.
+ivec4 solid_motion_of(int i, uint flags) {
+    if ((flags & kCellMoving) != 0u) return IVec4Ref(hot.cell_motion).v[i];
+    if ((flags & kCellNoAir) == 0u) return ivec4(0);
+    return region_of(LabelsRef(hot.labels).v[part_node(uint(i), 0u)]);
 }
 
 vec3 motion_velocity(ivec4 m) { return m.w > 0 ? vec3(m.xyz) / (kVelocityScale * float(m.w)) : vec3(0.0); }
@@ -354,23 +359,42 @@ void convergence_check(uint x_slot) {
 
 // ---- What engines read ---------------------------------------------------------------------------------
 
+/// The voxel of cell `cell` that point p (cell units) lies in, as a bit of a CellBits.
+uint voxel_bit(vec3 p, int cell) {
+    ivec3 c = cell_from_index(grid_dims(), cell);
+    int v = int(hot.voxels_per_cell);
+    ivec3 voxel = clamp(ivec3(floor((p - vec3(c)) * float(v))), ivec3(0), ivec3(v - 1));
+    return uint(voxel.x + v * (voxel.y + v * voxel.z));
+}
+
 /// Whether point p (cell units, inside the grid) lies in a solid: in a cell without air, or in a voxel of a
 /// cut cell that is not the cell's air.
 bool in_solid(vec3 p, int cell, uint flags) {
     if ((flags & kCellNoAir) != 0u) return true;
     if ((flags & kCellCut) == 0u) return false;
-    ivec3 c = cell_from_index(grid_dims(), cell);
-    int v = int(hot.voxels_per_cell);
-    ivec3 voxel = clamp(ivec3(floor((p - vec3(c)) * float(v))), ivec3(0), ivec3(v - 1));
-    return !bits_get(air_of(cell, flags), uint(voxel.x + v * (voxel.y + v * voxel.z)));
+    return !bits_get(air_of(cell, flags), voxel_bit(p, cell));
+}
+
+/// The velocity of the solid at point p (cell units) in cell `cell`, where in_solid: in a sealed part, its
+/// region's (region_of); in a static voxel, 0; in a moving one, the cell's fragments' mean. A point inside a
+/// static building stays still beside a mover that brushes its wall (the whole cell answered the mover's).
+vec3 solid_velocity_at(vec3 p, int cell, uint flags) {
+    LabelsRef labels = LabelsRef(hot.labels);
+    if ((flags & kCellCut) == 0u) return motion_velocity(region_of(labels.v[part_node(uint(cell), 0u)]));
+    uint bit = voxel_bit(p, cell);
+    for (uint k = 0u; k < kCellParts; ++k)
+        if (bits_get(part_of(cell, flags, k), bit)) return motion_velocity(region_of(labels.v[part_node(uint(cell), k)]));
+    if (bits_get(static_of(cell, flags), bit)) return vec3(0.0);
+    return (flags & kCellMoving) != 0u ? motion_velocity(IVec4Ref(hot.cell_motion).v[cell]) : vec3(0.0);
 }
 
 /// Velocity at cell i's centre as reported: the air's (the mean of its faces), or in a cell without air
 /// the solid's own.
 vec3 cell_output(int i) {
     uint flags = flags_at(i);
-    if ((flags & kCellNoAir) != 0u) return motion_velocity(solid_motion_of(i, flags));
-    return cell_velocity(kFieldVelocity, cell_from_index(grid_dims(), i));
+    ivec3 c = cell_from_index(grid_dims(), i);
+    if ((flags & kCellNoAir) != 0u) return solid_velocity_at(vec3(c) + 0.5, i, flags);
+    return cell_velocity(kFieldVelocity, c);
 }
 
 layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };

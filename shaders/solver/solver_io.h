@@ -174,8 +174,10 @@ struct SolverBindings {
     GUST_ADDRESS cell_flags;     ///< uint[cells]: kCell* flags
     GUST_ADDRESS cell_motion;    ///< ivec4[cells]: fixed-point fragment velocity sums and count
     GUST_ADDRESS labels;         ///< uint[1 + kCellParts * cells]: union-find parents (part_node ids)
-    GUST_ADDRESS region_motion;  ///< ivec4[1 + kCellParts * cells]: per sealed region's root node, the
-                                 ///< fixed-point mean velocities of its moving cells, summed, and their count
+    GUST_ADDRESS region_motion;  ///< ivec4[2 (1 + kCellParts * cells)]: per sealed region's root node r,
+                                 ///< [2r] the fixed-point velocities of the moving solid its parts touch,
+                                 ///< weighted in quarters, and the weights; [2r + 1].x 4 per part that
+                                 ///< touches solid (enclosing_motion)
     GUST_ADDRESS vorticity;      ///< vec4[cells]: curl (1/s) and its length
     GUST_ADDRESS confinement;    ///< vec4[cells]: the step's confinement force (m/s^2) and speed (m/s)
     GUST_ADDRESS emitters;       ///< GpuEmitter[emitter_count]
@@ -420,19 +422,6 @@ GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
     return r;
 }
 
-/// The weight, in quarters (0..4), a moving cell's mean fragment velocity carries in the sealed region its
-/// part `part` belongs to: the share of the cell's solid voxels (`solid`) that the part touches which are
-/// not static (`still`). The air sealed inside a static building stays still when a moving body brushes
-/// its wall from outside (the part touches only the wall's static voxels: that cell gave the whole inside
-/// the body's velocity), and the inside of a crate sliding on a static floor moves with the crate's walls
-/// that touch no floor.
-GUST_INLINE uint region_weight(CellBits part, CellBits solid, CellBits still, uint v, CellBits faces[6]) {
-    CellBits ring = bits_and(bits_dilate(part, v, faces), solid);
-    uint touched = bits_count(ring);
-    uint moving = touched - bits_count(bits_and(ring, still));
-    return touched == 0u ? 0u : (4u * moving + touched / 2u) / touched;
-}
-
 /// Keeps `component` (of `count` voxels) if it is among the two largest seen: `first` the largest, `second`
 /// the next (the earlier one wins a tie).
 GUST_INLINE void keep_largest(CellBits component, uint count, GUST_OUT(CellBits) first,
@@ -585,6 +574,30 @@ GUST_INLINE uint face_any_count(CellBits low, CellBits high, uint axis, uint v, 
     CellBits b = bits_and(high, faces[2u * axis]);
     uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
     return bits_count(bits_or(bits_down(a, shift), b));
+}
+
+/// A sealed part's contact with solid voxels, as (voxels touched, of which static): in its own cell (`side`
+/// 6; `solid` and `still` are the cell's) or in the neighbour across face `side` (−x,+x,−y,+y,−z,+z; the
+/// neighbour's sets, counted as voxel pairs across the face).
+GUST_INLINE uvec2 part_contact(CellBits part, CellBits solid, CellBits still, uint side, uint v, CellBits faces[6]) {
+    if (side == 6u) {
+        CellBits ring = bits_and(bits_dilate(part, v, faces), solid);
+        return uvec2(bits_count(ring), bits_count(bits_and(ring, still)));
+    }
+    uint axis = side / 2u;
+    if ((side & 1u) != 0u)
+        return uvec2(face_open_count(part, solid, axis, v, faces), face_open_count(part, still, axis, v, faces));
+    return uvec2(face_open_count(solid, part, axis, v, faces), face_open_count(still, part, axis, v, faces));
+}
+
+/// A sealed region moves with the solid that encloses it: the mean velocity of the moving solid voxels
+/// its parts touch when those are at least half of all the solid voxels they touch, else still. `motion`
+/// is region_motion's first slot (velocity sums weighted in quarters, and the weights), `border` the
+/// second's x (4 per part that touches solid). So the inside of a static building stays still whatever
+/// moves in it or brushes its walls, and a crate's inside moves with the crate though the floor it slides
+/// on holds a sixth of its border.
+GUST_INLINE ivec4 enclosing_motion(ivec4 motion, int border) {
+    return motion.w > 0 && 2 * motion.w >= border ? motion : ivec4(0);
 }
 
 /// The share of a face's closed voxel pairs a moving solid pushes with: those with no static solid voxel.

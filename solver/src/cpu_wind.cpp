@@ -55,7 +55,7 @@ struct CpuWind::Impl {
     std::vector<CellBits> fixed;           ///< per cell, its static solid voxels
     std::vector<glm::ivec4> motion;        ///< per cell, as cell_motion
     std::vector<std::uint32_t> roots;      ///< per part node: its set's root (the smallest node id)
-    std::vector<glm::ivec4> region_motion; ///< per root node, as region_motion
+    std::vector<glm::ivec4> region_motion; ///< two per root node, as region_motion
     std::uint32_t face_mask[6 * kCellWords];
     float last_dt = 0.0f;
     bool has_guess = false; ///< as WindSolver's: φ may start the next solve
@@ -83,6 +83,14 @@ struct CpuWind::Impl {
     void seal_pockets(std::uint32_t& sealed_cells);
     CellBits part_of(std::size_t cell, std::uint32_t part) const;
     CellBits air_of(std::size_t cell) const;
+    CellBits static_of(std::size_t cell) const;
+    /// As fill_finish.comp's add_contacts.
+    void add_contacts(std::size_t cell, std::uint32_t part, std::uint32_t root, const CellBits layers[6]);
+    /// As solver_common.glsl's region_of.
+    glm::ivec4 region_of(std::uint32_t root) const;
+    /// As solid_faces.comp's solid_layer_motion and air_cell_motion.
+    glm::ivec4 solid_layer_motion(std::size_t i, const CellBits& layer) const;
+    glm::ivec4 air_cell_motion(std::size_t i, const CellBits& layer, const CellBits faces[6]) const;
     glm::ivec4 solid_motion_of(std::size_t cell) const;
     void extend();
     void coarse_weights();
@@ -132,7 +140,7 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
     m.fixed.assign(m.cells(), shaderio::bits_none());
     m.motion.assign(m.cells(), glm::ivec4(0));
     m.roots.assign(1 + shaderio::kCellParts * m.cells(), 0);
-    m.region_motion.assign(m.roots.size(), glm::ivec4(0));
+    m.region_motion.assign(2 * m.roots.size(), glm::ivec4(0));
     detail::face_masks(desc.voxels_per_cell, m.face_mask);
     return wind;
 }
@@ -219,11 +227,82 @@ CellBits CpuWind::Impl::air_of(std::size_t cell) const {
     return part_of(cell, (flags[cell] & shaderio::kCellSecondPart) != 0 ? 1 : 0);
 }
 
+CellBits CpuWind::Impl::static_of(std::size_t cell) const {
+    return (flags[cell] & shaderio::kCellStatic) != 0 ? fixed[cell] : shaderio::bits_none();
+}
+
+glm::ivec4 CpuWind::Impl::region_of(std::uint32_t root) const {
+    if (root == shaderio::kOutsideNode) return glm::ivec4(0);
+    return shaderio::enclosing_motion(region_motion[2 * root], region_motion[2 * root + 1].x);
+}
+
 glm::ivec4 CpuWind::Impl::solid_motion_of(std::size_t cell) const {
     if ((flags[cell] & shaderio::kCellMoving) != 0) return motion[cell];
     if ((flags[cell] & shaderio::kCellNoAir) == 0) return glm::ivec4(0);
-    const std::uint32_t root = roots[shaderio::part_node(std::uint32_t(cell), 0)];
-    return root == shaderio::kOutsideNode ? glm::ivec4(0) : region_motion[root];
+    return region_of(roots[shaderio::part_node(std::uint32_t(cell), 0)]);
+}
+
+glm::ivec4 CpuWind::Impl::solid_layer_motion(std::size_t i, const CellBits& layer) const {
+    using namespace shaderio;
+    const CellBits p0 = part_of(i, 0), p1 = part_of(i, 1);
+    const CellBits moving = bits_and_not(bits_and_not(bits_and_not(layer, p0), p1), static_of(i));
+    if ((flags[i] & kCellMoving) != 0 && bits_count(moving) != 0) return motion[i];
+    if (bits_count(bits_and(p0, layer)) != 0) return region_of(roots[part_node(std::uint32_t(i), 0)]);
+    if (bits_count(bits_and(p1, layer)) != 0) return region_of(roots[part_node(std::uint32_t(i), 1)]);
+    return glm::ivec4(0);
+}
+
+glm::ivec4 CpuWind::Impl::air_cell_motion(std::size_t i, const CellBits& layer,
+                                          const CellBits faces[6]) const {
+    using namespace shaderio;
+    const std::uint32_t v = desc.voxels_per_cell;
+    const std::uint32_t air = (flags[i] & kCellSecondPart) != 0 ? 1 : 0;
+    const CellBits p0 = part_of(i, 0), p1 = part_of(i, 1);
+    const CellBits moving = bits_and_not(bits_and_not(bits_and_not(bits_all(v), p0), p1), static_of(i));
+    CellBits grid_faces[6];
+    std::copy(faces, faces + 6, grid_faces);
+    if ((flags[i] & kCellMoving) != 0 &&
+        bits_count(bits_and(bits_dilate(air == 0 ? p0 : p1, v, grid_faces), moving)) != 0)
+        return motion[i];
+    if (bits_count(bits_and(air == 0 ? p1 : p0, layer)) != 0)
+        return region_of(roots[part_node(std::uint32_t(i), 1 - air)]);
+    return glm::ivec4(0);
+}
+
+void CpuWind::Impl::add_contacts(std::size_t cell, std::uint32_t part, std::uint32_t root,
+                                 const CellBits layers[6]) {
+    using namespace shaderio;
+    const std::uint32_t v = desc.voxels_per_cell;
+    CellBits faces[6];
+    std::copy(layers, layers + 6, faces);
+    const glm::ivec3 c = cell_from_index(k.dims, int(cell));
+    const CellBits p = part_of(cell, part);
+    glm::uvec2 touch[7];
+    glm::ivec3 mean[7];
+    std::uint32_t total = 0;
+    for (std::uint32_t side = 0; side < 7; ++side) {
+        touch[side] = glm::uvec2(0);
+        mean[side] = glm::ivec3(0);
+        const glm::ivec3 at = side == 6 ? c : c + ((side & 1) != 0 ? 1 : -1) * axis_unit(side / 2);
+        if (!inside_cells(k.dims, at)) continue;
+        const std::size_t j = std::size_t(cell_index(k.dims, at));
+        if ((flags[j] & kCellCut) == 0) continue;
+        const CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(j, 0)), part_of(j, 1));
+        touch[side] = part_contact(p, solid, static_of(j), side, v, faces);
+        total += touch[side].x;
+        if ((flags[j] & kCellMoving) == 0)
+            touch[side].y = touch[side].x;
+        else
+            mean[side] = glm::ivec3(motion[j]) / motion[j].w;
+    }
+    if (total == 0) return;
+    glm::ivec4 sum(0);
+    for (std::uint32_t side = 0; side < 7; ++side) {
+        const int quarters = int((4 * (touch[side].x - touch[side].y) + total / 2) / total);
+        sum += glm::ivec4(mean[side] * quarters, quarters);
+    }
+    region_motion[2 * root] += sum;
+    region_motion[2 * root + 1].x += 4;
 }
 
 // fill_link.comp and fill_finish.comp as a flood fill from the outside: the same sets, and the same roots,
@@ -295,15 +374,13 @@ void CpuWind::Impl::fill(std::uint32_t& sealed_cells) {
             if (counts[0] != 0) ++sealed_cells;
         }
         solid_fraction[cell] = 1.0f - float(air) / float(v * v * v);
-        if ((flags[cell] & kCellMoving) == 0) return;
-        const glm::ivec4 m = motion[cell];
-        const glm::ivec3 mean = glm::ivec3(m) / m.w;
-        const CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(cell, 0)), part_of(cell, 1));
-        const CellBits still = (flags[cell] & kCellStatic) != 0 ? fixed[cell] : bits_none();
+    });
+    // After every cell's flags are set, as the GPU's atomics make no difference to the sums' order.
+    each_cell(k.levels[0], [&](int i, glm::ivec3) {
         for (std::uint32_t part = 0; part < kCellParts; ++part) {
-            if (counts[part] == 0 || r[part] == kOutsideNode) continue;
-            const int weight = int(region_weight(part_of(cell, part), solid, still, v, layers));
-            if (weight != 0) region_motion[r[part]] += glm::ivec4(mean * weight, weight);
+            const std::uint32_t root = roots[part_node(std::uint32_t(i), part)];
+            if (bits_count(part_of(std::size_t(i), part)) != 0 && root != kOutsideNode)
+                add_contacts(std::size_t(i), part, root, layers);
         }
     });
 }
@@ -363,9 +440,7 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         return inside_cells(k.dims, c) ? solid_motion_of(std::size_t(cell_index(k.dims, c))) : glm::ivec4(0);
     };
     auto static_at = [&](glm::ivec3 c) {
-        if (!inside_cells(k.dims, c)) return bits_none();
-        const std::size_t i = std::size_t(cell_index(k.dims, c));
-        return (flags[i] & kCellStatic) != 0 ? fixed[i] : bits_none();
+        return inside_cells(k.dims, c) ? static_of(std::size_t(cell_index(k.dims, c))) : bits_none();
     };
     each_face([&](int i, std::uint32_t axis, glm::ivec3 f) {
         const glm::ivec3 lo = f - axis_unit(axis);
@@ -373,7 +448,17 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         if (((flags_at(lo) | flags_at(f)) & (kCellCut | kCellNoAir)) != 0)
             open = face_open_fraction(air_at(lo), air_at(f), axis, v, faces_layers);
         k.weights[std::size_t(i)] = open;
-        const glm::ivec4 m = motion_at(lo) + motion_at(f);
+        const bool air_lo = (flags_at(lo) & kCellNoAir) == 0, air_hi = (flags_at(f) & kCellNoAir) == 0;
+        glm::ivec4 m = motion_at(lo) + motion_at(f);
+        if (air_lo != air_hi) {
+            const glm::ivec3 ca = air_lo ? lo : f;
+            const std::size_t b = std::size_t(cell_index(k.dims, air_lo ? f : lo));
+            const CellBits& layer_a = faces_layers[air_lo ? 2 * axis + 1 : 2 * axis];
+            const CellBits& layer_b = faces_layers[air_lo ? 2 * axis : 2 * axis + 1];
+            const bool reaches = !inside_cells(k.dims, ca) || bits_count(bits_and(air_at(ca), layer_a)) != 0;
+            m = reaches ? solid_layer_motion(b, layer_b)
+                        : air_cell_motion(std::size_t(cell_index(k.dims, ca)), layer_a, faces_layers);
+        }
         float share = 1.0f;
         if (m.w > 0 && ((flags_at(lo) | flags_at(f)) & kCellStatic) != 0) {
             const std::uint32_t closed =

@@ -260,7 +260,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.cell_flags, cells * 4, 0, "gust cell flags"},
         {&m.cell_motion, cells * 16, 0, "gust cell motion"},
         {&m.labels, (nodes + cells) * 4, 0, "gust fill labels"},
-        {&m.region_motion, nodes * 16, 0, "gust region motion"},
+        {&m.region_motion, nodes * 32, 0, "gust region motion"},
         {&m.vorticity_buf, cells * 16, 0, "gust vorticity"},
         {&m.confinement, cells * 16, 0, "gust confinement"},
         {&m.emitters, shaderio::kMaxEmitters * sizeof(shaderio::GpuEmitter), 0, "gust emitters"},
