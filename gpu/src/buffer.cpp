@@ -16,6 +16,8 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, Vk
     Buffer b;
     b.ctx_ = &ctx;
     b.size_ = size;
+    if (Status s = ctx.reserve_release_slot(); !s) return s;
+    b.slot_ = true;
     VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     info.size = size;
     info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
@@ -76,6 +78,7 @@ void Buffer::release() {
         if (buffer_) vk.vkDestroyBuffer(ctx_->device(), buffer_, ctx_->allocator());
         if (memory_) vk.vkFreeMemory(ctx_->device(), memory_, ctx_->allocator());
     }
+    if (std::exchange(slot_, false)) ctx_->drop_release_slot();
     buffer_ = VK_NULL_HANDLE;
     memory_ = VK_NULL_HANDLE;
     mapped_ = nullptr;
@@ -98,6 +101,7 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept {
         address_ = std::exchange(other.address_, 0);
         size_ = std::exchange(other.size_, 0);
         mapped_ = std::exchange(other.mapped_, nullptr);
+        slot_ = std::exchange(other.slot_, false);
     }
     return *this;
 }

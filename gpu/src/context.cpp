@@ -686,7 +686,6 @@ Status Context::begin_one_time(VkCommandBuffer& cmd) {
         return Status::failure(std::string("vkAllocateCommandBuffers failed: ") + to_string(r));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    spoiled_ = false;
     if (VkResult r = vk_.vkBeginCommandBuffer(cmd, &begin); r != VK_SUCCESS) {
         vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
         cmd = VK_NULL_HANDLE;
@@ -705,10 +704,6 @@ Status Context::end_one_time(VkCommandBuffer cmd) {
     if (VkResult r = vk_.vkEndCommandBuffer(cmd); r != VK_SUCCESS) {
         vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
         return Status::failure(std::string("vkEndCommandBuffer failed: ") + to_string(r));
-    }
-    if (take_spoiled()) {
-        vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);
-        return Status::failure("host memory ran out while recording: a buffer the commands use was freed");
     }
 
     VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
@@ -805,7 +800,6 @@ void Context::end_label(VkCommandBuffer cmd) const {
 
 void Context::begin_frame(std::uint64_t frame) {
     deferred_ = true;
-    spoiled_ = false;
     recording_frame_ = frame;
 }
 
@@ -823,20 +817,26 @@ void Context::retire(std::uint64_t completed) {
 }
 
 void Context::release_later(VkBuffer buffer, VkDeviceMemory memory) noexcept {
-    try {
-        released_.push_back({recording_frame_, buffer, memory});
-    } catch (const std::bad_alloc&) {
-        // No memory to keep it for later: it is freed once the queue is idle, and the commands recorded
-        // since the last submission, which may name it, are spoiled (take_spoiled).
-        wait_idle();
-        vk_.vkDestroyBuffer(device_, buffer, allocator());
-        vk_.vkFreeMemory(device_, memory, allocator());
-        spoiled_ = true;
-    }
+    // Within the capacity reserve_release_slot kept, so push_back does not allocate: a buffer a recorded
+    // frame still uses is never freed early for want of memory to remember it.
+    released_.push_back({recording_frame_, buffer, memory});
 }
 
-bool Context::take_spoiled() {
-    return std::exchange(spoiled_, false);
+Status Context::reserve_release_slot() noexcept {
+    const std::size_t needed = released_.size() + live_buffers_ + 1;
+    if (needed > released_.capacity()) {
+        try {
+            released_.reserve(std::max(needed, 2 * released_.capacity()));
+        } catch (const std::exception&) {
+            return Status::failure("host memory ran out keeping room to release a buffer");
+        }
+    }
+    ++live_buffers_;
+    return {};
+}
+
+void Context::drop_release_slot() noexcept {
+    --live_buffers_;
 }
 
 std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags required,

@@ -881,11 +881,7 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
         m.ctx->begin_frame(n);
 
-        Outcome recorded = m.record_frame(commands, dt, shift, slot);
-        if (recorded && m.ctx->take_spoiled())
-            return Outcome(ErrorCode::DeviceFailure, "host memory ran out while recording the frame: do not "
-                                                     "submit these commands");
-        return recorded;
+        return m.record_frame(commands, dt, shift, slot);
     }));
 }
 

@@ -46,6 +46,7 @@ class Buffer {
     VkDeviceAddress address_ = 0;
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
+    bool slot_ = false; ///< holds one of the context's release slots (Context::reserve_release_slot)
     void release();
 };
 

@@ -226,12 +226,13 @@ class Context : public HostObject {
     bool deferred() const { return deferred_; }
     /// The frame begin_frame() last named (0 before the first call).
     std::uint64_t recording_frame() const { return recording_frame_; }
-    /// Internal: called by Buffer when it is released while deferred(). Never throws: without the host
-    /// memory to keep it, the buffer is freed once the queue is idle and the recording is spoiled.
+    /// Internal: called by Buffer when it is released while deferred(). Never allocates: every live
+    /// Buffer holds a slot of the list reserved when it was created (reserve_release_slot).
     void release_later(VkBuffer buffer, VkDeviceMemory memory) noexcept;
-    /// True (once) when commands recorded since the last call may name a buffer already freed: they must
-    /// not be submitted.
-    bool take_spoiled();
+    /// Internal: Buffer::create keeps room in the release list for one more buffer (it fails, rather than a
+    /// later release, when host memory runs out); drop_release_slot gives it back once the buffer is freed.
+    Status reserve_release_slot() noexcept;
+    void drop_release_slot() noexcept;
 
     /// Index of a memory type allowed by `type_bits` having all of `required` (and as many of
     /// `preferred` as possible); UINT32_MAX if none.
@@ -284,7 +285,7 @@ class Context : public HostObject {
     };
     bool deferred_ = false;
     std::uint64_t recording_frame_ = 0;
-    bool spoiled_ = false;
+    std::size_t live_buffers_ = 0; ///< Buffers holding a release slot
     std::pmr::vector<Released> released_;
     WorkCounts work_;
     std::atomic<std::uint32_t> validation_messages_{0};
