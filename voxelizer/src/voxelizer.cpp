@@ -195,10 +195,16 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
     return v;
 }
 
+std::uint64_t Voxelizer::fragment_limit() const {
+    // Moving meshes keep a velocity (8 bytes) per fragment beside it, in one allocation too.
+    const std::size_t entry_bytes = inv_dt_ > 0.0f ? sizeof(glm::uvec2) : sizeof(std::uint32_t);
+    return std::min<std::uint64_t>(ctx_.info().max_allocation_size / entry_bytes, UINT32_MAX);
+}
+
 Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
     if (fragments <= capacity_) return {};
-    const std::uint64_t limit = ctx_.info().max_allocation_size / sizeof(std::uint32_t);
-    if (fragments > limit || fragments > UINT32_MAX)
+    const std::uint64_t limit = fragment_limit();
+    if (fragments > limit)
         return Status::failure("the fragment list needs " + std::to_string(fragments) +
                                " entries, more than one device allocation holds (" + std::to_string(limit) +
                                "); lower the resolution or split the scene");
@@ -410,9 +416,11 @@ Status Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t 
                                "lower the resolution or split the scene");
     stats.truncated = counters.fragments > capacity || counters.large_peak > large_capacity;
     // Grow with headroom so that a scene growing slowly does not redo every frame.
-    if (counters.fragments > capacity_)
-        if (Status s = ensure_capacity(std::uint64_t(counters.fragments) + counters.fragments / 4); !s)
+    if (counters.fragments > capacity_) {
+        const std::uint64_t needed = counters.fragments;
+        if (Status s = ensure_capacity(std::max(needed, std::min(needed + needed / 4, fragment_limit()))); !s)
             return s;
+    }
     if (counters.large_peak > large_capacity_)
         if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4); !s)
             return s;
@@ -427,11 +435,7 @@ Status Voxelizer::ensure_pass(std::span<const GpuInstance> instances, const Grid
     VoxelizeWork work;
     for (const GpuInstance& inst : instances)
         work += voxelize_work(inst.mesh->sizes_, inst.model, grid);
-    // Moving meshes keep a velocity (8 bytes) per fragment beside it: the list's first size leaves room
-    // for that list in one allocation too.
-    const std::size_t entry_bytes = inv_dt_ > 0.0f ? sizeof(glm::uvec2) : sizeof(std::uint32_t);
-    const double limit =
-        double(std::min<std::uint64_t>(ctx_.info().max_allocation_size / entry_bytes, UINT32_MAX));
+    const double limit = double(fragment_limit());
     const double guess = std::min(limit, kFragmentHeadroom * work.fragments + double(kFragmentSlack));
     if (Status s = ensure_capacity(std::uint64_t(guess)); !s) return s;
     if (inv_dt_ > 0.0f)

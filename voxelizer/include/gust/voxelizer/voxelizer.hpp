@@ -152,6 +152,8 @@ class Voxelizer : public gpu::HostObject {
 
   private:
     explicit Voxelizer(gpu::Context& ctx) : ctx_(ctx) {}
+    /// The most fragments one device allocation holds, the moving meshes' velocity list included.
+    std::uint64_t fragment_limit() const;
     Status ensure_capacity(std::uint64_t fragments);
     Status rotate_positions(GpuMesh& mesh);
     Status ensure_large_list(std::uint64_t items);
