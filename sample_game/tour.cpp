@@ -44,17 +44,16 @@ bool crosses(glm::vec3 a, glm::vec3 b, const Obstacle& box) {
 /// its own direction whenever that is clear, and turns only while something stands in the way.
 OrbitCamera clear_view(const Stage& stage, glm::vec3 target, glm::vec3 towards_eye, float distance) {
     constexpr float kStep = 20.0f * std::numbers::pi_v<float> / 180.0f;
-    for (int turn = 0; turn <= 9; ++turn) {
-        for (const float sign : {1.0f, -1.0f}) {
-            const float a = sign * kStep * static_cast<float>(turn);
-            const glm::vec3 d(std::cos(a) * towards_eye.x - std::sin(a) * towards_eye.z, towards_eye.y,
-                              std::sin(a) * towards_eye.x + std::cos(a) * towards_eye.z);
-            const OrbitCamera camera = looking_at(target, d, distance);
-            const glm::vec3 eye = camera.eye();
-            if (std::none_of(stage.obstacles.begin(), stage.obstacles.end(),
-                             [&](const Obstacle& box) { return crosses(target, eye, box); }))
-                return camera;
-        }
+    // 0, then ±20°, ±40°, ... ±160°, then 180°: each direction once.
+    for (int at = 0; at < 18; ++at) {
+        const float a = (at % 2 == 0 ? -1.0f : 1.0f) * kStep * static_cast<float>((at + 1) / 2);
+        const glm::vec3 d(std::cos(a) * towards_eye.x - std::sin(a) * towards_eye.z, towards_eye.y,
+                          std::sin(a) * towards_eye.x + std::cos(a) * towards_eye.z);
+        const OrbitCamera camera = looking_at(target, d, distance);
+        const glm::vec3 eye = camera.eye();
+        if (std::none_of(stage.obstacles.begin(), stage.obstacles.end(),
+                         [&](const Obstacle& box) { return crosses(target, eye, box); }))
+            return camera;
     }
     return looking_at(target, towards_eye, distance);
 }

@@ -303,7 +303,7 @@ TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {
             const long n = only_gust_on_stack() ? f->ours++ : -1;
             if (n >= 0 && f->fail_at >= 0 && (n == f->fail_at || (f->forever && n > f->fail_at)))
                 return nullptr;
-            return std::aligned_alloc(alignment, (bytes + alignment - 1) / alignment * alignment);
+            return allocate(bytes, alignment);
         };
         desc.hooks.free = [](void*, void* memory) { std::free(memory); };
         desc.hooks.log = nullptr;
@@ -318,7 +318,7 @@ TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {
     {
         Failing counting;
         std::unique_ptr<System> system;
-        make(counting, system);
+        ASSERT_NO_FATAL_FAILURE(make(counting, system));
         const long before = counting.ours;
         ASSERT_TRUE(system->step(1.0f / 30.0f));
         per_step = counting.ours - before;
@@ -330,7 +330,7 @@ TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {
                          std::to_string(per_step));
             Failing failing;
             std::unique_ptr<System> system;
-            make(failing, system);
+            ASSERT_NO_FATAL_FAILURE(make(failing, system));
             failing.forever = forever;
             failing.fail_at = failing.ours + at;
             const Outcome stepped = system->step(1.0f / 30.0f);

@@ -319,8 +319,8 @@ TEST(SampleGame, theWindowedTourUnderXvfbPlaysEveryShotAndExitsCleanly) {
 TEST(SampleGame, aPersonAtTheWindowTakesTheCameraFromTheTourAndCGivesItBack) {
     // Under Xvfb, xdotool drags across the window (the tour stops), presses F and W (follow the fox, voxels
     // on), then C (the tour again) and Esc (quit). After each step the script waits until the game has
-    // written five more frames to stats.jsonl (at most a minute), so a slow or busy machine still sees
-    // every step land in its own frames.
+    // written five more frames to stats.jsonl (the test fails after a minute without them), so a slow or
+    // busy machine still sees every step land in its own frames.
     const fs::path out = fresh_dir("person");
     const std::string stats_file = (out / "stats.jsonl").string();
     const std::string game =
@@ -328,7 +328,8 @@ TEST(SampleGame, aPersonAtTheWindowTakesTheCameraFromTheTourAndCGivesItBack) {
     const std::string script =
         "frames() { cat " + stats_file +
         " 2>/dev/null | wc -l; }; "
-        "advance() { n=$(frames); i=0; while [ $(frames) -lt $((n + 5)) ] && [ $i -lt 600 ]; do "
+        "advance() { n=$(frames); i=0; while [ $(frames) -lt $((n + 5)) ]; do "
+        "[ $i -lt 600 ] || { echo no new frames for a minute; kill $game; exit 1; }; "
         "sleep 0.1; i=$((i + 1)); done; }; " +
         game +
         " & game=$!; "

@@ -109,7 +109,7 @@ TEST(SampleTour, closeShotsLookPastABuildingInTheWay) {
     const struct {
         std::size_t shot;
         glm::vec3 actor;
-    } close[] = {{1, stage.fox.position + glm::vec3(0.0f, 0.3f, 0.0f)},
+    } close[] = {{1, stage.fox.position + glm::vec3(0.0f, 0.25f, 0.0f)},
                  {3, stage.flyer.position},
                  {4, stage.walker.position + glm::vec3(0.0f, 0.7f, 0.0f)}};
     for (const auto& c : close) {
