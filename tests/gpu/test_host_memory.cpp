@@ -8,18 +8,23 @@
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
 #include <gust/gpu/host_memory.hpp>
+#include <memory>
 #include <memory_resource>
+#include <new>
+#include <vector>
 
 namespace gust::test {
 namespace {
 
-/// new/delete that counts what is live.
+/// new/delete that counts what is live, and runs out while `empty` is set.
 class CountingResource final : public std::pmr::memory_resource {
   public:
     long live = 0, allocations = 0;
+    bool empty = false;
 
   private:
     void* do_allocate(std::size_t bytes, std::size_t alignment) override {
+        if (empty) throw std::bad_alloc();
         ++live;
         ++allocations;
         return std::pmr::new_delete_resource()->allocate(bytes, alignment);
@@ -32,6 +37,16 @@ class CountingResource final : public std::pmr::memory_resource {
         return this == &other;
     }
 };
+
+/// A validated Context taking its host memory from `memory`.
+std::unique_ptr<gpu::Context> context_on(std::pmr::memory_resource& memory) {
+    gpu::ContextDesc desc;
+    desc.validation = true;
+    desc.memory = &memory;
+    auto ctx = gpu::Context::create(desc);
+    EXPECT_TRUE(ctx) << ctx.message();
+    return ctx ? std::move(*ctx) : nullptr;
+}
 
 TEST(VulkanAllocator, leavesVulkanToTheDriverForNewDeleteAndCallsTheResourceOtherwise) {
     EXPECT_EQ(gpu::VulkanAllocator(std::pmr::new_delete_resource()).callbacks(), nullptr);
@@ -81,12 +96,9 @@ TEST(VulkanAllocator, reallocationKeepsTheContentsAndTheAlignment) {
 TEST(ContextHostMemory, theContextAndVulkanTakeTheirHostMemoryFromTheResourceAndGiveItAllBack) {
     CountingResource counting;
     {
-        gpu::ContextDesc desc;
-        desc.validation = true;
-        desc.memory = &counting;
-        auto ctx = gpu::Context::create(desc);
-        ASSERT_TRUE(ctx) << ctx.message();
-        gpu::Context& c = **ctx;
+        auto ctx = context_on(counting);
+        ASSERT_TRUE(ctx);
+        gpu::Context& c = *ctx;
         EXPECT_EQ(c.memory(), &counting);
         EXPECT_NE(c.allocator(), nullptr);
         const long after_create = counting.allocations;
@@ -100,6 +112,30 @@ TEST(ContextHostMemory, theContextAndVulkanTakeTheirHostMemoryFromTheResourceAnd
         EXPECT_EQ(c.validation_messages(), 0u) << c.last_validation_message();
     }
     EXPECT_EQ(counting.live, 0) << "host allocations not given back";
+}
+
+// A buffer released while frames are in flight is kept until they complete. Keeping it needs no memory
+// then: each buffer reserved its place when it was made. When the host's memory had run out, the release
+// threw from a noexcept move (std::terminate); the fallback that freed the buffer at once could free one a
+// frame recorded into the host's command buffer would still read.
+TEST(BufferRelease, whileFramesAreInFlightNeedsNoMemoryAndCreationFailsCleanlyWithout) {
+    CountingResource memory;
+    auto ctx = context_on(memory);
+    ASSERT_TRUE(ctx);
+    ctx->begin_frame(1);
+    std::vector<gpu::Buffer> buffers;
+    for (int i = 0; i < 40; ++i) {
+        auto b = gpu::Buffer::create(*ctx, 256, gpu::MemoryUse::Device);
+        ASSERT_TRUE(b) << b.message();
+        buffers.push_back(std::move(*b));
+    }
+    memory.empty = true;
+    const auto refused = gpu::Buffer::create(*ctx, 256, gpu::MemoryUse::Device);
+    EXPECT_FALSE(refused) << "a buffer that could not be released later is not made";
+    buffers.clear(); // every one released into the list, without allocating
+    memory.empty = false;
+    ctx->retire(1);
+    EXPECT_EQ(ctx->validation_messages(), 0u) << ctx->last_validation_message();
 }
 
 } // namespace

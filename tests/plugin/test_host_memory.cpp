@@ -241,6 +241,17 @@ TEST(HostMemory, aSystemWithAnAllocationHookAllocatesNothingElseInItsWholeLife) 
     destroy_and_expect_nothing_else(system, watch);
 }
 
+/// A System made from `desc` (its hooks the caller's) holding a moving 1 m box above the ground, as the
+/// tests of failing allocations step it.
+void make_with_moving_box(const SystemDesc& desc, std::unique_ptr<System>& system) {
+    ASSERT_TRUE(System::create(desc, system));
+    const Box box(1.0f);
+    MeshId mesh = 0;
+    InstanceId instance = 0;
+    ASSERT_TRUE(system->create_mesh(box.desc(), mesh));
+    ASSERT_TRUE(system->create_instance(mesh, translation(0, 2, 0), true, instance));
+}
+
 // The allocation hook may return null. When it does inside a step, the step fails with DeviceFailure, and
 // since a step that failed part-way leaves the System's state unknown, every later step refuses to run
 // rather than give wrong wind (it gave 0.2-0.6 m/s inside a static box, and 1.7 m/s for 2.95 upstream).
@@ -262,12 +273,7 @@ TEST(HostMemory, aStepWhoseAllocationFailsLeavesTheSystemRefusingLaterSteps) {
         };
         desc.hooks.free = [](void*, void* memory) { std::free(memory); };
         std::unique_ptr<System> system;
-        ASSERT_TRUE(System::create(desc, system));
-        const Box box(1.0f);
-        MeshId mesh = 0;
-        InstanceId instance = 0;
-        ASSERT_TRUE(system->create_mesh(box.desc(), mesh));
-        ASSERT_TRUE(system->create_instance(mesh, translation(0, 2, 0), true, instance));
+        ASSERT_NO_FATAL_FAILURE(make_with_moving_box(desc, system));
         failing.fail_at = failing.allocations + extra;
         const Outcome stepped = system->step(1.0f / 30.0f);
         if (stepped) continue; // the step made fewer allocations than that
@@ -307,12 +313,7 @@ TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {
         };
         desc.hooks.free = [](void*, void* memory) { std::free(memory); };
         desc.hooks.log = nullptr;
-        ASSERT_TRUE(System::create(desc, system));
-        const Box box(1.0f);
-        MeshId mesh = 0;
-        InstanceId instance = 0;
-        ASSERT_TRUE(system->create_mesh(box.desc(), mesh));
-        ASSERT_TRUE(system->create_instance(mesh, translation(0, 2, 0), true, instance));
+        make_with_moving_box(desc, system);
     };
     long per_step = 0;
     {
