@@ -17,12 +17,10 @@ shared bool group_ambiguous;
 /// Adds what sealed part k of cell i touches to its region (root): the solid voxels in its cell and across
 /// its faces, the moving ones with their cell's mean fragment velocity, weighted in quarters of all it
 /// touches, and 4 to the region's border (enclosing_motion).
-void add_contacts(int i, uint flags, uint k, uint root) {
+void add_contacts(int i, uint flags, uint k, uint root, CellBits faces[6]) {
     uint v = hot.voxels_per_cell;
     ivec3 n = hot.dims;
     ivec3 c = cell_from_index(n, i);
-    CellBits faces[6];
-    load_face_masks(faces);
     CellBits part = part_of(i, flags, k);
     uvec2 touch[7];
     ivec3 mean[7];
@@ -35,8 +33,7 @@ void add_contacts(int i, uint flags, uint k, uint root) {
         int j = cell_index(n, at);
         uint fj = side == 6u ? flags : flags_at(j);
         if ((fj & kCellCut) == 0u) continue;
-        CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(j, fj, 0u)), part_of(j, fj, 1u));
-        touch[side] = part_contact(part, solid, static_of(j, fj), side, v, faces);
+        touch[side] = part_contact(part, solid_of(j, fj), static_of(j, fj), side, v, faces);
         total += touch[side].x;
         if ((fj & kCellMoving) == 0u) {
             touch[side].y = touch[side].x; // a solid without moving fragments is still
@@ -99,8 +96,15 @@ void main() {
             if (counts[0] != 0u) atomicAdd(group_sealed, 1u);
         }
         FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
+        bool sealed[kCellParts];
         for (uint k = 0u; k < kCellParts; ++k)
-            if (counts[k] != 0u && roots[k] != kOutsideNode) add_contacts(i, flags, k, roots[k]);
+            sealed[k] = counts[k] != 0u && roots[k] != kOutsideNode;
+        if (sealed[0] || sealed[1]) {
+            CellBits faces[6];
+            load_face_masks(faces);
+            for (uint k = 0u; k < kCellParts; ++k)
+                if (sealed[k]) add_contacts(i, flags, k, roots[k], faces);
+        }
         if (add != 0u) atomicOr(WordsRef(hot.cell_flags).v[i], add);
     }
     barrier();

@@ -17,7 +17,8 @@ void main() {
     uint cells = uint(n.x * n.y * n.z);
     if (gl_LocalInvocationIndex == 0u) group_sealed = 0u;
     barrier();
-    if (uint(i) < cells && (flags_at(i) & kCellNoAir) == 0u && uf_find(fluid_node(uint(i), cells)) != kOutsideNode) {
+    if (uint(i) < cells && (flags_at(i) & kCellNoAir) == 0u &&
+        uf_find(fluid_node(uint(i), cells)) != kOutsideNode) {
         atomicOr(WordsRef(hot.cell_flags).v[i], kCellNoAir);
         FloatsRef(hot.cell_solid).v[i] = 1.0;
         ivec3 c = cell_from_index(n, i);

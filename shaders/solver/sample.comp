@@ -25,7 +25,8 @@ void main() {
         } else {
             int cell = cell_index(n, clamp(ivec3(floor(p)), ivec3(0), n - 1));
             uint flags = flags_at(cell);
-            u = in_solid(p, cell, flags) ? solid_velocity_at(p, cell, flags) : sample_velocity(kFieldVelocity, p);
+            u = in_solid(p, cell, flags) ? solid_velocity_at(p, cell, flags)
+                                         : sample_velocity(kFieldVelocity, p);
         }
         SamplesRef(sb().b.samples).v[i] = u;
     } else {

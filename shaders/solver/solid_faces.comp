@@ -34,13 +34,11 @@ CellBits static_at(ivec3 c, uint flags) {
 /// Cell i's solid in its voxel layer `layer`: its moving fragments where that holds moving voxels, else the
 /// region of a sealed part in it, else none (static).
 ivec4 solid_layer_motion(int i, uint flags, CellBits layer) {
-    uint v = hot.voxels_per_cell;
-    CellBits p0 = part_of(i, flags, 0u), p1 = part_of(i, flags, 1u);
-    CellBits moving = bits_and_not(bits_and_not(bits_and_not(layer, p0), p1), static_of(i, flags));
+    CellBits moving = bits_and_not(bits_and(solid_of(i, flags), layer), static_of(i, flags));
     if ((flags & kCellMoving) != 0u && bits_count(moving) != 0u) return IVec4Ref(hot.cell_motion).v[i];
-    LabelsRef labels = LabelsRef(hot.labels);
-    if (bits_count(bits_and(p0, layer)) != 0u) return region_of(labels.v[part_node(uint(i), 0u)]);
-    if (bits_count(bits_and(p1, layer)) != 0u) return region_of(labels.v[part_node(uint(i), 1u)]);
+    for (uint k = 0u; k < kCellParts; ++k)
+        if (bits_count(bits_and(part_of(i, flags, k), layer)) != 0u)
+            return region_of(LabelsRef(hot.labels).v[part_node(uint(i), k)]);
     return ivec4(0);
 }
 
@@ -48,13 +46,12 @@ ivec4 solid_layer_motion(int i, uint flags, CellBits layer) {
 /// fragments where its moving voxels touch its air, else the region of its sealed part in the layer, else
 /// none (a static wall).
 ivec4 air_cell_motion(int i, uint flags, CellBits layer, CellBits faces[6]) {
-    uint v = hot.voxels_per_cell;
     uint air = (flags & kCellSecondPart) != 0u ? 1u : 0u;
-    CellBits p0 = part_of(i, flags, 0u), p1 = part_of(i, flags, 1u);
-    CellBits moving = bits_and_not(bits_and_not(bits_and_not(bits_all(v), p0), p1), static_of(i, flags));
-    if ((flags & kCellMoving) != 0u && bits_count(bits_and(bits_dilate(air == 0u ? p0 : p1, v, faces), moving)) != 0u)
+    CellBits moving = bits_and_not(solid_of(i, flags), static_of(i, flags));
+    CellBits reach = bits_dilate(part_of(i, flags, air), hot.voxels_per_cell, faces);
+    if ((flags & kCellMoving) != 0u && bits_count(bits_and(reach, moving)) != 0u)
         return IVec4Ref(hot.cell_motion).v[i];
-    if (bits_count(bits_and(air == 0u ? p1 : p0, layer)) != 0u)
+    if (bits_count(bits_and(part_of(i, flags, 1u - air), layer)) != 0u)
         return region_of(LabelsRef(hot.labels).v[part_node(uint(i), 1u - air)]);
     return ivec4(0);
 }
@@ -102,8 +99,10 @@ void main() {
             CellBits layer_a = faces[air_lo ? 2u * axis + 1u : 2u * axis];
             CellBits layer_b = faces[air_lo ? 2u * axis : 2u * axis + 1u];
             // Beyond the domain all is air, which reaches the face.
-            bool reaches = !inside_cells(n, ca) || bits_count(bits_and(air_of(cell_index(n, ca), flags_a), layer_a)) != 0u;
-            m = reaches ? solid_layer_motion(b, flags_b, layer_b) : air_cell_motion(cell_index(n, ca), flags_a, layer_a, faces);
+            bool reaches = !inside_cells(n, ca) ||
+                           bits_count(bits_and(air_of(cell_index(n, ca), flags_a), layer_a)) != 0u;
+            m = reaches ? solid_layer_motion(b, flags_b, layer_b)
+                        : air_cell_motion(cell_index(n, ca), flags_a, layer_a, faces);
         } else {
             m = motion_of(lo, flags_lo) + motion_of(f, flags_hi);
         }

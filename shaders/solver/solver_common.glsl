@@ -257,6 +257,12 @@ CellBits part_of(int i, uint flags, uint k) {
     return b;
 }
 
+/// The solid voxels of level-0 cell i: those in neither of its parts (none in a cell without solid).
+CellBits solid_of(int i, uint flags) {
+    CellBits all = bits_all(hot.voxels_per_cell);
+    return bits_and_not(bits_and_not(all, part_of(i, flags, 0u)), part_of(i, flags, 1u));
+}
+
 /// The static solid voxels of level-0 cell i (none unless it is kCellStatic).
 CellBits static_of(int i, uint flags) {
     if ((flags & kCellStatic) == 0u) return bits_none();
@@ -383,7 +389,8 @@ vec3 solid_velocity_at(vec3 p, int cell, uint flags) {
     if ((flags & kCellCut) == 0u) return motion_velocity(region_of(labels.v[part_node(uint(cell), 0u)]));
     uint bit = voxel_bit(p, cell);
     for (uint k = 0u; k < kCellParts; ++k)
-        if (bits_get(part_of(cell, flags, k), bit)) return motion_velocity(region_of(labels.v[part_node(uint(cell), k)]));
+        if (bits_get(part_of(cell, flags, k), bit))
+            return motion_velocity(region_of(labels.v[part_node(uint(cell), k)]));
     if (bits_get(static_of(cell, flags), bit)) return vec3(0.0);
     return (flags & kCellMoving) != 0u ? motion_velocity(IVec4Ref(hot.cell_motion).v[cell]) : vec3(0.0);
 }

@@ -576,17 +576,19 @@ GUST_INLINE uint face_any_count(CellBits low, CellBits high, uint axis, uint v, 
     return bits_count(bits_or(bits_down(a, shift), b));
 }
 
-/// A sealed part's contact with solid voxels, as (voxels touched, of which static): in its own cell (`side`
-/// 6; `solid` and `still` are the cell's) or in the neighbour across face `side` (−x,+x,−y,+y,−z,+z; the
-/// neighbour's sets, counted as voxel pairs across the face).
-GUST_INLINE uvec2 part_contact(CellBits part, CellBits solid, CellBits still, uint side, uint v, CellBits faces[6]) {
+/// A sealed part's contact with solid voxels, as (voxels touched, of which static): in its own cell
+/// (`side` 6; `solid` and `still` are the cell's) or in the neighbour across face `side` (−x,+x,−y,+y,−z,
+/// +z; the neighbour's sets, counted as voxel pairs across the face).
+GUST_INLINE uvec2 part_contact(CellBits part, CellBits solid, CellBits still, uint side, uint v,
+                               CellBits faces[6]) {
     if (side == 6u) {
         CellBits ring = bits_and(bits_dilate(part, v, faces), solid);
         return uvec2(bits_count(ring), bits_count(bits_and(ring, still)));
     }
     uint axis = side / 2u;
     if ((side & 1u) != 0u)
-        return uvec2(face_open_count(part, solid, axis, v, faces), face_open_count(part, still, axis, v, faces));
+        return uvec2(face_open_count(part, solid, axis, v, faces),
+                     face_open_count(part, still, axis, v, faces));
     return uvec2(face_open_count(solid, part, axis, v, faces), face_open_count(still, part, axis, v, faces));
 }
 

@@ -84,13 +84,15 @@ struct CpuWind::Impl {
     CellBits part_of(std::size_t cell, std::uint32_t part) const;
     CellBits air_of(std::size_t cell) const;
     CellBits static_of(std::size_t cell) const;
+    /// As solver_common.glsl's solid_of.
+    CellBits solid_of(std::size_t cell) const;
     /// As fill_finish.comp's add_contacts.
-    void add_contacts(std::size_t cell, std::uint32_t part, std::uint32_t root, const CellBits layers[6]);
+    void add_contacts(std::size_t cell, std::uint32_t part, std::uint32_t root, CellBits faces[6]);
     /// As solver_common.glsl's region_of.
     glm::ivec4 region_of(std::uint32_t root) const;
     /// As solid_faces.comp's solid_layer_motion and air_cell_motion.
     glm::ivec4 solid_layer_motion(std::size_t i, const CellBits& layer) const;
-    glm::ivec4 air_cell_motion(std::size_t i, const CellBits& layer, const CellBits faces[6]) const;
+    glm::ivec4 air_cell_motion(std::size_t i, const CellBits& layer, CellBits faces[6]) const;
     glm::ivec4 solid_motion_of(std::size_t cell) const;
     void extend();
     void coarse_weights();
@@ -227,6 +229,11 @@ CellBits CpuWind::Impl::air_of(std::size_t cell) const {
     return part_of(cell, (flags[cell] & shaderio::kCellSecondPart) != 0 ? 1 : 0);
 }
 
+CellBits CpuWind::Impl::solid_of(std::size_t cell) const {
+    return shaderio::bits_and_not(
+        shaderio::bits_and_not(shaderio::bits_all(desc.voxels_per_cell), part_of(cell, 0)), part_of(cell, 1));
+}
+
 CellBits CpuWind::Impl::static_of(std::size_t cell) const {
     return (flags[cell] & shaderio::kCellStatic) != 0 ? fixed[cell] : shaderio::bits_none();
 }
@@ -244,37 +251,29 @@ glm::ivec4 CpuWind::Impl::solid_motion_of(std::size_t cell) const {
 
 glm::ivec4 CpuWind::Impl::solid_layer_motion(std::size_t i, const CellBits& layer) const {
     using namespace shaderio;
-    const CellBits p0 = part_of(i, 0), p1 = part_of(i, 1);
-    const CellBits moving = bits_and_not(bits_and_not(bits_and_not(layer, p0), p1), static_of(i));
+    const CellBits moving = bits_and_not(bits_and(solid_of(i), layer), static_of(i));
     if ((flags[i] & kCellMoving) != 0 && bits_count(moving) != 0) return motion[i];
-    if (bits_count(bits_and(p0, layer)) != 0) return region_of(roots[part_node(std::uint32_t(i), 0)]);
-    if (bits_count(bits_and(p1, layer)) != 0) return region_of(roots[part_node(std::uint32_t(i), 1)]);
+    for (std::uint32_t part = 0; part < kCellParts; ++part)
+        if (bits_count(bits_and(part_of(i, part), layer)) != 0)
+            return region_of(roots[part_node(std::uint32_t(i), part)]);
     return glm::ivec4(0);
 }
 
-glm::ivec4 CpuWind::Impl::air_cell_motion(std::size_t i, const CellBits& layer,
-                                          const CellBits faces[6]) const {
+glm::ivec4 CpuWind::Impl::air_cell_motion(std::size_t i, const CellBits& layer, CellBits faces[6]) const {
     using namespace shaderio;
-    const std::uint32_t v = desc.voxels_per_cell;
     const std::uint32_t air = (flags[i] & kCellSecondPart) != 0 ? 1 : 0;
-    const CellBits p0 = part_of(i, 0), p1 = part_of(i, 1);
-    const CellBits moving = bits_and_not(bits_and_not(bits_and_not(bits_all(v), p0), p1), static_of(i));
-    CellBits grid_faces[6];
-    std::copy(faces, faces + 6, grid_faces);
-    if ((flags[i] & kCellMoving) != 0 &&
-        bits_count(bits_and(bits_dilate(air == 0 ? p0 : p1, v, grid_faces), moving)) != 0)
-        return motion[i];
-    if (bits_count(bits_and(air == 0 ? p1 : p0, layer)) != 0)
+    const CellBits moving = bits_and_not(solid_of(i), static_of(i));
+    const CellBits reach = bits_dilate(part_of(i, air), desc.voxels_per_cell, faces);
+    if ((flags[i] & kCellMoving) != 0 && bits_count(bits_and(reach, moving)) != 0) return motion[i];
+    if (bits_count(bits_and(part_of(i, 1 - air), layer)) != 0)
         return region_of(roots[part_node(std::uint32_t(i), 1 - air)]);
     return glm::ivec4(0);
 }
 
 void CpuWind::Impl::add_contacts(std::size_t cell, std::uint32_t part, std::uint32_t root,
-                                 const CellBits layers[6]) {
+                                 CellBits faces[6]) {
     using namespace shaderio;
     const std::uint32_t v = desc.voxels_per_cell;
-    CellBits faces[6];
-    std::copy(layers, layers + 6, faces);
     const glm::ivec3 c = cell_from_index(k.dims, int(cell));
     const CellBits p = part_of(cell, part);
     glm::uvec2 touch[7];
@@ -287,8 +286,7 @@ void CpuWind::Impl::add_contacts(std::size_t cell, std::uint32_t part, std::uint
         if (!inside_cells(k.dims, at)) continue;
         const std::size_t j = std::size_t(cell_index(k.dims, at));
         if ((flags[j] & kCellCut) == 0) continue;
-        const CellBits solid = bits_and_not(bits_and_not(bits_all(v), part_of(j, 0)), part_of(j, 1));
-        touch[side] = part_contact(p, solid, static_of(j), side, v, faces);
+        touch[side] = part_contact(p, solid_of(j), static_of(j), side, v, faces);
         total += touch[side].x;
         if ((flags[j] & kCellMoving) == 0)
             touch[side].y = touch[side].x;
