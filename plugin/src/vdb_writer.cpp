@@ -1,6 +1,10 @@
 #include "vdb_writer.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <openvdb/io/Archive.h>
 #include <openvdb/openvdb.h>
 #include <sstream>
 
@@ -59,21 +63,41 @@ openvdb::GridPtrVec frame_grids(std::span<const std::uint32_t> voxels, const Gri
     return {occupancy_grid(voxels, grid), solid, velocity, pressure};
 }
 
-/// Writes `grids` to `path`, turning what OpenVDB throws (while the grids are made or written) into a
-/// failure naming the file.
+/// io::File's own write ignores the stream's state, so a full disk gave a truncated file and success.
+/// This writes the same seekable layout (Archive::write, as File::write does) through a stream that
+/// throws on any failed write or close.
+class CheckedFile : public openvdb::io::Archive {
+  public:
+    void write_to(const std::filesystem::path& path, const openvdb::GridPtrVec& grids) const {
+        std::ofstream os;
+        os.exceptions(std::ios::failbit | std::ios::badbit);
+        os.open(path, std::ios::out | std::ios::binary | std::ios::trunc);
+        Archive::write(os, grids, /*seekable=*/true);
+        os.close();
+    }
+};
+
+/// Writes `grids` to `path`, turning what OpenVDB or the stream throws (while the grids are made or
+/// written) into a failure naming the file. A regular file left half-written is removed: a reader
+/// must not take it for a result.
 template <class MakeGrids>
 Status write_grids(const std::filesystem::path& path, double voxel_size, MakeGrids make_grids) {
     if (Status s = check_voxel_size(voxel_size); !s)
         return Status::failure(path.string() + ": " + s.message());
+    std::string reason;
+    errno = 0;
     try {
         openvdb::initialize();
-        openvdb::io::File file(path.string());
-        file.write(make_grids());
-        file.close();
+        CheckedFile().write_to(path, make_grids());
+        return {};
+    } catch (const std::ios_base::failure&) {
+        reason = errno != 0 ? std::strerror(errno) : "the write failed";
     } catch (const std::exception& e) {
-        return Status::failure(path.string() + ": cannot write OpenVDB file: " + e.what());
+        reason = e.what();
     }
-    return {};
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(path, ec)) std::filesystem::remove(path, ec);
+    return Status::failure(path.string() + ": cannot write OpenVDB file: " + reason);
 }
 
 } // namespace
