@@ -7,6 +7,7 @@
 #include <glm/gtc/packing.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
 #include <limits>
+#include <sstream>
 
 namespace gust {
 
@@ -32,6 +33,10 @@ constexpr std::uint64_t kFragmentSlack = 4096;
 
 /// Large-triangle work items allocated before the first pass (each is one tile of a large triangle).
 constexpr std::uint64_t kInitialLargeItems = 4096;
+
+/// The smallest voxel size relative to the grid's largest coordinate: 2^-40 keeps 12 bits below a voxel
+/// in the doubles of an OpenVDB transform (which refuses a voxel its doubles cannot resolve).
+constexpr double kSmallestRelativeVoxel = 0x1p-40;
 
 template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) {
     return {a, N};
@@ -128,6 +133,18 @@ Status validate_grid(const GridDesc& grid) {
         return Status::failure("grid origin must be finite");
     if (!std::isfinite(grid.voxel_size * float(grid.res)))
         return Status::failure("grid extent overflows a float");
+    // The voxelizer subtracts the origin before it scales, so a far-off grid still voxelizes its float
+    // vertices; only the output's world transform needs a voxel to stand out against the coordinates.
+    const glm::dvec3 lo = glm::dvec3(grid.origin);
+    const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(lo + double(grid.voxel_size) * double(grid.res)));
+    const double farthest = std::max({far.x, far.y, far.z});
+    if (double(grid.voxel_size) < farthest * kSmallestRelativeVoxel) {
+        std::ostringstream text;
+        text << "voxel size " << grid.voxel_size << " is below 2^-40 of the grid's largest coordinate ("
+             << farthest << "), finer than a double transform places voxels: move the grid nearer the "
+             << "origin or use larger voxels";
+        return Status::failure(text.str());
+    }
     return {};
 }
 

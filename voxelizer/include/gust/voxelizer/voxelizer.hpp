@@ -192,7 +192,8 @@ class Voxelizer : public gpu::HostObject {
     std::uint64_t fragment_count_ = 0;
 };
 
-/// Checks a grid: res in [kMinRes, kMaxRes], finite origin, finite voxel size > 0.
+/// Checks a grid: res in [kMinRes, kMaxRes], finite origin, finite voxel size > 0, and voxels no finer than
+/// 2^-40 of the grid's largest coordinate (what OpenVDB's double transforms place).
 Status validate_grid(const GridDesc& grid);
 
 /// The grid docs/design.md uses when none is given: the box [lo, hi] made cubic about its centre and padded
