@@ -445,9 +445,10 @@ Status Context::pick_device(std::string_view override_spec) {
             .append(")");
         const bool usable = props.apiVersion >= VK_API_VERSION_1_3;
         if (!override_spec.empty()) {
-            const bool by_index = override_spec.find_first_not_of("0123456789") == std::string_view::npos &&
-                                  override_spec == index.data();
-            const bool by_name = contains_ignoring_case(props.deviceName, override_spec);
+            // A number is an index only: "5" must not pick "llvmpipe (LLVM 15.0.6)" by its name.
+            const bool numeric = override_spec.find_first_not_of("0123456789") == std::string_view::npos;
+            const bool by_index = numeric && override_spec == index.data();
+            const bool by_name = !numeric && contains_ignoring_case(props.deviceName, override_spec);
             if ((by_index || by_name) && physical_ == VK_NULL_HANDLE) {
                 if (!usable)
                     return Status::failure("device '" + std::string(props.deviceName) +
