@@ -212,7 +212,10 @@ GUST_INLINE float diffuse_face(uint field, uint axis, ivec3 f, float alpha) {
             bool inside = g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
             sum += inside ? load_face(field, face_index(n, axis, g)) : grid_ambient()[axis];
         }
-    return (load_face(kFieldVelocity, face_index(n, axis, f)) + alpha * sum) / (1.0f + 6.0f * alpha);
+    // (u0 + α·sum) / (1 + 6α) as u0·(1 − 6w) + sum·w with w = 1 / (6 + 1/α), finite for every α: a huge
+    // viscosity (α·sum past a float) gives the neighbours' mean, not inf / inf.
+    float w = 1.0f / (6.0f + 1.0f / clamp(alpha, 1e-30f, 1e30f));
+    return load_face(kFieldVelocity, face_index(n, axis, f)) * (1.0f - 6.0f * w) + sum * w;
 }
 
 // ---- Projection with face weights (Batty, Bertails and Bridson 2007) -------------------------------------
