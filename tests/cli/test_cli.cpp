@@ -224,6 +224,33 @@ TEST(CliVoxelize, unwritableOutputFailsNamingIt) {
     EXPECT_NE(run.err.find("/nonexistent/dir/out.vdb"), std::string::npos) << run.err;
 }
 
+// OpenVDB's own writer never looked at its stream: a full disk gave a cut-off file and exit 0.
+TEST(CliVoxelize, aFullDiskFailsNamingTheFileAndTheReason) {
+    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") + " --res 16 --out /dev/full");
+    EXPECT_EQ(run.code, 1);
+    EXPECT_NE(run.err.find("/dev/full: cannot write OpenVDB file: No space left on device"),
+              std::string::npos)
+        << run.err;
+    EXPECT_TRUE(run.out.empty()) << run.out;
+}
+
+// Voxels below 2^-40 of the grid's coordinates are more than OpenVDB's double transform places: it
+// threw after all the GPU work and left a file it could not read. Now the grid is refused first.
+TEST(CliVoxelize, voxelsTooFineForTheirCoordinatesAreRefusedBeforeAnyWork) {
+    const fs::path out = temp_vdb("far_" + std::to_string(::getpid()));
+    const CliRun run = gust("voxelize " + asset("scans/bunny.ply") +
+                            " --res 16 --origin 1e15,0,0 --size 1 --out " + out.string());
+    EXPECT_EQ(run.code, 1);
+    EXPECT_NE(run.err.find("--origin and --size: voxel size 0.0625 is below 2^-40"), std::string::npos)
+        << run.err;
+    EXPECT_EQ(run.err.find("voxelizing"), std::string::npos) << "refused before any work: " << run.err;
+    EXPECT_FALSE(fs::exists(out));
+    const CliRun near = gust("voxelize " + asset("scans/bunny.ply") +
+                             " --res 16 --origin 1e6,0,0 --size 1 --out " + out.string());
+    EXPECT_EQ(near.code, 0) << near.err;
+    fs::remove(out);
+}
+
 TEST(CliSimulate, writesStatsLinesAndOccupancyFramesMatchingTheReference) {
     const fs::path out = fs::temp_directory_path() / "gust_cli_simulate";
     fs::remove_all(out);
@@ -480,6 +507,14 @@ TEST(CliInfo, printsTheDeviceAndAMeshsCounts) {
     EXPECT_FALSE(info["device"].get<std::string>().empty());
     EXPECT_EQ(info["mesh"]["triangles"], 3674);
     EXPECT_EQ(info["mesh"]["vertices"], 1839);
+}
+
+TEST(CliInfo, aDeviceThatIsNotThereFailsAsInTheOtherCommands) {
+    for (const char* device : {"5", "no-such-device"}) {
+        const CliRun run = gust(std::string("info --device ") + device);
+        EXPECT_EQ(run.code, 1) << device << ": " << run.out;
+        EXPECT_NE(run.err.find("gust: error: "), std::string::npos) << device << ": " << run.err;
+    }
 }
 
 /// An empty folder of this test process's own under the temp directory.
