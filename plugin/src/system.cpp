@@ -41,11 +41,6 @@ constexpr std::uint64_t kKeepAnswers = 64;
 
 /// The most cells set_focus moves the focus at once.
 constexpr float kMaxFocusMoveCells = 1e6f;
-/// The farthest the focus may be from the world's origin, in cells: 2^19, where a float's step is 1/16 of
-/// a cell (a quarter voxel at 4 voxels per cell). Beyond it positions lose the voxels (a focus of 1e30
-/// made every voxel and query land in the wrong place).
-constexpr float kMaxFocusCells = 524288.0f;
-
 /// Whether `focus` lies too far from the world's origin for cells of `h` m (kMaxFocusCells).
 bool too_far_out(const glm::vec3& focus, float h) {
     return glm::any(glm::greaterThan(glm::abs(focus) / h, glm::vec3(kMaxFocusCells)));

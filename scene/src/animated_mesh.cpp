@@ -351,6 +351,12 @@ Status add_influences(const tinygltf::Model& model, std::size_t file_size,
     return {};
 }
 
+/// Whether `path` is a target an extension the file uses defines (KHR_animation_pointer's "pointer").
+bool extension_target(const tinygltf::Model& model, const std::string& path) {
+    const auto& used = model.extensionsUsed;
+    return path == "pointer" && std::find(used.begin(), used.end(), "KHR_animation_pointer") != used.end();
+}
+
 Result<Interpolation> interpolation(const std::string& name, const std::string& where) {
     if (name == "LINEAR") return Interpolation::linear;
     if (name == "STEP") return Interpolation::step;
@@ -437,8 +443,12 @@ Result<std::vector<anim::Clip>> read_clips(const tinygltf::Model& model, std::si
             } else if (source.target_path.empty()) {
                 // glTF requires the path (and the target): an exporter's slip, which froze the clip silently.
                 return R::failure(where + " has no target path (glTF requires target.path)");
-            } else {
+            } else if (source.target_path == "weights" || extension_target(model, source.target_path)) {
                 continue; // morph target weights and extension-defined targets do not move vertices here
+            } else {
+                // Anything else is a typo that would leave the clip frozen without a word.
+                return R::failure(where + " has unknown target path '" + source.target_path +
+                                  "' (glTF allows translation, rotation, scale and weights)");
             }
             // glTF lets an extension name the target instead of a node.
             if (source.target_node < 0) continue;

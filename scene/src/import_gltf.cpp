@@ -652,6 +652,22 @@ Status check_tinygltf_binding() {
     return status;
 }
 
+/// tinygltf's own reader takes a folder for a buffer's file (its size reads as 2^63 and the allocation
+/// threw) and would wait on a FIFO: a buffer or image the file names must be a regular file.
+bool read_external_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+    std::error_code ec;
+    const std::filesystem::file_status status = std::filesystem::status(path, ec);
+    if (!std::filesystem::is_regular_file(status)) {
+        if (err != nullptr) {
+            *err += path + (std::filesystem::is_directory(status) ? " is a directory, not a file"
+                            : std::filesystem::exists(status)     ? " is not a regular file"
+                                                                  : " not found");
+        }
+        return false;
+    }
+    return tinygltf::ReadWholeFile(out, err, path, nullptr);
+}
+
 } // namespace
 
 std::string primitive_name(const tinygltf::Model& model, std::size_t mesh, std::size_t primitive) {
@@ -711,6 +727,8 @@ Result<tinygltf::Model> parse_gltf(const std::vector<unsigned char>& bytes,
 
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
+    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_external_file,
+                           &tinygltf::WriteWholeFile, nullptr});
     tinygltf::Model model;
     std::string error;
     std::string warning;

@@ -263,7 +263,10 @@ float float_number(const json& value, const std::string& at) {
 
 float positive_float(const json& value, const std::string& at) {
     const float v = float_number(value, at);
-    if (!(v > 0.0f)) fail(at, "must be greater than 0 (found " + format(number(value, at)) + ")");
+    const double exact = number(value, at);
+    if (exact > 0.0 && !(v >= std::numeric_limits<float>::min()))
+        fail(at, "number " + format(exact) + " is too small for a 32-bit float (at least 1.2e-38)");
+    if (!(v > 0.0f)) fail(at, "must be greater than 0 (found " + format(exact) + ")");
     return v;
 }
 
@@ -355,6 +358,10 @@ DomainDesc read_domain(const json& value, const std::string& at) {
     if (domain.cell_size > kMaxCellSize) {
         fail(key_path(at, "cell_size"),
              "must be at most " + format(kMaxCellSize) + " m (found " + format(domain.cell_size) + ")");
+    }
+    if (glm::any(glm::greaterThan(glm::abs(domain.center) / domain.cell_size, glm::vec3(kMaxFocusCells)))) {
+        fail(key_path(at, "center"), "is more than 2^19 cells of " + format(domain.cell_size) +
+                                         " m from the world's origin, where floats cannot place voxels");
     }
     if (Result<GridDesc> grid = domain_grid(domain); !grid) fail(at, grid.message());
     return domain;
@@ -589,13 +596,19 @@ SceneDesc read_scene(const json& root, const fs::path& file) {
         scene.dt = number(*v, "dt");
         if (!(scene.dt > 0.0 && scene.dt <= kMaxStep))
             fail("dt", "must be in (0, " + format(kMaxStep) + "] seconds (found " + format(scene.dt) + ")");
+        if (!(static_cast<float>(scene.dt) >= std::numeric_limits<float>::min()))
+            fail("dt", "number " + format(scene.dt) + " is too small for a 32-bit float (at least 1.2e-38)");
     }
     if (const json* v = member(root, "domain")) scene.domain = read_domain(*v, "domain");
     if (const json* v = member(root, "ambient")) {
         object(*v, "ambient");
         allow_keys(*v, "ambient", {"velocity"});
-        if (const json* velocity = member(*v, "velocity"))
+        if (const json* velocity = member(*v, "velocity")) {
             scene.ambient_velocity = vec3(*velocity, "ambient.velocity");
+            if (glm::length(scene.ambient_velocity) > kMaxAmbientSpeed)
+                fail("ambient.velocity", "must be below " + format(kMaxAmbientSpeed) + " m/s (found " +
+                                             format(glm::length(scene.ambient_velocity)) + ")");
+        }
     }
     if (const json* v = member(root, "objects")) {
         array(*v, "objects");

@@ -106,7 +106,8 @@ Status validate_dt(float dt) {
 Status validate_ambient(glm::vec3 velocity) {
     if (!std::isfinite(velocity.x) || !std::isfinite(velocity.y) || !std::isfinite(velocity.z))
         return Status::failure("ambient wind must be finite");
-    if (glm::length(velocity) > 1e4f) return Status::failure("ambient wind must be below 10000 m/s");
+    if (glm::length(velocity) > kMaxAmbientSpeed)
+        return Status::failure("ambient wind must be below 10000 m/s");
     return Status{};
 }
 

@@ -115,6 +115,11 @@ DeviceRequirements device_requirements();
 /// chain (which must hold both), leaving the host's other flags as they are.
 Outcome add_required_features(VkPhysicalDeviceFeatures2& features);
 
+/// The farthest the focus may be from the world's origin, in cells: 2^19, where a float's step is 1/16 of a
+/// cell (a quarter voxel at 4 voxels per cell). Beyond it positions lose the voxels (a focus of 1e30 made
+/// every voxel and query land in the wrong place).
+inline constexpr float kMaxFocusCells = 524288.0f;
+
 /// Where the wind is simulated and how finely. The longest axis in voxels (cells × voxels_per_cell), rounded
 /// up to a power of `branching`, must be at most 1024 (256 cells take 4 voxels per cell at branching 4, 2 at
 /// branching 8).

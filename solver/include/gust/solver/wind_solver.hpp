@@ -40,6 +40,8 @@ inline constexpr float kMinVoxelSize = 1e-4f;
 inline constexpr float kMaxCellSize = 1000.0f;
 /// The longest step a solver takes, seconds.
 inline constexpr float kMaxStep = 10.0f;
+/// The fastest ambient wind a solver takes, m/s.
+inline constexpr float kMaxAmbientSpeed = 1e4f;
 /// The most emitters a solver takes.
 inline constexpr std::size_t kMaxEmitterCount = 64;
 /// An emitter's largest |strength|, m/s, and largest falloff exponent.
