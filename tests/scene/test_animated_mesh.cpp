@@ -496,6 +496,23 @@ TEST_F(AnimatedMeshFile, rejectsAChannelWithoutATargetOrPathAndASkinWithoutJoint
     expect_failure(write("nojoints.gltf", no_joints.gltf), "/skins/0/joints is required");
 }
 
+TEST_F(AnimatedMeshFile, rejectsAnUnknownTargetPathAndSkipsMorphWeightsAndAnExtensionsPointer) {
+    // An unknown path was skipped, so a typo left the clip frozen without a word.
+    SkinnedTriangle typo;
+    typo.add_clip("move", typo.joint_a, "colour", {0, 1}, {0, 0, 0, 1, 0, 0});
+    expect_failure(write("colour.gltf", typo.gltf),
+                   "animation 'move' channel 0 has unknown target path 'colour'");
+    SkinnedTriangle pointer;
+    pointer.add_clip("move", pointer.joint_a, "pointer", {0, 1}, {0, 0, 0, 1, 0, 0});
+    expect_failure(write("pointer.gltf", pointer.gltf), "has unknown target path 'pointer'");
+    pointer.gltf.doc()["extensionsUsed"] = {"KHR_animation_pointer"};
+    EXPECT_EQ(load_ok(write("pointer_used.gltf", pointer.gltf)).clip_names(),
+              std::vector<std::string>{"move"});
+    SkinnedTriangle weights;
+    weights.add_clip("blend", weights.joint_a, "weights", {0, 1}, {0, 0, 0, 1, 0, 0});
+    EXPECT_EQ(load_ok(write("weights.gltf", weights.gltf)).clip_names(), std::vector<std::string>{"blend"});
+}
+
 TEST_F(AnimatedMeshFile, rejectsAnimatedMatrixNode) {
     SkinnedTriangle file;
     file.gltf.doc()["nodes"][static_cast<std::size_t>(file.joint_a)]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0,

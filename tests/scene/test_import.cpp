@@ -387,6 +387,15 @@ TEST_F(ImportTest, rejectsDirectory) {
     expect_failure(dir_ / "folder.obj", "is a directory");
 }
 
+TEST_F(ImportTest, rejectsAGltfBufferThatNamesAFolder) {
+    // tinygltf read the folder's size as 2^63 and failed on the allocation ("std::bad_alloc").
+    fs::create_directory(dir_ / "data.bin");
+    expect_failure(
+        write("folder_buffer.gltf",
+              R"({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "data.bin"}]})"),
+        "data.bin is a directory, not a file");
+}
+
 TEST_F(ImportTest, rejectsUnknownExtension) {
     expect_failure(write("mesh.abc", "anything"),
                    "unsupported extension '.abc' (expected .ply, .obj, .stl, .gltf, .glb)");
