@@ -261,11 +261,16 @@ float float_number(const json& value, const std::string& at) {
     return to_float(number(value, at), at);
 }
 
+/// Fails unless `value` (> 0) stays a normal float: 1e-300 would reach the solver as 0.
+void require_normal_float(double value, const std::string& at) {
+    if (!(static_cast<float>(value) >= std::numeric_limits<float>::min()))
+        fail(at, "number " + format(value) + " is too small for a 32-bit float (at least 1.2e-38)");
+}
+
 float positive_float(const json& value, const std::string& at) {
     const float v = float_number(value, at);
     const double exact = number(value, at);
-    if (exact > 0.0 && !(v >= std::numeric_limits<float>::min()))
-        fail(at, "number " + format(exact) + " is too small for a 32-bit float (at least 1.2e-38)");
+    if (exact > 0.0) require_normal_float(exact, at);
     if (!(v > 0.0f)) fail(at, "must be greater than 0 (found " + format(exact) + ")");
     return v;
 }
@@ -596,8 +601,7 @@ SceneDesc read_scene(const json& root, const fs::path& file) {
         scene.dt = number(*v, "dt");
         if (!(scene.dt > 0.0 && scene.dt <= kMaxStep))
             fail("dt", "must be in (0, " + format(kMaxStep) + "] seconds (found " + format(scene.dt) + ")");
-        if (!(static_cast<float>(scene.dt) >= std::numeric_limits<float>::min()))
-            fail("dt", "number " + format(scene.dt) + " is too small for a 32-bit float (at least 1.2e-38)");
+        require_normal_float(scene.dt, "dt");
     }
     if (const json* v = member(root, "domain")) scene.domain = read_domain(*v, "domain");
     if (const json* v = member(root, "ambient")) {

@@ -168,22 +168,23 @@ TEST(CliVoxelize, missingFileFailsNamingIt) {
 
 TEST(CliVoxelize, rejectsBadArguments) {
     const std::string bunny = asset("scans/bunny.ply");
+    // A file of this process's own: a stale /tmp/x.vdb left by anything else must not fail the test.
+    const std::string x = temp_vdb("bad_args_" + std::to_string(::getpid())).string();
+    fs::remove(x);
     for (const std::string& args :
-         {"voxelize " + bunny + " --res 4 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 2000 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --method magic --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --origin 0,0,0 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --origin 0,0 --size 1 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --origin 0,0,0 --size -1 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --origin nan,0,0 --size 1 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res -5 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16.5 --out /tmp/x.vdb",
-          "voxelize " + bunny + " --res 16 --out /tmp/x.vdb --colour red", "voxelize " + bunny + " --res 16",
+         {"voxelize " + bunny + " --res 4 --out " + x, "voxelize " + bunny + " --res 2000 --out " + x,
+          "voxelize " + bunny + " --res 16 --method magic --out " + x,
+          "voxelize " + bunny + " --res 16 --origin 0,0,0 --out " + x,
+          "voxelize " + bunny + " --res 16 --origin 0,0 --size 1 --out " + x,
+          "voxelize " + bunny + " --res 16 --origin 0,0,0 --size -1 --out " + x,
+          "voxelize " + bunny + " --res 16 --origin nan,0,0 --size 1 --out " + x,
+          "voxelize " + bunny + " --res -5 --out " + x, "voxelize " + bunny + " --res 16.5 --out " + x,
+          "voxelize " + bunny + " --res 16 --out " + x + " --colour red", "voxelize " + bunny + " --res 16",
           std::string("simulate scene.json --frames -1 --out /tmp/x")}) {
         const CliRun run = gust(args);
         EXPECT_EQ(run.code, 1) << args;
         EXPECT_NE(run.err.find("gust: error: "), std::string::npos) << args << ": " << run.err;
-        EXPECT_FALSE(fs::exists("/tmp/x.vdb")) << args;
+        EXPECT_FALSE(fs::exists(x)) << args;
     }
     const CliRun help = gust("voxelize --help");
     EXPECT_EQ(help.code, 0);
