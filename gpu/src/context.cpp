@@ -425,9 +425,16 @@ Status Context::init(const ContextDesc& desc) {
 
 Status Context::pick_device(std::string_view override_spec) {
     std::uint32_t count = 0;
-    vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
-    std::pmr::vector<VkPhysicalDevice> devices(count, host_memory_);
-    vk_.vkEnumeratePhysicalDevices(instance_, &count, devices.data());
+    VkResult listed = vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
+    std::pmr::vector<VkPhysicalDevice> devices(host_memory_);
+    if (listed == VK_SUCCESS) {
+        devices.resize(count);
+        listed = vk_.vkEnumeratePhysicalDevices(instance_, &count, devices.data());
+        devices.resize(count);
+    }
+    // Out of host memory the loader leaves the handles null, and reading their properties aborted.
+    if (listed != VK_SUCCESS && listed != VK_INCOMPLETE)
+        return Status::failure(std::string("vkEnumeratePhysicalDevices failed: ") + to_string(listed));
     if (devices.empty())
         return Status::failure("no Vulkan device found (install mesa-vulkan-drivers for lavapipe)");
 

@@ -281,6 +281,9 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::mem
         };
     if (desc.host) {
         const HostDevice& h = *desc.host;
+        if (!h.instance || !h.physical_device || !h.device || !h.get_instance_proc_addr)
+            return invalid(
+                "host: instance, physical_device, device and get_instance_proc_addr must not be null");
         gpu::HostDevice host;
         host.instance = h.instance;
         host.physical_device = h.physical_device;
@@ -400,10 +403,16 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
     if (b != 2 && b != 4 && b != 8) return invalid("domain.branching must be 2, 4 or 8");
 
     return guarded([&]() -> Outcome {
+        // The System first, so that a failed allocation of either frees what came before.
+        std::unique_ptr<System> system(new (desc.hooks) System());
         HookResource memory(desc.hooks);
         void* place = memory.allocate(sizeof(Impl), alignof(Impl));
-        std::unique_ptr<System> system(new (desc.hooks) System());
-        system->impl_ = new (place) Impl(desc.hooks);
+        try {
+            system->impl_ = new (place) Impl(desc.hooks);
+        } catch (...) {
+            memory.deallocate(place, sizeof(Impl), alignof(Impl));
+            throw;
+        }
         Impl& m = *system->impl_;
         m.solver_desc = solver_desc;
         m.branching = b;

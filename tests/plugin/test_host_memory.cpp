@@ -241,6 +241,37 @@ TEST(HostMemory, aSystemWithAnAllocationHookAllocatesNothingElseInItsWholeLife) 
     destroy_and_expect_nothing_else(system, watch);
 }
 
+// System::create allocated its state before the System itself: when the second allocation failed, the
+// first was never freed.
+TEST(HostMemory, aCreateWhoseAllocationFailsFreesWhatItTookAndSaysSo) {
+    struct Failing {
+        Watch watch;
+        long allocations = 0, fail_at = 0;
+    };
+    for (const long at : {0L, 1L, 2L}) {
+        SCOPED_TRACE("allocation " + std::to_string(at));
+        Failing failing{{}, 0, at};
+        SystemDesc desc = small_desc(failing.watch);
+        desc.hooks.user = &failing;
+        desc.hooks.allocate = [](void* user, std::size_t bytes, std::size_t alignment) -> void* {
+            auto* f = static_cast<Failing*>(user);
+            if (f->allocations++ == f->fail_at) return nullptr;
+            ++f->watch.live;
+            return allocate(bytes, alignment);
+        };
+        desc.hooks.free = [](void* user, void* memory) {
+            --static_cast<Failing*>(user)->watch.live;
+            std::free(memory);
+        };
+        desc.hooks.log = nullptr;
+        std::unique_ptr<System> system;
+        const Outcome created = System::create(desc, system);
+        EXPECT_EQ(created.code(), ErrorCode::DeviceFailure) << created.message();
+        EXPECT_EQ(system, nullptr);
+        EXPECT_EQ(failing.watch.live, 0) << "host allocations not freed";
+    }
+}
+
 /// A System made from `desc` (its hooks the caller's) holding a moving 1 m box above the ground, as the
 /// tests of failing allocations step it.
 void make_with_moving_box(const SystemDesc& desc, std::unique_ptr<System>& system) {

@@ -474,6 +474,14 @@ TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {
     desc.device = "no such device";
     EXPECT_EQ(System::create(desc, system).code(), ErrorCode::DeviceUnsupported);
     EXPECT_EQ(system, nullptr);
+    desc = small_desc(watch);
+    const HostDevice empty_host{};
+    desc.host = &empty_host;
+    const Outcome null_host = System::create(desc, system);
+    EXPECT_EQ(null_host.code(), ErrorCode::InvalidArgument) << "null handles are bad arguments";
+    EXPECT_NE(std::string(null_host.message()).find("must not be null"), std::string::npos)
+        << null_host.message();
+    EXPECT_EQ(system, nullptr);
     EXPECT_EQ(watch.live, 0);
     EXPECT_EQ(library_version(), kHeaderVersion);
 }
