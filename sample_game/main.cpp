@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     app.add_option("--out", out,
                    "folder for PNG frames, the animated WebP and stats.jsonl (headless default out/sample)");
     app.add_option("--png-every", options.png_every, "headless: write every K-th frame's PNG")
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::Range(1u, 1000000u));
     app.add_option("--width", options.width, "frame width in pixels")->check(CLI::Range(64u, 8192u));
     app.add_option("--height", options.height, "frame height in pixels")->check(CLI::Range(64u, 8192u));
     std::string quality = "auto";

@@ -237,7 +237,7 @@ typedef struct gust_wind_texture {
     uint32_t extent[3];         ///< texels per axis
     float world_to_texture[16]; ///< column-major: uvw = world_to_texture * (p, 1), domain -> [0, 1]^3
     VkImageLayout layout;       ///< VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step
-    uint64_t frame;             ///< the frame whose wind it holds
+    uint64_t frame;             ///< steps taken when written (0 before any): its step's stats frame + 1
 } gust_wind_texture;
 
 /// What one step did; per-pass GPU milliseconds via gust_system_stats_pass.

@@ -257,7 +257,7 @@ struct WindTexture {
     Mat4 world_to_texture;
     /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step.
     VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    std::uint64_t frame = 0; ///< steps taken when it was written (0 before the first)
+    std::uint64_t frame = 0; ///< steps taken when written (0 before any): its step's FrameStats::frame + 1
 };
 
 /// What one step did (GPU milliseconds per pass where the device has timestamps).
