@@ -85,11 +85,18 @@ class HookResource final : public std::pmr::memory_resource {
   public:
     explicit HookResource(const Hooks& hooks) : hooks_(hooks) {}
 
+    /// Whether the hook has refused an allocation: Vulkan then fails with its own error (a failed
+    /// vkCreateInstance read as an unsupported device), which this tells apart.
+    bool ran_out() const { return ran_out_; }
+
   private:
     void* do_allocate(std::size_t bytes, std::size_t alignment) override {
         if (!hooks_.allocate) return ::operator new(bytes, std::align_val_t(alignment));
         void* memory = hooks_.allocate(hooks_.user, bytes, alignment);
-        if (!memory) throw std::bad_alloc();
+        if (!memory) {
+            ran_out_ = true;
+            throw std::bad_alloc();
+        }
         return memory;
     }
     void do_deallocate(void* memory, std::size_t bytes, std::size_t alignment) override {
@@ -101,6 +108,7 @@ class HookResource final : public std::pmr::memory_resource {
     }
 
     Hooks hooks_;
+    bool ran_out_ = false;
 };
 
 /// Runs `body`, turning an exception from below (allocation) into an error: none crosses the API.
@@ -420,7 +428,10 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         m.focus = to_glm(desc.domain.focus);
         // Without an allocate hook Vulkan keeps the driver's own allocator.
         std::pmr::memory_resource* hooked = desc.hooks.allocate ? &m.memory : nullptr;
-        if (Outcome o = create_context(desc, m.hooks, hooked, m.ctx); !o) return o;
+        if (Outcome o = create_context(desc, m.hooks, hooked, m.ctx); !o)
+            return m.memory.ran_out()
+                       ? Outcome(ErrorCode::DeviceFailure, "out of host memory: " + o.message())
+                       : o;
 
         auto grid = voxel_grid(solver_desc, b);
         if (!grid) return invalid(grid.message());
