@@ -199,13 +199,11 @@ GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt,
         GpuEmitter em = load_emitter(e);
         float target = emitter_velocity(em, x)[axis];
         // Within its reach an omni emitter's radial wind, kept by the projection as a source
-        // (cell_source), is added to the ambient wind, and the air is driven there both ways, at the rate
-        // times its falloff (so other wind crosses its rim as it would): with the one-way drive,
-        // advection carried the faster air from the centre outwards and nothing slowed it, so the outflow
-        // grew past the rim (2.6 m/s 2 m beyond it after 60 steps, still growing).
-        float d = length(x - em.position);
-        if (em.type == kEmitterOmni && em.strength != 0.0f && d < em.radius)
-            u += (target + grid_ambient()[axis] - u) * rate * emitter_falloff(d, em.radius, em.falloff);
+        // (cell_source), is added to the ambient wind, and the air is driven there both ways: with the
+        // one-way drive, advection carried the faster air from the centre outwards and nothing slowed it,
+        // so the outflow grew past the rim (2.6 m/s 2 m beyond it after 60 steps, still growing).
+        if (em.type == kEmitterOmni && length(x - em.position) < em.radius)
+            u += (target + grid_ambient()[axis] - u) * rate;
         else
             u = emitter_drive(u, target, rate);
     }
