@@ -195,18 +195,8 @@ GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon
 GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
     if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
-    for (uint e = 0u; e < emitter_count(); ++e) {
-        GpuEmitter em = load_emitter(e);
-        float target = emitter_velocity(em, x)[axis];
-        // Within its reach an omni emitter's radial wind, kept by the projection as a source
-        // (cell_source), is added to the ambient wind, and the air is driven there both ways: with the
-        // one-way drive, advection carried the faster air from the centre outwards and nothing slowed it,
-        // so the outflow grew past the rim (2.6 m/s 2 m beyond it after 60 steps, still growing).
-        if (em.type == kEmitterOmni && length(x - em.position) < em.radius)
-            u += (target + grid_ambient()[axis] - u) * rate;
-        else
-            u = emitter_drive(u, target, rate);
-    }
+    for (uint e = 0u; e < emitter_count(); ++e)
+        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
     return u + confinement_change(axis, f, dt, epsilon);
 }
 
@@ -238,38 +228,12 @@ GUST_INLINE float face_flux(uint axis, ivec3 f) {
     return open * load_face(kFieldVelocity, i) + (1.0f - open) * load_face(kFieldSolid, i);
 }
 
-/// The divergence omni emitters ask of cell c (1/s): the net outward flux of their target velocities
-/// through the cell's open faces over its volume. A radial wind has a source at its centre and, where
-/// it falls off, a sink towards its rim; projected to zero divergence it all went (an 8 m/s omni
-/// emitter left 0.08 m/s), so the projection keeps this much, as Feldman, O'Brien and Arikan (2003)
-/// give an explosion's expanding gas a divergence source.
-GUST_INLINE float cell_source(ivec3 c) {
-    ivec3 n = grid_dims();
-    float size = grid_h();
-    vec3 centre = grid_origin() + (vec3(c) + vec3(0.5f)) * size;
-    float net = 0.0f;
-    for (uint e = 0u; e < emitter_count(); ++e) {
-        GpuEmitter em = load_emitter(e);
-        // A face centre lies within 0.87 h of the cell's.
-        if (em.type != kEmitterOmni || !(length(centre - em.position) < em.radius + size)) continue;
-        for (uint a = 0u; a < 3u; ++a) {
-            ivec3 lo = c, hi = c + axis_unit(a);
-            vec3 at_lo = grid_origin() + face_position(a, lo) * size;
-            vec3 at_hi = grid_origin() + face_position(a, hi) * size;
-            net += load_weight(face_index(n, a, hi)) * emitter_velocity(em, at_hi)[a] -
-                   load_weight(face_index(n, a, lo)) * emitter_velocity(em, at_lo)[a];
-        }
-    }
-    return net / size;
-}
-
-/// The divergence the projection drives to zero at cell c (1/s): the net outward flux over the cell's
-/// volume, less what omni emitters ask for (cell_source).
+/// The solver's divergence of cell c (1/s): net outward flux over the cell's volume.
 GUST_INLINE float cell_divergence(ivec3 c) {
     float net = 0.0f;
     for (uint a = 0u; a < 3u; ++a)
         net += face_flux(a, c + axis_unit(a)) - face_flux(a, c);
-    return net / grid_h() - cell_source(c);
+    return net / grid_h();
 }
 
 /// Face 2a + s of cell c of `level` (s = 0: the low side) in the Laplacian: its weight over h², 0 when

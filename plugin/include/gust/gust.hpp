@@ -271,11 +271,11 @@ struct FrameStats {
     std::uint64_t pool_bytes = 0;     ///< bytes of live tree blocks
     std::uint64_t fragment_bytes = 0; ///< bytes of the fragment lists
     std::uint64_t dense_bytes = 0;    ///< bytes a dense voxel grid of the same size would take
-    float divergence_before = 0.0f; ///< max |divergence| before projection (less omni emitters' source), 1/s
-    float divergence_after = 0.0f;  ///< the same after, 1/s
-    float residual = 0.0f;          ///< max |residual| of the pressure solve, 1/s
-    std::uint32_t cycles = 0;       ///< V-cycles the solve took (WindPressure::Jacobi: iterations)
-    bool converged = false;         ///< the solve met its tolerance
+    float divergence_before = 0.0f;   ///< max |divergence| before projection, 1/s
+    float divergence_after = 0.0f;    ///< the same after, 1/s
+    float residual = 0.0f;            ///< max |residual| of the pressure solve, 1/s
+    std::uint32_t cycles = 0;         ///< V-cycles the solve took (WindPressure::Jacobi: iterations)
+    bool converged = false;           ///< the solve met its tolerance
     /// The solve diverged (an inconsistent problem): it was stopped and this step projected nothing, so
     /// the wind stays bounded; converged is false. docs/solver.md "Stability".
     bool diverged = false;

@@ -111,7 +111,7 @@ struct SolidSource {
 struct WindStats {
     /// `memory` holds the pass timings.
     explicit WindStats(std::pmr::memory_resource* memory = std::pmr::get_default_resource()) : ms(memory) {}
-    double divergence_before = 0.0;    ///< max |divergence| before projection (less omni sources), 1/s
+    double divergence_before = 0.0;    ///< max |divergence| before projection, 1/s
     double divergence_after = 0.0;     ///< the same after, 1/s
     double residual = 0.0;             ///< max |residual| at the last check, 1/s
     std::uint32_t cycles = 0;          ///< V-cycles (multigrid) or iterations (Jacobi) run
