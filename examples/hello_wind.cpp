@@ -1,5 +1,5 @@
 // hello_wind: the smallest complete use of gust. It creates a wind System on its own Vulkan device,
-// places a static ground and a moving box, blows an ambient wind and an omni emitter, steps ten frames
+// places a static ground and a moving box, blows an ambient wind and a fan, steps ten frames
 // and prints the wind at a few points. Build it against an installed gust (examples/CMakeLists.txt):
 //   cmake -S examples -B build-hello -DCMAKE_PREFIX_PATH=<gust's install prefix>
 //   cmake --build build-hello && build-hello/hello_wind [--validation]
@@ -66,10 +66,11 @@ int main(int argc, char** argv) {
             "create_instance(box)"))
         return 1;
 
-    // A 4 m/s breeze along +x, and an omni emitter blowing 8 m/s outwards from a point 5 m to the side.
+    // A 4 m/s breeze along +x, and a fan 5 m to the side blowing 8 m/s towards -z within 3 m of it.
     gust::WindEmitter fan;
-    fan.type = gust::WindEmitterType::Omni;
+    fan.type = gust::WindEmitterType::Directional;
     fan.position = {0, 2, 5};
+    fan.direction = {0, 0, -1};
     fan.radius = 3.0f;
     fan.strength = 8.0f;
     if (!ok(wind->set_ambient({4, 0, 0}), "set_ambient") ||
