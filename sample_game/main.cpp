@@ -61,9 +61,17 @@ int main(int argc, char** argv) {
     CLI::Option* dt_option =
         app.add_option("--dt", dt, "fixed time step, s (default 1/30 headless; windowed: the clock)")
             ->check(CLI::Range(0.001f, 0.5f));
-    CLI::Option* views_option = app.add_option(
-        "--views", views,
-        "views to start with: any of q (hide triangles), g (hide grass), w, r, t, y (no tour)");
+    CLI::Option* views_option =
+        app.add_option("--views", views,
+                       "views to start with: any of q (hide triangles), g (hide grass), w, r, t, y (no tour)")
+            ->check(CLI::Validator(
+                [](const std::string& letters) {
+                    const std::size_t bad = letters.find_first_not_of("qgwrty,");
+                    return bad == std::string::npos
+                               ? std::string()
+                               : "takes letters from 'qgwrty', got '" + letters.substr(bad, 1) + "'";
+                },
+                "LETTERS"));
     CLI::Option* follow_option = app.add_flag("--follow", options.follow, "camera follows the fox (no tour)");
     app.add_flag("--validation", options.validation, "Khronos validation on; any message fails the run");
     app.add_option("--assets", assets, "the repository's assets/ folder");
@@ -89,11 +97,8 @@ int main(int argc, char** argv) {
         case 'y':
             options.views.arrows = true;
             break;
-        case ',':
+        default: // ',' (the validator above lets nothing else through)
             break;
-        default:
-            std::fprintf(stderr, "gust_sample: error: --views takes letters from 'qgwrty', got '%c'\n", v);
-            return 2;
         }
     }
     options.quality = *sample::parse_quality(quality);

@@ -298,6 +298,19 @@ TEST(SampleGame, autoQualityFollowsTheDeviceType) {
     fs::remove_all(out);
 }
 
+// --views checked its letters itself and exited 2, where every other bad flag gives CLI11's code.
+TEST(SampleGame, badFlagsFailWithOneExitCodeAndTheirReasonBeforeAnythingStarts) {
+    const Outcome views = run("--headless --views qx");
+    const Outcome png = run("--headless --png-every 0");
+    EXPECT_NE(views.exit_code, 0);
+    EXPECT_EQ(views.exit_code, png.exit_code) << views.output << png.output;
+    EXPECT_NE(views.output.find("takes letters from 'qgwrty', got 'x'"), std::string::npos) << views.output;
+    EXPECT_NE(png.output.find("not in range 1 to"), std::string::npos) << png.output;
+    for (const Outcome* r : {&views, &png})
+        EXPECT_EQ(r->output.find("headless on"), std::string::npos)
+            << "the device was created: " << r->output;
+}
+
 TEST(SampleGame, anUnknownQualityIsAClearErrorBeforeAnythingStarts) {
     const Outcome r = run("--headless --quality ultra");
     EXPECT_NE(r.exit_code, 0);
@@ -325,20 +338,19 @@ TEST(SampleGame, aPersonAtTheWindowTakesTheCameraFromTheTourAndCGivesItBack) {
     const std::string stats_file = (out / "stats.jsonl").string();
     const std::string game =
         std::string(GUST_SAMPLE_BINARY) + " --frames 3000 --dt 0.1 --out " + out.string() + kSmall;
-    const std::string script =
-        "frames() { cat " + stats_file +
-        " 2>/dev/null | wc -l; }; "
-        "advance() { n=$(frames); i=0; while [ $(frames) -lt $((n + 5)) ]; do "
-        "[ $i -lt 600 ] || { echo no new frames for a minute; kill $game; exit 1; }; "
-        "sleep 0.1; i=$((i + 1)); done; }; " +
-        game +
-        " & game=$!; "
-        "win=$(xdotool search --sync --name \"gust sample\"); "
-        "xdotool mousemove --window $win 96 54; advance; "
-        "xdotool mousedown 1 mousemove_relative 30 10 mouseup 1; advance; "
-        "xdotool key f key w; advance; "
-        "xdotool key c; advance; "
-        "xdotool key Escape; wait $game";
+    const std::string script = "frames() { cat " + stats_file +
+                               " 2>/dev/null | wc -l; }; "
+                               "advance() { n=$(frames); i=0; while [ $(frames) -lt $((n + 5)) ]; do "
+                               "[ $i -lt 600 ] || { echo no new frames for a minute; kill $game; exit 1; }; "
+                               "sleep 0.1; i=$((i + 1)); done; }; " +
+                               game +
+                               " & game=$!; "
+                               "win=$(xdotool search --sync --name \"gust sample\"); "
+                               "xdotool mousemove --window $win 96 54; advance; "
+                               "xdotool mousedown 1 mousemove_relative 30 10 mouseup 1; advance; "
+                               "xdotool key f key w; advance; "
+                               "xdotool key c; advance; "
+                               "xdotool key Escape; wait $game";
     // Single quotes: the script's variables belong to the shell inside xvfb-run, which has the display.
     const Outcome r = run_command("xvfb-run -a -s \"-screen 0 640x480x24\" sh -c '" + script + "'");
     ASSERT_EQ(r.exit_code, 0) << r.output;
