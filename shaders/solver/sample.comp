@@ -2,9 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // Reading the field for engines. pc.parity 0: per point, the velocity there: inside a solid (a voxel that
 // is not its cell's air, or a cell without air) the solid's own velocity, in the air trilinear on the faces
-// (extended into the solid, so no wall's zeros mix in), the ambient wind outside the grid. 1: per cell, a
-// texel of the wind texture (store_texel; finish.comp writes them at the end of a step). 2: per cell, the
-// velocity at its centre (cell_output) as three floats into `samples`.
+// (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind, the ambient wind
+// outside the grid. 1: per cell, a texel of the wind texture (store_texel; finish.comp writes them at the
+// end of a step). 2: per cell, the velocity at its centre (cell_output) as three floats into `samples`.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -26,7 +26,7 @@ void main() {
             int cell = cell_index(n, clamp(ivec3(floor(p)), ivec3(0), n - 1));
             uint flags = flags_at(cell);
             u = in_solid(p, cell, flags) ? solid_velocity_at(p, cell, flags)
-                                         : sample_velocity(kFieldVelocity, p);
+                                         : sample_velocity(kFieldVelocity, p) + omni_velocity(p);
         }
         SamplesRef(sb().b.samples).v[i] = u;
     } else {

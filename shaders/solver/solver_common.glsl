@@ -395,13 +395,13 @@ vec3 solid_velocity_at(vec3 p, int cell, uint flags) {
     return (flags & kCellMoving) != 0u ? motion_velocity(IVec4Ref(hot.cell_motion).v[cell]) : vec3(0.0);
 }
 
-/// Velocity at cell i's centre as reported: the air's (the mean of its faces), or in a cell without air
-/// the solid's own.
+/// Velocity at cell i's centre as reported: the air's (the mean of its faces, and the omni emitters'
+/// wind), or in a cell without air the solid's own.
 vec3 cell_output(int i) {
     uint flags = flags_at(i);
     ivec3 c = cell_from_index(grid_dims(), i);
     if ((flags & kCellNoAir) != 0u) return solid_velocity_at(vec3(c) + 0.5, i, flags);
-    return cell_velocity(kFieldVelocity, c);
+    return cell_velocity(kFieldVelocity, c) + omni_velocity(vec3(c) + 0.5);
 }
 
 layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };

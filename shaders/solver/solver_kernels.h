@@ -95,13 +95,29 @@ GUST_INLINE vec3 face_velocity(uint field, uint axis, ivec3 f) {
     return v;
 }
 
+/// The omni emitters' radial wind at p (cell units), m/s. A radial wind is all divergence, so it is not
+/// part of the solved field, whose projection removed it (an 8 m/s emitter left 0.08 m/s), nor can it
+/// be: kept as a divergence source, advection of that divergent field fed a rotational part no
+/// projection removes (1.3 m/s beyond the radius after 500 steps, still growing). It is added to the
+/// field where the air is carried and where the wind is reported, as a potential flow is superposed:
+/// the sum of the omni emitters' profiles.
+GUST_INLINE vec3 omni_velocity(vec3 p) {
+    vec3 x = grid_origin() + p * grid_h();
+    vec3 u = vec3(0.0f);
+    for (uint e = 0u; e < emitter_count(); ++e) {
+        GpuEmitter em = load_emitter(e);
+        if (em.type == kEmitterOmni) u += emitter_velocity(em, x);
+    }
+    return u;
+}
+
 /// Where the air at face f's centre was dt seconds ago (dt < 0: where it will be), in cell units,
-/// midpoint rule.
+/// midpoint rule, carried by the field and the omni emitters' wind.
 GUST_INLINE vec3 trace(uint axis, ivec3 f, float dt) {
     vec3 x = face_position(axis, f);
     float s = dt / grid_h();
-    vec3 mid = x - 0.5f * s * face_velocity(kFieldVelocity, axis, f);
-    return x - s * sample_velocity(kFieldVelocity, mid);
+    vec3 mid = x - 0.5f * s * (face_velocity(kFieldVelocity, axis, f) + omni_velocity(x));
+    return x - s * (sample_velocity(kFieldVelocity, mid) + omni_velocity(mid));
 }
 
 /// Semi-Lagrangian: face f of `field` carried by the velocity field over dt.
@@ -195,8 +211,11 @@ GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon
 GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
     if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
-    for (uint e = 0u; e < emitter_count(); ++e)
-        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
+    for (uint e = 0u; e < emitter_count(); ++e) {
+        GpuEmitter em = load_emitter(e);
+        // An omni emitter's wind is added where the field is read, not driven into it (omni_velocity).
+        if (em.type != kEmitterOmni) u = emitter_drive(u, emitter_velocity(em, x)[axis], rate);
+    }
     return u + confinement_change(axis, f, dt, epsilon);
 }
 

@@ -633,6 +633,64 @@ TEST_F(WindSolverTest, recordsTheCyclesTheLastStepSuggests) {
     EXPECT_TRUE(steps.back().converged);
 }
 
+// A radial wind is all divergence: driven into the field and projected, an 8 m/s omni emitter left
+// 0.08 m/s; kept as a divergence source it grew a wind beyond its radius step after step. Reported as
+// a potential flow added to the field, it is its profile, nothing moves beyond its radius however long
+// it blows, and in a breeze the two add up (a source in a uniform stream).
+TEST_F(WindSolverTest, anOmniEmitterBlowsItsProfileAddedToTheBreezeAndNothingBeyondItsRadius) {
+    SolverDesc desc;
+    desc.cells = {16, 16, 16};
+    const glm::vec3 centre(8.5f, 8.5f, 8.5f);
+    const float radius = 4.0f;
+    struct Case {
+        float strength;
+        float breeze;
+    };
+    for (const Case& c : {Case{8.0f, 0.0f}, Case{-8.0f, 0.0f}, Case{8.0f, 4.0f}}) {
+        auto solver = make(ctx(), desc);
+        ASSERT_TRUE(solver);
+        const Emitter omni{EmitterType::Omni, centre, {1, 0, 0}, radius, c.strength, 1.0f, 0.0f};
+        ASSERT_TRUE(solver->set_emitters({&omni, 1}));
+        ASSERT_TRUE(solver->set_ambient({c.breeze, 0.0f, 0.0f}));
+        ASSERT_TRUE(solver->set_velocity(uniform_field(desc.cells, {c.breeze, 0.0f, 0.0f})));
+        for (int i = 0; i < 200; ++i) {
+            auto stats = solver->step(0.05f);
+            ASSERT_TRUE(stats) << stats.message();
+            EXPECT_TRUE(stats->converged) << "step " << i;
+        }
+        auto cells = solver->read_cell_velocity();
+        ASSERT_TRUE(cells);
+        const glm::ivec3 n(desc.cells);
+        const glm::vec3 breeze(c.breeze, 0.0f, 0.0f);
+        float worst_inside = 0.0f, worst_beyond = 0.0f;
+        for (int z = 0; z < n.z; ++z)
+            for (int y = 0; y < n.y; ++y)
+                for (int x = 0; x < n.x; ++x) {
+                    const glm::vec3 at = glm::vec3(x, y, z) + 0.5f - centre;
+                    const float d = glm::length(at);
+                    const glm::vec3 profile = d > 0.0f && d < radius
+                                                  ? at / d * (c.strength * (1.0f - d / radius))
+                                                  : glm::vec3(0.0f);
+                    const glm::vec3 u = (*cells)[std::size_t(x + n.x * (y + n.y * z))];
+                    const float off = glm::length(u - breeze - profile);
+                    (d < radius ? worst_inside : worst_beyond) =
+                        std::max(d < radius ? worst_inside : worst_beyond, off);
+                }
+        EXPECT_LT(worst_inside, 0.01f) << "strength " << c.strength << " breeze " << c.breeze;
+        EXPECT_LT(worst_beyond, 0.01f) << "strength " << c.strength << " breeze " << c.breeze;
+        // Points between cell centres, as engines query them: 1.5 m out along +x and 2 m out along -y.
+        const glm::vec3 points[] = {centre + glm::vec3(1.5f, 0.0f, 0.0f),
+                                    centre - glm::vec3(0.0f, 2.0f, 0.0f)};
+        auto sampled = solver->sample(points);
+        ASSERT_TRUE(sampled) << sampled.message();
+        const float s = c.strength;
+        EXPECT_NEAR(glm::distance((*sampled)[0], breeze + glm::vec3(s * (1.0f - 1.5f / radius), 0.0f, 0.0f)),
+                    0.0f, 0.01f);
+        EXPECT_NEAR(glm::distance((*sampled)[1], breeze - glm::vec3(0.0f, s * (1.0f - 2.0f / radius), 0.0f)),
+                    0.0f, 0.01f);
+    }
+}
+
 TEST_F(WindSolverTest, tenTimesTheCflStepStaysBounded) {
     SolverDesc desc;
     desc.cells = {16, 16, 16};

@@ -204,7 +204,7 @@ typedef struct gust_mesh_desc {
 /// A wind source's profile (docs/solver.md "Emitters" draws each).
 typedef enum gust_wind_emitter_type {
     GUST_WIND_EMITTER_DIRECTIONAL = 0,   ///< flow along direction within radius
-    GUST_WIND_EMITTER_OMNI = 1,          ///< outward from position (moves little air: docs/solver.md)
+    GUST_WIND_EMITTER_OMNI = 1,          ///< outward from position, added to the solved wind
     GUST_WIND_EMITTER_VORTEX = 2,        ///< swirl about direction
     GUST_WIND_EMITTER_CAPSULE_MOTOR = 3, ///< flow along a capsule from position, length along direction
     GUST_WIND_EMITTER_CONE_MOTOR = 4,    ///< flow along a cone from position, length along direction

@@ -222,7 +222,7 @@ struct MeshDesc {
 /// A wind source (docs/solver.md "Emitters" draws each profile).
 enum class WindEmitterType : std::int32_t {
     Directional = 0,
-    Omni = 1, ///< outward from position; moves little air (docs/solver.md, "Emitters")
+    Omni = 1, ///< outward from position, added to the solved wind (docs/solver.md, "Emitters")
     Vortex = 2,
     CapsuleMotor = 3,
     ConeMotor = 4
