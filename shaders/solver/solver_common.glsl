@@ -46,6 +46,7 @@ struct HotBindings {
     uint voxels_per_cell;
     uint cell_words;
     uint emitter_count;
+    uint omni_count;
 };
 HotBindings hot;
 void load_bindings() {
@@ -81,6 +82,7 @@ void load_bindings() {
     hot.voxels_per_cell = r.b.voxels_per_cell;
     hot.cell_words = r.b.cell_words;
     hot.emitter_count = r.b.emitter_count;
+    hot.omni_count = r.b.omni_count;
 }
 
 ivec3 grid_dims() { return hot.dims; }
@@ -90,6 +92,7 @@ vec3 grid_ambient() { return hot.ambient; }
 uint grid_open_sides() { return hot.open_sides; }
 GridLevel load_level(uint l) { return sb().b.level[l]; }
 uint emitter_count() { return hot.emitter_count; }
+uint omni_count() { return hot.omni_count; }
 GpuEmitter load_emitter(uint i) { return EmittersRef(hot.emitters).v[i]; }
 
 uint64_t face_field(uint field) {

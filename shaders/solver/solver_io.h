@@ -218,7 +218,7 @@ struct SolverBindings {
     float max_solid_speed;    ///< m/s: fragment velocities are clamped to this length
     uint smoothing;           ///< red-black sweeps per V-cycle level and leg (SolverDesc::smoothing)
     uint cycles_recorded;     ///< V-cycles (Jacobi: blocks) this step records, for the stats
-    uint pad_bindings;
+    uint omni_count;          ///< the first emitters are the omni ones (set_emitters puts them first)
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };

@@ -11,7 +11,7 @@
 //   vec4 load_confinement(int index);          level-0 cells: cell_confinement, made earlier in the step
 //   float load_phi(int index);                 level-0 cells: the step's pressure solution φ
 //   GridLevel load_level(uint level);
-//   uint emitter_count();  GpuEmitter load_emitter(uint i);
+//   uint emitter_count();  GpuEmitter load_emitter(uint i);  uint omni_count();  (omni emitters first)
 
 // ---- Sampling the staggered grid ------------------------------------------------------------------
 
@@ -104,10 +104,8 @@ GUST_INLINE vec3 face_velocity(uint field, uint axis, ivec3 f) {
 GUST_INLINE vec3 omni_velocity(vec3 p) {
     vec3 x = grid_origin() + p * grid_h();
     vec3 u = vec3(0.0f);
-    for (uint e = 0u; e < emitter_count(); ++e) {
-        GpuEmitter em = load_emitter(e);
-        if (em.type == kEmitterOmni) u += emitter_velocity(em, x);
-    }
+    for (uint e = 0u; e < omni_count(); ++e)
+        u += emitter_velocity(load_emitter(e), x);
     return u;
 }
 
@@ -211,11 +209,10 @@ GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon
 GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
     if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
-    for (uint e = 0u; e < emitter_count(); ++e) {
-        GpuEmitter em = load_emitter(e);
-        // An omni emitter's wind is added where the field is read, not driven into it (omni_velocity).
-        if (em.type != kEmitterOmni) u = emitter_drive(u, emitter_velocity(em, x)[axis], rate);
-    }
+    // The omni emitters, first in the list, are added where the field is read, not driven into it
+    // (omni_velocity).
+    for (uint e = omni_count(); e < emitter_count(); ++e)
+        u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
     return u + confinement_change(axis, f, dt, epsilon);
 }
 

@@ -15,7 +15,8 @@ struct HostKernels {
     glm::vec3 origin{0.0f}, ambient{0.0f};
     uint open_sides = 0;
     std::vector<GridLevel> levels;
-    std::vector<GpuEmitter> emitters;
+    std::vector<GpuEmitter> emitters; ///< omni first (omni_first)
+    uint omni = 0;
     std::vector<float> face[kFaceFields]; ///< kField*
     std::vector<float> weights;
     std::vector<float> cell[kCellFields]; ///< kCell*
@@ -35,6 +36,7 @@ struct HostKernels {
     float load_phi(int index) const { return cell[kCellPhi][std::size_t(index)]; }
     GridLevel load_level(uint l) const { return levels[l]; }
     uint emitter_count() const { return uint(emitters.size()); }
+    uint omni_count() const { return omni; }
     GpuEmitter load_emitter(uint i) const { return emitters[i]; }
 
 #include "solver/solver_kernels.h"
@@ -159,9 +161,8 @@ Status CpuWind::set_ambient(glm::vec3 velocity) {
 
 Status CpuWind::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
-    impl_->k.emitters.clear();
-    for (const Emitter& e : emitters)
-        impl_->k.emitters.push_back(detail::to_gpu(e));
+    impl_->k.emitters.resize(emitters.size());
+    impl_->k.omni = detail::omni_first(emitters, impl_->k.emitters);
     return Status{};
 }
 

@@ -64,6 +64,16 @@ std::uint32_t cell_words(std::uint32_t v) {
     return (v * v * v + 31) / 32;
 }
 
+std::uint32_t omni_first(std::span<const Emitter> emitters, std::span<shaderio::GpuEmitter> out) {
+    std::uint32_t omni = 0;
+    for (const Emitter& e : emitters)
+        if (e.type == EmitterType::Omni) out[omni++] = to_gpu(e);
+    std::uint32_t next = omni;
+    for (const Emitter& e : emitters)
+        if (e.type != EmitterType::Omni) out[next++] = to_gpu(e);
+    return omni;
+}
+
 shaderio::GpuEmitter to_gpu(const Emitter& e) {
     shaderio::GpuEmitter g{};
     g.position = e.position;

@@ -4,6 +4,7 @@
 #include "solver/solver_io.h"
 
 #include <gust/solver/wind_solver.hpp>
+#include <span>
 #include <vector>
 
 namespace gust::detail {
@@ -16,6 +17,9 @@ build_levels(glm::uvec3 cells, float cell_size,
 void face_masks(std::uint32_t v, std::uint32_t* out);
 std::uint32_t cell_words(std::uint32_t v);
 shaderio::GpuEmitter to_gpu(const Emitter& e);
+/// Writes `emitters` into `out` (at least as many), omni emitters first and each group in its order;
+/// returns how many are omni (the kernels' omni_count).
+std::uint32_t omni_first(std::span<const Emitter> emitters, std::span<shaderio::GpuEmitter> out);
 /// Share of an emitter's gap closed in dt seconds.
 float emitter_rate(float dt, float response);
 /// Jacobi iterations between convergence checks.

@@ -89,6 +89,7 @@ struct WindSolver::Impl : gpu::HostObject {
     /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.
     std::uint32_t coarse_level = 0;
     std::uint32_t emitter_count = 0;
+    std::uint32_t omni_count = 0; ///< the first emitter_data are omni (omni_first)
     std::array<shaderio::GpuEmitter, shaderio::kMaxEmitters> emitter_data{}; ///< written by each step
     /// Which of the two velocity buffers holds the velocity (SolverPush::swap bit 0): a pass writes the
     /// next field into the other, and they trade places instead of being copied.
@@ -360,8 +361,7 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
 
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
-    for (std::size_t i = 0; i < emitters.size(); ++i)
-        impl_->emitter_data[i] = detail::to_gpu(emitters[i]);
+    impl_->omni_count = detail::omni_first(emitters, impl_->emitter_data);
     impl_->emitter_count = std::uint32_t(emitters.size());
     return Status{};
 }
@@ -560,6 +560,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     b.ambient = ambient_;
     b.open_sides = shaderio::open_sides_for(ambient_);
     b.emitter_count = m.emitter_count;
+    b.omni_count = m.omni_count;
     b.tree_nodes = b.tree_masks = b.fragments = b.fragment_count = b.fragment_motion = 0;
     b.tree_levels = 0;
     b.fragment_capacity = 0;
