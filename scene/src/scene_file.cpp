@@ -268,8 +268,8 @@ void require_normal_float(double value, const std::string& at) {
 }
 
 float positive_float(const json& value, const std::string& at) {
-    const float v = float_number(value, at);
     const double exact = number(value, at);
+    const float v = to_float(exact, at);
     if (exact > 0.0) require_normal_float(exact, at);
     if (!(v > 0.0f)) fail(at, "must be greater than 0 (found " + format(exact) + ")");
     return v;
