@@ -239,7 +239,7 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
     EXPECT_EQ(ctx.validation_messages(), 0u) << ctx.last_validation_message();
 }
 
-/// Issue 31's overflowing first frame, small: a box turned about two axes fills about 15,000 bricks of
+/// Issue 31's overflowing first frame, small: a box turned about two axes fills about 11,900 bricks of
 /// 4^3 voxels on a 256^3 grid, where the default pools of branching 4 hold 4,095.
 struct TurnedBox {
     TurnedBox() {
