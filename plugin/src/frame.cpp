@@ -32,6 +32,7 @@ Outcome Frame::create_texture() {
     image.usage =
         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
     image.volume = true;
+    image.name = "gust wind texture";
     auto created = gpu::Image::create(*ctx_, image);
     if (!created) return device_failure(created.status());
     image_ = std::move(*created);
@@ -42,6 +43,7 @@ Outcome Frame::create_texture() {
         VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     if (ctx_->vk().vkCreateSampler(ctx_->device(), &sampler, ctx_->allocator(), &sampler_) != VK_SUCCESS)
         return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
+    ctx_->name(VK_OBJECT_TYPE_SAMPLER, std::uint64_t(sampler_), "gust wind sampler");
     texture_.image = image_.handle();
     texture_.view = image_.view();
     texture_.sampler = sampler_;

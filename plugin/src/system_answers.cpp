@@ -5,10 +5,7 @@
 #include "vdb_writer.hpp"
 #endif
 
-#include "tree/tree_io.h"
-
 #include <algorithm>
-#include <bit>
 
 namespace gust {
 
@@ -161,58 +158,27 @@ Outcome System::debug_voxels(std::span<VoxelCoord> out, std::size_t& count) {
 Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
     count = 0;
     return guarded([&]() -> Outcome {
-        Impl& m = *impl_;
-        const SparseTree& tree = m.world->tree();
-        auto pool = tree.node_pool();
-        if (!pool) return device_failure(pool.status());
-        const std::pmr::vector<glm::uvec2>& nodes = *pool;
-        const GridDesc& grid = m.world->grid();
-        const std::uint32_t log2_b = std::uint32_t(std::countr_zero(tree.branching()));
-        const std::uint32_t children = 1u << (3 * log2_b), depth = tree.depth();
-        const std::size_t blocks = nodes.size() / children;
-        if (Outcome o = m.check(blocks > 0, "the node pool holds the root's block", __LINE__); !o) return o;
-
-        // Level by level, so a short `out` still holds the coarse levels whole. A block reached twice (or
-        // the root's block reached as a child) would mean a corrupt pool; refusing it bounds the walk.
-        struct Visit {
-            std::uint32_t node;
-            glm::uvec3 corner; ///< in voxels
-        };
-        std::pmr::vector<Visit> level_nodes({{0, glm::uvec3(0)}}, &m.memory), next(&m.memory);
-        std::pmr::vector<bool> reached(blocks, false, &m.memory);
-        reached[0] = true;
-        std::size_t total = 0;
-        std::uint32_t extent = grid.res; // voxels across a node of this level
-        for (std::uint32_t level = 0; !level_nodes.empty(); ++level, extent >>= log2_b) {
-            const bool bricks = level + 1 == depth;
-            next.clear();
-            for (const Visit& v : level_nodes) {
-                const glm::uvec2 node = nodes[v.node];
-                if (total < out.size()) {
-                    TreeNode& n = out[total];
-                    n.min = to_vec3(grid.origin + glm::vec3(v.corner) * grid.voxel_size);
-                    n.size = float(extent) * grid.voxel_size;
-                    n.level = level;
-                    n.state = node.y == shaderio::kPinned                   ? TreeNodeState::Static
-                              : tree.frame() != 0 && node.y == tree.frame() ? TreeNodeState::Reached
-                                                                            : TreeNodeState::Stale;
-                    n.refined = node.x != 0;
-                }
-                ++total;
-                if (bricks || node.x == 0) continue;
-                const bool fresh = node.x < blocks && !reached[node.x];
-                if (Outcome o = m.check(fresh, "every child block is in the pool, once", __LINE__); !o)
-                    return o;
-                reached[node.x] = true;
-                const std::uint32_t child_extent = extent >> log2_b, mask = (1u << log2_b) - 1;
-                for (std::uint32_t c = 0; c < children; ++c) {
-                    const glm::uvec3 slot(c & mask, (c >> log2_b) & mask, c >> (2 * log2_b));
-                    next.push_back({node.x * children + c, v.corner + slot * child_extent});
-                }
-            }
-            level_nodes.swap(next);
+        // SparseTree decodes its own pool, coarse levels first, so a short `out` still holds them whole.
+        // A pool that does not decode (a block linked twice or out of range) breaks an internal invariant.
+        auto nodes = impl_->world->tree().nodes();
+        if (!nodes) {
+            static_cast<void>(impl_->check(false, "the tree's node pool decodes", __LINE__));
+            return device_failure(nodes.status());
         }
-        count = total;
+        const GridDesc& grid = impl_->world->grid();
+        const std::size_t written = std::min(out.size(), nodes->size());
+        for (std::size_t i = 0; i < written; ++i) {
+            const TreeNodeView& v = (*nodes)[i];
+            TreeNode& n = out[i];
+            n.min = to_vec3(grid.origin + glm::vec3(v.min) * grid.voxel_size);
+            n.size = float(v.extent) * grid.voxel_size;
+            n.level = v.level;
+            n.state = v.state == TreeNodeView::State::Static    ? TreeNodeState::Static
+                      : v.state == TreeNodeView::State::Reached ? TreeNodeState::Reached
+                                                                : TreeNodeState::Stale;
+            n.refined = v.refined;
+        }
+        count = nodes->size();
         return {};
     });
 }
