@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
-// parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
+// parts (cell_parts in solver_cells.h); starts the outside-air fill (each part its own union-find set) and
 // clears what the last step summed here. Only cells whose voxels may have changed are gathered again: with
 // pc.parity 0 (the static solids as at the last step) a cell that held no moving voxels then and whose
 // leaf bricks hold none now keeps its parts and static voxels; pc.parity 1 redoes every cell. Thread 0

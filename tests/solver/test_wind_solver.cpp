@@ -2,7 +2,7 @@
 // through solid faces, analytic potential flow, drag and wakes, thin walls, multigrid convergence,
 // stability at large dt, bad input and scrolling. Small grids: lavapipe runs them in CI.
 #include "solver/solid_world.hpp"
-#include "solver/solver_io.h"
+#include "solver/solver_math.h"
 #include "support/gpu_env.hpp"
 
 #include <chrono>

@@ -48,7 +48,7 @@ inline constexpr std::size_t kMaxEmitterCount = 64;
 inline constexpr float kMaxEmitterStrength = 1e4f;
 inline constexpr float kMaxEmitterFalloff = 64.0f;
 
-/// Wind-source profiles (see emitter_velocity in shaders/solver/solver_io.h).
+/// Wind-source profiles (see emitter_velocity in shaders/solver/solver_math.h).
 enum class EmitterType { Directional, Omni, Vortex, CapsuleMotor, ConeMotor };
 
 /// A wind source. The air within reach is sped up along the emitter's flow towards `strength` with a
