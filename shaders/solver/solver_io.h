@@ -17,9 +17,6 @@ GUST_CONST uint kTileSide = 8;
 /// Levels of at most this many cells are solved together by one workgroup in shared memory
 /// (coarse_solve.comp), so none of them costs a dispatch of its own.
 GUST_CONST uint kCoarseCells = 4096;
-/// advect.comp's and smooth.comp's modes (SolverPush::parity 0 to 4), one pipeline each.
-GUST_CONST uint kAdvectModes = 5;
-GUST_CONST uint kSmoothModes = 5;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
 /// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3 (the layout of the voxel-set arrays).
@@ -230,8 +227,8 @@ struct SolverPush {
     GUST_ADDRESS bindings; ///< SolverBindings
     float dt;              ///< seconds
     uint level;            ///< multigrid level the pass works on
-    uint parity;           ///< the pass's mode, or which field it reads
-    uint iterations;       ///< sweeps, or a pass-specific count
+    uint mode;             ///< the pass's job (the k<Pass>* modes below; diffuse.comp: the field it reads)
+    uint iterations;       ///< smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level
     float param;           ///< pass-specific value
     /// Bit 0: kFieldVelocity is velocity_tmp and kFieldTmp velocity; bit 1: the conjugate-gradient
     /// iteration's parity (x and p read from their B buffers).
@@ -239,6 +236,54 @@ struct SolverPush {
     ivec3 shift; ///< scroll: cells the field moves by
     uint pad;
 };
+
+// ---- Pass modes (SolverPush::mode) ------------------------------------------------------------------
+// advect.comp and smooth.comp also take the mode as specialization constant 0 and get one pipeline per
+// mode (their k*Modes): a compiler then keeps only that mode's code, where a CPU device would execute every
+// mode's.
+
+/// advect.comp: the velocity's next field into kFieldTmp.
+GUST_CONST uint kAdvectSemiLagrangian = 0u; ///< semi-Lagrangian advection, then the forces (forced_face)
+GUST_CONST uint kAdvectForward = 1u;  ///< MacCormack's forward pass, and the range it blended
+GUST_CONST uint kAdvectBackward = 2u; ///< MacCormack's backward pass, kFieldTmp -> kFieldBack
+GUST_CONST uint kAdvectCorrect = 3u;  ///< MacCormack's clamped correction, then the forces, in place
+GUST_CONST uint kAdvectForces = 4u;   ///< no advection: the forces alone
+GUST_CONST uint kAdvectModes = 5u;
+
+/// smooth.comp: one level's smoothing in shared-memory tiles.
+GUST_CONST uint kSmoothFirst = 0u;      ///< level 0, a conjugate-gradient iteration's first pass: x_k and r
+GUST_CONST uint kSmoothDown = 1u;       ///< a level between, downward: from zero against its right-hand side
+GUST_CONST uint kSmoothUp = 2u;         ///< upward: the downward values plus the coarser level's correction
+GUST_CONST uint kSmoothUpBeta = 3u;     ///< level 0 upward, conjugate gradients: kSmoothUp, then β's sums
+GUST_CONST uint kSmoothFirstPlain = 4u; ///< kSmoothFirst of plain multigrid (α = 1, p the last z)
+GUST_CONST uint kSmoothModes = 5u;
+
+/// coarse_solve.comp: the levels from SolverPush::level down in one workgroup.
+GUST_CONST uint kCoarseCorrection = 0u; ///< the finer level's correction (level 0: plain multigrid's V-cycle)
+GUST_CONST uint kCoarseBeta = 1u;       ///< level 0, conjugate gradients: the whole V-cycle, then β's sums
+
+/// solid_cells.comp: which cells gather their voxels again.
+GUST_CONST uint kSolidChanged = 0u; ///< those a moving surface reaches now or reached at the last step
+GUST_CONST uint kSolidAll = 1u;     ///< every cell (the static solids or the grid changed)
+
+/// start.comp: the pressure solve's start.
+GUST_CONST uint kStartCold = 0u; ///< from zero
+GUST_CONST uint kStartWarm = 1u; ///< also the warm start's q = Lφ and its scale (warm_scale)
+
+/// jacobi.comp: the Jacobi baseline.
+GUST_CONST uint kJacobiSweep = 0u; ///< one damped sweep
+GUST_CONST uint kJacobiCheck = 1u; ///< the residual's maximum and the convergence check
+
+/// sample.comp: reading the field for engines.
+GUST_CONST uint kSamplePoints = 0u; ///< per query point, the velocity there
+GUST_CONST uint kSampleTexels = 1u; ///< per cell, its texel of the wind texture (finish.comp's, when bound)
+GUST_CONST uint kSampleCells = 2u;  ///< per cell, the velocity at its centre
+
+/// diffuse.comp reads face field SolverPush::mode (kFieldVelocity, then each iteration's target) and
+/// writes this one: the iterations alternate between kFieldTmp and kFieldBack.
+GUST_INLINE uint diffuse_target(uint from) {
+    return from == kFieldTmp ? kFieldBack : kFieldTmp;
+}
 
 GUST_NAMESPACE_END
 

@@ -733,13 +733,13 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     u = std::move(forced);
     if (desc.viscosity > 0.0f) {
         const float alpha = desc.viscosity * dt / (desc.cell_size * desc.cell_size);
-        std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
+        std::uint32_t from = shaderio::kFieldVelocity;
         for (std::uint32_t it = 0; it < detail::kViscosityIterations; ++it) {
+            const std::uint32_t to = shaderio::diffuse_target(from);
             m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
                 k.face[to][std::size_t(i)] = k.diffuse_face(from, a, f, alpha);
             });
             from = to;
-            to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
         }
         u = k.face[from];
     }

@@ -74,7 +74,7 @@ std::uint64_t cells_of(glm::ivec3 dims) {
 
 struct WindSolver::Impl : gpu::HostObject {
     explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
-    /// advect.comp and smooth.comp specialized to each mode (SolverPush::parity) the solver uses.
+    /// advect.comp and smooth.comp specialized to each mode (SolverPush::mode) the solver uses.
     std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
     std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
     gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_link, fluid_finish,
@@ -103,14 +103,14 @@ struct WindSolver::Impl : gpu::HostObject {
         gpu::update(ctx, cmd, bindings, &b, sizeof(b));
         gpu::barrier(ctx, cmd);
     }
-    /// Records sample.comp in `mode` (0 query points, 1 the texture's texels, 2 cell-centre velocities) over
-    /// `count` threads, after the bindings `b` the caller set.
+    /// Records sample.comp in `mode` (shaderio::kSample*) over `count` threads, after the bindings `b` the
+    /// caller set.
     void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
                             std::uint64_t count) {
         put_bindings(ctx, cmd);
         SolverPush push{};
         push.bindings = bindings.address();
-        push.parity = mode;
+        push.mode = mode;
         push.swap = swap;
         const LevelDispatch g = groups_for(count);
         sample.bind(cmd, &push, sizeof(push));
@@ -190,7 +190,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
-    // advect.comp and smooth.comp once per mode (SolverPush::parity) the solver uses, the mode a
+    // advect.comp and smooth.comp once per mode (SolverPush::mode) the solver uses, the mode a
     // specialization constant: a compiler then keeps only that mode's code, where a CPU device would
     // execute every mode's.
     auto create_modes = [&](std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
@@ -203,9 +203,14 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         }
         return {};
     };
-    static constexpr std::uint32_t kMacCormackModes[] = {1, 2, 3}, kSemiLagrangianMode[] = {0},
-                                   kForcesMode[] = {4};
-    static constexpr std::uint32_t kPcgModes[] = {0, 1, 2, 3}, kMultigridModes[] = {1, 2, 4};
+    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectBackward,
+                                                         shaderio::kAdvectCorrect},
+                                   kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
+                                   kForcesMode[] = {shaderio::kAdvectForces};
+    static constexpr std::uint32_t kPcgModes[] = {shaderio::kSmoothFirst, shaderio::kSmoothDown,
+                                                  shaderio::kSmoothUp, shaderio::kSmoothUpBeta},
+                                   kMultigridModes[] = {shaderio::kSmoothDown, shaderio::kSmoothUp,
+                                                        shaderio::kSmoothFirstPlain};
     const std::span<const std::uint32_t> advect_modes =
         desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
         : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
@@ -430,7 +435,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.b.origin = origin_;
         m.b.samples = out_buffer->address();
-        m.record_sample_pass(ctx_, cmd, 2, cell_count());
+        m.record_sample_pass(ctx_, cmd, shaderio::kSampleCells, cell_count());
     });
     if (!s) return s;
     std::vector<glm::vec3> out(cell_count());
@@ -474,7 +479,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     m.b.points = points;
     m.b.samples = samples;
     m.b.point_count = count;
-    m.record_sample_pass(ctx_, cmd, 0, count);
+    m.record_sample_pass(ctx_, cmd, shaderio::kSamplePoints, count);
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {
@@ -488,7 +493,7 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     Impl& m = *impl_;
     m.b.origin = origin_;
     m.b.texels = texels.address();
-    m.record_sample_pass(ctx_, cmd, 1, cell_count());
+    m.record_sample_pass(ctx_, cmd, shaderio::kSampleTexels, cell_count());
 }
 
 Status WindSolver::scroll(glm::ivec3 cells) {
@@ -626,9 +631,8 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     // The solid boundary in three timed parts: the cells' voxels and the moving fragments (solid), the
     // outside-air fill (fill), the faces' open fractions and solid velocities (faces).
     m.profiler.begin(cmd, "solid");
-    push.parity = all_cells ? 1u : 0u;
+    push.mode = all_cells ? shaderio::kSolidAll : shaderio::kSolidChanged;
     run(m.solid_cells, cell_groups);
-    push.parity = 0;
     m.solid_motion.bind(cmd, &push, sizeof(push));
     m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
     gpu::barrier(ctx_, cmd);
@@ -656,13 +660,15 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.begin(cmd, "advect");
     push.param = detail::emitter_rate(dt, desc_.emitter_response);
     if (desc_.advection == Advection::MacCormack) {
-        for (std::uint32_t mode : {1u, 2u, 3u}) {
-            push.parity = mode;
+        for (std::uint32_t mode :
+             {shaderio::kAdvectForward, shaderio::kAdvectBackward, shaderio::kAdvectCorrect}) {
+            push.mode = mode;
             run(m.advect[mode], face_groups);
         }
     } else {
-        push.parity = desc_.advection == Advection::SemiLagrangian ? 0u : 4u;
-        run(m.advect[push.parity], face_groups);
+        push.mode = desc_.advection == Advection::SemiLagrangian ? shaderio::kAdvectSemiLagrangian
+                                                                 : shaderio::kAdvectForces;
+        run(m.advect[push.mode], face_groups);
     }
     m.swap ^= 1u;
     m.profiler.end(cmd);
@@ -670,13 +676,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     if (desc_.viscosity > 0.0f) {
         m.profiler.begin(cmd, "viscosity");
         push.param = desc_.viscosity * dt / (desc_.cell_size * desc_.cell_size);
-        std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
+        std::uint32_t from = shaderio::kFieldVelocity;
         for (std::uint32_t i = 0; i < detail::kViscosityIterations; ++i) {
-            push.parity = from;
-            push.iterations = to;
+            push.mode = from;
             run(m.diffuse, face_groups);
-            from = to;
-            to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
+            from = shaderio::diffuse_target(from);
         }
         if (from == shaderio::kFieldBack) {
             const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
@@ -688,9 +692,8 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     }
 
     m.profiler.begin(cmd, "pressure");
-    push.parity = 0;
+    push.mode = warm ? shaderio::kStartWarm : shaderio::kStartCold;
     push.level = 0;
-    push.iterations = warm ? 1u : 0u;
     run(m.start, cell_groups);
     const bool cg = desc_.pressure == PressureSolver::MultigridPCG;
     if (desc_.pressure == PressureSolver::Jacobi) {
@@ -699,11 +702,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         gpu::barrier(ctx_, cmd);
         for (std::uint32_t block = 0; block < recorded; ++block) {
             for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
-                push.parity = 0;
+                push.mode = shaderio::kJacobiSweep;
                 push.swap = (i & 1u) << 1;
                 run_slot(m.jacobi, 0);
             }
-            push.parity = 1;
+            push.mode = shaderio::kJacobiCheck;
             push.swap = 0;
             run_slot(m.jacobi, 0);
         }
@@ -713,23 +716,23 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.swap = (k & 1u) << 1;
             push.iterations = k;
             push.level = 0;
-            push.parity = cg ? 0u : 4u;
-            run_slot(m.smooth[push.parity], shaderio::kTileSlot);
+            push.mode = cg ? shaderio::kSmoothFirst : shaderio::kSmoothFirstPlain;
+            run_slot(m.smooth[push.mode], shaderio::kTileSlot);
             for (std::uint32_t l = 0; l < coarse; ++l) {
                 push.level = l + 1;
                 run_slot(m.restrict_, l + 1);
                 if (l + 1 == coarse) break;
-                push.parity = 1;
-                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l + 1);
+                push.mode = shaderio::kSmoothDown;
+                run_slot(m.smooth[push.mode], shaderio::kTileSlot + l + 1);
             }
             push.level = coarse;
-            push.parity = coarse == 0 && cg ? 1u : 0u;
+            push.mode = coarse == 0 && cg ? shaderio::kCoarseBeta : shaderio::kCoarseCorrection;
             push.iterations = detail::kCoarseSweeps;
             run_slot(m.coarse_solve, shaderio::kCoarseSlot);
             for (std::uint32_t l = coarse; l-- > 0;) {
                 push.level = l;
-                push.parity = l == 0 && cg ? 3u : 2u;
-                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l);
+                push.mode = l == 0 && cg ? shaderio::kSmoothUpBeta : shaderio::kSmoothUp;
+                run_slot(m.smooth[push.mode], shaderio::kTileSlot + l);
             }
             if (cg) {
                 push.level = 0;
