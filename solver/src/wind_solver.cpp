@@ -316,7 +316,7 @@ Status WindSolver::set_velocity(std::span<const float> faces) {
 }
 
 void WindSolver::bind_texels(const gpu::Buffer& texels) {
-    impl_->b.texels = texels.address();
+    impl_->bound_texels = impl_->b.texels = texels.address();
 }
 
 namespace {
@@ -423,6 +423,8 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     m.b.origin = origin_;
     m.b.texels = texels.address();
     m.record_sample_pass(ctx_, cmd, shaderio::kSampleTexels, cell_count());
+    // The steps write the bound texels alone; the next pass's bindings carry them again.
+    m.b.texels = m.bound_texels;
 }
 
 Status WindSolver::scroll(glm::ivec3 cells) {

@@ -76,6 +76,9 @@ struct WindSolver::Impl : gpu::HostObject {
     std::uint64_t last_static_generation = 0;
     glm::ivec3 last_voxel_offset{0};
     shaderio::SolverBindings b{};
+    /// The texels every step writes in its last pass (bind_texels; 0: none). b.texels holds them between
+    /// passes: record_texels points it at its own buffer for one pass only.
+    VkDeviceAddress bound_texels = 0;
 };
 
 } // namespace gust
