@@ -1,3 +1,5 @@
+// CpuWind's set-up, its step in the GPU's order of passes and its pressure solve; the solid boundary is in
+// cpu_wind_solid.cpp.
 #include "cpu_wind_impl.hpp"
 
 #include <algorithm>

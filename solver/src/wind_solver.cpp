@@ -1,3 +1,6 @@
+// WindSolver's creation (its pipelines, one per pass mode where a pass has several; its buffers and
+// bindings) and its API around the step: fields, queries, texels, scrolling. The step is recorded in
+// wind_solver_step.cpp.
 #include "wind_solver_impl.hpp"
 
 #include <bit>
