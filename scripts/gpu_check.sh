@@ -176,7 +176,7 @@ if [[ "$small" == 1 ]]; then
 else
     solver_args=(--sizes 32x16x32 64 128 --repeat 5 --budget 20 --solve-max-cells 2097152 --frame-cycles 2
         --tolerance 1e-3)
-    voxelize_args=(--res 512 --repeat 5)
+    voxelize_args=(--res 512 --repeat 3)
     tree_args=(--repeat 5)
     sample_args=(--quality high --frames 300)
 fi
