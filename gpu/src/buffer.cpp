@@ -129,7 +129,7 @@ Status download(Context& ctx, const Buffer& src, void* data, std::size_t bytes, 
         std::memcpy(data, static_cast<const char*>(src.mapped()) + offset, bytes);
         return {};
     }
-    auto staging = Buffer::create(ctx, bytes, MemoryUse::Readback);
+    auto staging = Buffer::create(ctx, bytes, MemoryUse::Readback, 0, "gust download staging");
     if (!staging) return staging.status();
     Status s = ctx.submit_and_wait([&](VkCommandBuffer cmd) {
         VkBufferCopy region{offset, 0, bytes};

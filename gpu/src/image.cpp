@@ -25,6 +25,7 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     if (VkResult r = vk.vkCreateImage(ctx.device(), &info, ctx.allocator(), &img.image_); r != VK_SUCCESS)
         return Result<Image>::failure(std::string("vkCreateImage failed: ") + to_string(r));
+    ctx.name(VK_OBJECT_TYPE_IMAGE, std::uint64_t(img.image_), desc.name);
     VkMemoryRequirements req;
     vk.vkGetImageMemoryRequirements(ctx.device(), img.image_, &req);
     const std::uint32_t type =
@@ -45,6 +46,7 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     if (VkResult r = vk.vkCreateImageView(ctx.device(), &view, ctx.allocator(), &img.view_); r != VK_SUCCESS)
         return Result<Image>::failure(std::string("vkCreateImageView failed: ") + to_string(r));
+    ctx.name(VK_OBJECT_TYPE_IMAGE_VIEW, std::uint64_t(img.view_), desc.name);
     return img;
 }
 

@@ -52,6 +52,7 @@ Result<Pipeline> Pipeline::compute(Context& ctx, const char* name, std::span<con
     p.ctx_ = &ctx;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
     if (Status s = p.create_layout(push_constant_bytes); !s) return s;
+    ctx.name(VK_OBJECT_TYPE_PIPELINE_LAYOUT, std::uint64_t(p.layout_), name);
     auto module = make_module(ctx, spirv);
     if (!module) return module.status();
     VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
@@ -77,6 +78,7 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const char* name, const Graphi
     p.ctx_ = &ctx;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
     if (Status s = p.create_layout(desc.push_constant_bytes); !s) return s;
+    ctx.name(VK_OBJECT_TYPE_PIPELINE_LAYOUT, std::uint64_t(p.layout_), name);
 
     std::pmr::vector<VkPipelineShaderStageCreateInfo> stages(ctx.memory());
     std::pmr::vector<VkShaderModule> modules(ctx.memory());

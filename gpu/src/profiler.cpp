@@ -13,6 +13,7 @@ Result<Profiler> Profiler::create(Context& ctx, std::uint32_t max_passes) {
     if (VkResult r = ctx.vk().vkCreateQueryPool(ctx.device(), &info, ctx.allocator(), &p.pool_);
         r != VK_SUCCESS)
         return Result<Profiler>::failure(std::string("vkCreateQueryPool failed: ") + to_string(r));
+    ctx.name(VK_OBJECT_TYPE_QUERY_POOL, std::uint64_t(p.pool_), "gust timestamps");
     p.capacity_ = max_passes;
     p.names_ = static_cast<const char**>(
         ctx.memory()->allocate(kFrameSlots * max_passes * sizeof(const char*), alignof(const char*)));

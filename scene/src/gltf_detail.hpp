@@ -11,10 +11,23 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <string>
+#include <string_view>
 #include <tiny_gltf.h>
 #include <vector>
 
 namespace gust::detail {
+
+/// Whether `bytes` begin as a GLB file does ("glTF").
+bool is_glb(const std::vector<unsigned char>& bytes);
+
+/// The JSON text of a .gltf file or of a GLB's first chunk, after checking the GLB framing.
+/// Defined in gltf_schema.cpp.
+Result<std::string_view> json_text(const std::vector<unsigned char>& bytes);
+
+/// Checks `text` against the property types of the glTF 2.0 core schema (the names tinygltf would drop
+/// or misread) and its required extensions against those that leave the geometry as it is.
+/// Defined in gltf_schema.cpp.
+Status check_json(std::string_view text);
 
 /// Parses the glTF or GLB file held in `bytes` after checking its JSON against the core schema's
 /// property types and its required extensions; external buffers are read from next to `path`.

@@ -1,12 +1,13 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Per face, the velocity's next field into kFieldTmp. Mode (kMode) 0: semi-Lagrangian advection, then the
-// emitters (closing pc.param of the gap), the ambient wind on the domain's faces and vorticity confinement
-// (forced_face), all in this one pass. MacCormack: 1 the forward pass (kFieldTmp, and the range it
-// blended into kFieldLow and kFieldHigh), 2 the backward pass (kFieldTmp -> kFieldBack), 3 the clamped
-// correction and the same forces, in place in kFieldTmp (each thread reads and writes only its own face
-// there). 4: no advection, the forces alone.
-// The mode is the pipeline's specialization constant 0 (pc.parity holds it too), so a compiler keeps only
+// Per face, the velocity's next field into kFieldTmp. Mode (kMode) kAdvectSemiLagrangian: semi-Lagrangian
+// advection, then the emitters (closing pc.param of the gap), the ambient wind on the domain's faces and
+// vorticity confinement (forced_face), all in this one pass. MacCormack: kAdvectForward the forward pass
+// (kFieldTmp, and the range it blended into kFieldLow and kFieldHigh), kAdvectBackward the backward pass
+// (kFieldTmp -> kFieldBack), kAdvectCorrect the clamped correction and the same forces, in place in
+// kFieldTmp (each thread reads and writes only its own face there). kAdvectForces: no advection, the
+// forces alone.
+// The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -21,18 +22,18 @@ void main() {
     uint axis;
     ivec3 f = face_from_index(n, i, axis);
     float epsilon = sb().b.vorticity_strength;
-    if (kMode == 0u)
+    if (kMode == kAdvectSemiLagrangian)
         store_face(
             kFieldTmp, i,
             forced_face(advect_face(kFieldVelocity, axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
-    else if (kMode == 1u) {
+    else if (kMode == kAdvectForward) {
         vec2 range;
         store_face(kFieldTmp, i, advect_face_range(axis, f, pc.dt, range));
         store_face(kFieldLow, i, range.x);
         store_face(kFieldHigh, i, range.y);
-    } else if (kMode == 2u)
+    } else if (kMode == kAdvectBackward)
         store_face(kFieldBack, i, advect_face(kFieldTmp, axis, f, -pc.dt));
-    else if (kMode == 4u)
+    else if (kMode == kAdvectForces)
         store_face(kFieldTmp, i,
                    forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
     else

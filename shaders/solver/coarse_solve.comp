@@ -5,8 +5,8 @@
 // pc.iterations sweeps on the coarsest): levels of at most kCoarseCells cells (16^3) cost this one
 // dispatch together, where a dispatch per sweep and level cost microseconds whatever its size. The
 // first level's right-hand side is read from memory; its correction goes to kCellPressureUp for the finer
-// level's upward pass. With pc.level 0 (a grid that small) and pc.parity 1 it is the whole V-cycle of a
-// conjugate-gradient iteration, and also turns the sums z·r and z·r_old into β.
+// level's upward pass. With pc.level 0 (a grid that small) and pc.mode kCoarseBeta it is the whole V-cycle
+// of a conjugate-gradient iteration, and also turns the sums z·r and z·r_old into β.
 #include "solver_io.h"
 
 const uint kCoarseValues = kCoarseCells + kCoarseCells / 7u + 16u;
@@ -67,7 +67,7 @@ void main() {
         smooth_level(l, smoothing);
     }
 
-    if (top == 0u && pc.parity == 0u && gl_LocalInvocationIndex == 0u) {
+    if (top == 0u && pc.mode == kCoarseCorrection && gl_LocalInvocationIndex == 0u) {
         // Plain multigrid on a grid this small: the next iterate adds this z whole (as smooth.comp's
         // upward pass says on larger grids).
         state().s.p_slot = 2u;
@@ -77,9 +77,9 @@ void main() {
     for (uint i = gl_LocalInvocationIndex; i < cells_of(first); i += gl_WorkGroupSize.x) {
         float z = coarse_phi[i];
         store_cell(kCellPressureUp, int(first.cells + i), z);
-        if (pc.parity == 1u) sums += z * vec2(load_cell(kCellRhs, int(i)), load_cell(kCellOldResidual, int(i)));
+        if (pc.mode == kCoarseBeta) sums += z * vec2(load_cell(kCellRhs, int(i)), load_cell(kCellOldResidual, int(i)));
     }
-    if (pc.parity != 1u) return;
+    if (pc.mode != kCoarseBeta) return;
     vec2 total_sums = group_sum(sums);
     if (gl_LocalInvocationIndex == 0u) {
         StateRef st = state();

@@ -1,8 +1,9 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// The Jacobi baseline on the level-0 iterate, from zero. pc.parity 0: one damped sweep from kCellSolution
-// into kCellSolutionB (SolverPush::swap's bit 1 alternates them), against b in kCellRhs. 1: the residual's
-// maximum and, in the workgroup that finishes last, the convergence check (the iterate in buffer A).
+// The Jacobi baseline on the level-0 iterate, from zero. pc.mode kJacobiSweep: one damped sweep from
+// kCellSolution into kCellSolutionB (SolverPush::swap's bit 1 alternates them), against b in kCellRhs.
+// kJacobiCheck: the residual's maximum and, in the workgroup that finishes last, the convergence check (the
+// iterate in buffer A).
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -13,7 +14,7 @@ void main() {
     ivec3 n = grid_dims();
     bool inside = i < n.x * n.y * n.z;
     GridLevel level0 = load_level(0u);
-    if (pc.parity == 0u) {
+    if (pc.mode == kJacobiSweep) {
         if (inside) store_cell(kCellSolutionB, i, jacobi_cell(level0, cell_from_index(n, i), kCellSolution));
         return;
     }

@@ -1,10 +1,11 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Reading the field for engines. pc.parity 0: per point, the velocity there: inside a solid (a voxel that
-// is not its cell's air, or a cell without air) the solid's own velocity, in the air trilinear on the faces
-// (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind, the ambient wind
-// outside the grid. 1: per cell, a texel of the wind texture (store_texel; finish.comp writes them at the
-// end of a step). 2: per cell, the velocity at its centre (cell_output) as three floats into `samples`.
+// Reading the field for engines. pc.mode kSamplePoints: per point, the velocity there: inside a solid (a
+// voxel that is not its cell's air, or a cell without air) the solid's own velocity, in the air trilinear on
+// the faces (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind, the ambient
+// wind outside the grid. kSampleTexels: per cell, a texel of the wind texture (store_texel; a step's
+// finish.comp writes the bound texels, so this serves the first fill and tests). kSampleCells: per cell,
+// the velocity at its centre (cell_output) as three floats into `samples`.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -16,7 +17,7 @@ void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = grid_dims();
-    if (pc.parity == 0u) {
+    if (pc.mode == kSamplePoints) {
         if (i >= int(sb().b.point_count)) return;
         vec3 p = (PointsRef(sb().b.points).v[i] - grid_origin()) / grid_h();
         vec3 u;
@@ -31,7 +32,7 @@ void main() {
         SamplesRef(sb().b.samples).v[i] = u;
     } else {
         if (i >= n.x * n.y * n.z) return;
-        if (pc.parity == 2u)
+        if (pc.mode == kSampleCells)
             SamplesRef(sb().b.samples).v[i] = cell_output(i);
         else
             store_texel(i);

@@ -3,17 +3,18 @@
 // The V-cycle's smoothing in shared-memory tiles: a workgroup owns an 8^3 tile of level pc.level's cells,
 // loads it with a one-cell halo, and runs SolverBindings::smoothing red-black Gauss–Seidel sweeps on the
 // tile with the halo held at its loaded values (block Gauss–Seidel: exact inside a tile, Jacobi-like
-// across tiles), so a level's smoothing costs one dispatch, not one per half-sweep. pc.parity:
-//   0, 4 (level 0, first pass of an iteration): the iterate x_k = x_{k-1} + α p_{k-1} (k = pc.iterations;
-//     x_0 = s φ, the warm start; 4 is plain multigrid, where p is last iteration's z and α = 1), written to
-//     the other iterate, and its residual r = b − L x_k computed exactly (the last residual kept as r_old),
-//     with the convergence check in the workgroup that finishes last; then smoothing from zero against r.
-//   1 (a level between): smoothing from zero against the level's right-hand side (kCellPressure).
-//   2 (upward): the level's downward values plus the coarser level's correction (prolong_cell from
+// across tiles), so a level's smoothing costs one dispatch, not one per half-sweep. pc.mode:
+//   kSmoothFirst, kSmoothFirstPlain (level 0, first pass of an iteration): the iterate
+//     x_k = x_{k-1} + α p_{k-1} (k = pc.iterations; x_0 = s φ, the warm start; kSmoothFirstPlain is plain
+//     multigrid, where p is last iteration's z and α = 1), written to the other iterate, and its residual
+//     r = b − L x_k computed exactly (the last residual kept as r_old), with the convergence check in the
+//     workgroup that finishes last; then smoothing from zero against r.
+//   kSmoothDown (a level between): smoothing from zero against the level's right-hand side (kCellPressure).
+//   kSmoothUp (upward): the level's downward values plus the coarser level's correction (prolong_cell from
 //     kCellPressureUp), smoothed against the right-hand side, into kCellPressureUp.
-//   3 (level 0 upward, conjugate gradients): as 2, then the sums z·r and z·r_old, which the workgroup that
-//     finishes last turns into β.
-// The mode is the pipeline's specialization constant 0 (pc.parity holds it too), so a compiler keeps only
+//   kSmoothUpBeta (level 0 upward, conjugate gradients): as kSmoothUp, then the sums z·r and z·r_old,
+//     which the workgroup that finishes last turns into β.
+// The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not.
 #include "solver_io.h"
 layout(local_size_x = kTileSide, local_size_y = kTileSide, local_size_z = kTileSide) in;
@@ -43,7 +44,7 @@ void main() {
     const uint mode = kMode;
     GridLevel level = load_level(l);
     ivec3 local = ivec3(gl_LocalInvocationID);
-    bool up = mode == 2u || mode == 3u;
+    bool up = mode == kSmoothUp || mode == kSmoothUpBeta;
     // Only the upward leg prolongs from the next level.
     GridLevel coarse = up ? load_level(l + 1u) : level;
     ivec3 origin = ivec3(gl_WorkGroupID) * kSide - (up ? ivec3(kSide / 2) : ivec3(0));
@@ -51,7 +52,7 @@ void main() {
     bool mine = all(greaterThanEqual(c, ivec3(0))) && all(lessThan(c, level.dims));
     int i = mine ? int(level.cells) + cell_index(level.dims, c) : 0;
     uint open = grid_open_sides();
-    bool first = mode == 0u || mode == 4u;
+    bool first = mode == kSmoothFirst || mode == kSmoothFirstPlain;
 
     // The cell's six couplings (cell_operator's faces): weight, and where the neighbour's value lives.
     float w[6];
@@ -72,7 +73,7 @@ void main() {
     if (first) {
         group_max_begin();
         if (mine) {
-            bool plain = mode == 4u;
+            bool plain = mode == kSmoothFirstPlain;
             float x = iterate(c, plain);
             float lap = 0.0;
             for (uint a = 0u; a < 3u; ++a)
@@ -126,12 +127,12 @@ void main() {
     float z = mine && diag > 0.0 ? tile[self] : 0.0;
     if (mine) store_cell(up ? kCellPressureUp : kCellPressure, i, z);
 
-    if (mode == 2u && l == 0u && gl_WorkGroupID == uvec3(0) && gl_LocalInvocationIndex == 0u) {
+    if (mode == kSmoothUp && l == 0u && gl_WorkGroupID == uvec3(0) && gl_LocalInvocationIndex == 0u) {
         // Plain multigrid: the next iterate adds this z whole.
         state().s.p_slot = 2u;
         state().s.cg_alpha = 1.0;
     }
-    if (mode != 3u) return;
+    if (mode != kSmoothUpBeta) return;
     vec2 sums = mine ? z * vec2(rhs, load_cell(kCellOldResidual, i)) : vec2(0.0);
     vec2 total;
     if (sum_dispatch(sums, total) && gl_LocalInvocationIndex == 0u) {

@@ -1,10 +1,10 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Per wind cell: gathers the cell's voxels from the sparse tree's leaves and splits its free voxels into
-// parts (cell_parts in solver_io.h); starts the outside-air fill (each part its own union-find set) and
+// parts (cell_parts in solver_cells.h); starts the outside-air fill (each part its own union-find set) and
 // clears what the last step summed here. Only cells whose voxels may have changed are gathered again: with
-// pc.parity 0 (the static solids as at the last step) a cell that held no moving voxels then and whose
-// leaf bricks hold none now keeps its parts and static voxels; pc.parity 1 redoes every cell. Thread 0
+// pc.mode kSolidChanged (the static solids as at the last step) a cell that held no moving voxels then and
+// whose leaf bricks hold none now keeps its parts and static voxels; kSolidAll redoes every cell. Thread 0
 // also sizes the moving-fragment pass. Every cell also makes its vorticity-confinement force for advection.
 #include "../tree/tree_io.h"
 #include "solver_io.h"
@@ -120,7 +120,7 @@ void main() {
         any_node = node != kNone && NodesRef(tree_nodes).v[node].x != 0u;
     }
     if (!any_node) return;
-    if (pc.parity == 0u && (old & kCellDynamic) == 0u && !bricks_dynamic(lo, v)) {
+    if (pc.mode == kSolidChanged && (old & kCellDynamic) == 0u && !bricks_dynamic(lo, v)) {
         // Nothing here changed since the last step: its parts and static voxels stay as that step left them.
         if ((old & kCellCut) != 0u) {
             flags.v[i] = old & (kCellCut | kCellStatic);

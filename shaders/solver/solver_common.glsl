@@ -3,6 +3,8 @@
 // (1, 1, 1) where it is used before the declaration.
 #extension GL_EXT_control_flow_attributes : enable
 #include "solver_io.h"
+#include "solver_math.h"
+#include "solver_cells.h"
 
 layout(buffer_reference, scalar) readonly buffer BindingsRef { SolverBindings b; };
 // Not `coherent`: no pass reads what another invocation of the same dispatch wrote (the barrier between

@@ -1,5 +1,7 @@
-// Layouts and pure per-cell functions shared by the wind-solver shaders and solver/ (docs/design.md
-// "Wind solver"). The grid is a MAC grid of dims.x x dims.y x dims.z cells of size h: pressure at cell
+// Layouts shared by the wind-solver shaders and solver/ (docs/design.md "Wind solver"): constants, pass
+// modes, push constants, the bindings and the state, with their sizes checked on the C++ side. The pure
+// functions are in solver_math.h (grid indexing, emitters, the solve's scalars) and solver_cells.h (a
+// cell's voxel sets). The grid is a MAC grid of dims.x x dims.y x dims.z cells of size h: pressure at cell
 // centres, velocity component a on the faces normal to axis a. All face values of one field live in
 // one array: the x faces ((nx+1)·ny·nz, x fastest), then the y faces, then the z faces.
 #ifndef GUST_SOLVER_IO_H
@@ -15,9 +17,6 @@ GUST_CONST uint kTileSide = 8;
 /// Levels of at most this many cells are solved together by one workgroup in shared memory
 /// (coarse_solve.comp), so none of them costs a dispatch of its own.
 GUST_CONST uint kCoarseCells = 4096;
-/// advect.comp's and smooth.comp's modes (SolverPush::parity 0 to 4), one pipeline each.
-GUST_CONST uint kAdvectModes = 5;
-GUST_CONST uint kSmoothModes = 5;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
 /// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3 (the layout of the voxel-set arrays).
@@ -228,8 +227,8 @@ struct SolverPush {
     GUST_ADDRESS bindings; ///< SolverBindings
     float dt;              ///< seconds
     uint level;            ///< multigrid level the pass works on
-    uint parity;           ///< the pass's mode, or which field it reads
-    uint iterations;       ///< sweeps, or a pass-specific count
+    uint mode;             ///< the pass's job (the k<Pass>* modes below; diffuse.comp: the field it reads)
+    uint iterations;       ///< smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level
     float param;           ///< pass-specific value
     /// Bit 0: kFieldVelocity is velocity_tmp and kFieldTmp velocity; bit 1: the conjugate-gradient
     /// iteration's parity (x and p read from their B buffers).
@@ -238,495 +237,52 @@ struct SolverPush {
     uint pad;
 };
 
-// ---- Grid indexing ----------------------------------------------------------------------------------
+// ---- Pass modes (SolverPush::mode) ------------------------------------------------------------------
+// advect.comp and smooth.comp also take the mode as specialization constant 0 and get one pipeline per
+// mode (their k*Modes): a compiler then keeps only that mode's code, where a CPU device would execute every
+// mode's.
 
-GUST_INLINE ivec3 axis_unit(uint axis) {
-    return ivec3(axis == 0u ? 1 : 0, axis == 1u ? 1 : 0, axis == 2u ? 1 : 0);
-}
+/// advect.comp: the velocity's next field into kFieldTmp.
+GUST_CONST uint kAdvectSemiLagrangian = 0u; ///< semi-Lagrangian advection, then the forces (forced_face)
+GUST_CONST uint kAdvectForward = 1u;  ///< MacCormack's forward pass, and the range it blended
+GUST_CONST uint kAdvectBackward = 2u; ///< MacCormack's backward pass, kFieldTmp -> kFieldBack
+GUST_CONST uint kAdvectCorrect = 3u;  ///< MacCormack's clamped correction, then the forces, in place
+GUST_CONST uint kAdvectForces = 4u;   ///< no advection: the forces alone
+GUST_CONST uint kAdvectModes = 5u;
 
-GUST_INLINE int face_count(ivec3 n, uint axis) {
-    ivec3 m = n + axis_unit(axis);
-    return m.x * m.y * m.z;
-}
+/// smooth.comp: one level's smoothing in shared-memory tiles.
+GUST_CONST uint kSmoothFirst = 0u;      ///< level 0, a conjugate-gradient iteration's first pass: x_k and r
+GUST_CONST uint kSmoothDown = 1u;       ///< a level between, downward: from zero against its right-hand side
+GUST_CONST uint kSmoothUp = 2u;         ///< upward: the downward values plus the coarser level's correction
+GUST_CONST uint kSmoothUpBeta = 3u;     ///< level 0 upward, conjugate gradients: kSmoothUp, then β's sums
+GUST_CONST uint kSmoothFirstPlain = 4u; ///< kSmoothFirst of plain multigrid (α = 1, p the last z)
+GUST_CONST uint kSmoothModes = 5u;
 
-/// Offset of the first face normal to `axis` in a face array of a grid of n cells.
-GUST_INLINE int face_base(ivec3 n, uint axis) {
-    int base = 0;
-    if (axis > 0u) base += face_count(n, 0u);
-    if (axis > 1u) base += face_count(n, 1u);
-    return base;
-}
+/// coarse_solve.comp: the levels from SolverPush::level down in one workgroup.
+GUST_CONST uint kCoarseCorrection = 0u; ///< the finer level's correction (level 0: plain multigrid's V-cycle)
+GUST_CONST uint kCoarseBeta = 1u;       ///< level 0, conjugate gradients: the whole V-cycle, then β's sums
 
-GUST_INLINE int faces_total(ivec3 n) {
-    return face_count(n, 0u) + face_count(n, 1u) + face_count(n, 2u);
-}
+/// solid_cells.comp: which cells gather their voxels again.
+GUST_CONST uint kSolidChanged = 0u; ///< those a moving surface reaches now or reached at the last step
+GUST_CONST uint kSolidAll = 1u;     ///< every cell (the static solids or the grid changed)
 
-/// Index of face f (the face on the low side of cell f along `axis`; f[axis] in 0..n[axis]).
-GUST_INLINE int face_index(ivec3 n, uint axis, ivec3 f) {
-    ivec3 m = n + axis_unit(axis);
-    return face_base(n, axis) + f.x + m.x * (f.y + m.y * f.z);
-}
+/// start.comp: the pressure solve's start.
+GUST_CONST uint kStartCold = 0u; ///< from zero
+GUST_CONST uint kStartWarm = 1u; ///< also the warm start's q = Lφ and its scale (warm_scale)
 
-GUST_INLINE int cell_index(ivec3 n, ivec3 c) {
-    return c.x + n.x * (c.y + n.y * c.z);
-}
+/// jacobi.comp: the Jacobi baseline.
+GUST_CONST uint kJacobiSweep = 0u; ///< one damped sweep
+GUST_CONST uint kJacobiCheck = 1u; ///< the residual's maximum and the convergence check
 
-GUST_INLINE bool inside_cells(ivec3 n, ivec3 c) {
-    return c.x >= 0 && c.y >= 0 && c.z >= 0 && c.x < n.x && c.y < n.y && c.z < n.z;
-}
+/// sample.comp: reading the field for engines.
+GUST_CONST uint kSamplePoints = 0u; ///< per query point, the velocity there
+GUST_CONST uint kSampleTexels = 1u; ///< per cell, its texel of the wind texture (finish.comp's, when bound)
+GUST_CONST uint kSampleCells = 2u;  ///< per cell, the velocity at its centre
 
-/// The face a linear index names (inverse of face_index); the axis through `axis`.
-GUST_INLINE ivec3 face_from_index(ivec3 n, int index, GUST_OUT(uint) axis) {
-    axis = 0u;
-    if (index >= face_base(n, 1u)) axis = 1u;
-    if (index >= face_base(n, 2u)) axis = 2u;
-    int i = index - face_base(n, axis);
-    ivec3 m = n + axis_unit(axis);
-    return ivec3(i % m.x, (i / m.x) % m.y, i / (m.x * m.y));
-}
-
-GUST_INLINE ivec3 cell_from_index(ivec3 n, int index) {
-    return ivec3(index % n.x, (index / n.x) % n.y, index / (n.x * n.y));
-}
-
-/// Side bit (−x,+x,−y,+y,−z,+z) of boundary face f, or 6 for an interior face.
-GUST_INLINE uint boundary_side(ivec3 n, uint axis, ivec3 f) {
-    int k = f[axis];
-    if (k == 0) return 2u * axis;
-    if (k == n[axis]) return 2u * axis + 1u;
-    return 6u;
-}
-
-/// Sides through which the ambient wind enters are held at it (fixed velocity); the others are open
-/// (φ = 0), so air leaves through them. A side parallel to the wind counts as open.
-GUST_INLINE uint open_sides_for(vec3 ambient) {
-    uint bits = 0u;
-    for (uint a = 0u; a < 3u; ++a) {
-        if (!(ambient[a] > 0.0f)) bits |= 1u << (2u * a);      // low side: inflow only when wind goes +a
-        if (!(ambient[a] < 0.0f)) bits |= 1u << (2u * a + 1u); // high side: inflow only when wind goes −a
-    }
-    return bits;
-}
-
-// ---- Cell voxel sets (a cell's voxels, bit x + v·(y + v·z) for v voxels per cell) ---------------------
-
-struct CellBits {
-    uint w[kBitsWords];
-};
-
-GUST_INLINE CellBits bits_none() {
-    CellBits r;
-    for (uint i = 0u; i < kBitsWords; ++i)
-        r.w[i] = 0u;
-    return r;
-}
-
-/// Every voxel of a cell of v^3 voxels.
-GUST_INLINE CellBits bits_all(uint v) {
-    CellBits r = bits_none();
-    uint n = v * v * v;
-    for (uint i = 0u; i < kBitsWords; ++i) {
-        uint lo = i * 32u;
-        if (n >= lo + 32u)
-            r.w[i] = 0xffffffffu;
-        else if (n > lo)
-            r.w[i] = (1u << (n - lo)) - 1u;
-    }
-    return r;
-}
-
-GUST_INLINE bool bits_get(CellBits b, uint i) {
-    return (b.w[i / 32u] >> (i % 32u) & 1u) != 0u;
-}
-
-GUST_INLINE uint bits_count(CellBits b) {
-    uint c = 0u;
-    for (uint i = 0u; i < kBitsWords; ++i)
-        c += uint(bitCount(b.w[i]));
-    return c;
-}
-
-GUST_INLINE bool bits_equal(CellBits a, CellBits b) {
-    bool same = true;
-    for (uint i = 0u; i < kBitsWords; ++i)
-        same = same && a.w[i] == b.w[i];
-    return same;
-}
-
-GUST_INLINE CellBits bits_and(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kBitsWords; ++i)
-        a.w[i] &= b.w[i];
-    return a;
-}
-
-GUST_INLINE CellBits bits_and_not(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kBitsWords; ++i)
-        a.w[i] &= ~b.w[i];
-    return a;
-}
-
-GUST_INLINE CellBits bits_or(CellBits a, CellBits b) {
-    for (uint i = 0u; i < kBitsWords; ++i)
-        a.w[i] |= b.w[i];
-    return a;
-}
-
-/// Bits moved up by s positions (towards higher indices).
-GUST_INLINE CellBits bits_up(CellBits a, uint s) {
-    CellBits r = bits_none();
-    uint words = s / 32u, bits = s % 32u;
-    for (uint i = kBitsWords; i-- > words;) {
-        uint j = i - words;
-        r.w[i] = a.w[j] << bits;
-        if (bits != 0u && j > 0u) r.w[i] |= a.w[j - 1u] >> (32u - bits);
-    }
-    return r;
-}
-
-/// Bits moved down by s positions.
-GUST_INLINE CellBits bits_down(CellBits a, uint s) {
-    CellBits r = bits_none();
-    uint words = s / 32u, bits = s % 32u;
-    for (uint i = 0u; i + words < kBitsWords; ++i) {
-        uint j = i + words;
-        r.w[i] = a.w[j] >> bits;
-        if (bits != 0u && j + 1u < kBitsWords) r.w[i] |= a.w[j + 1u] << (32u - bits);
-    }
-    return r;
-}
-
-/// The voxels of a cell (v per axis) whose coordinate along `axis` equals `layer`.
-GUST_INLINE CellBits bits_layer(uint axis, uint layer, uint v) {
-    CellBits r = bits_none();
-    for (uint z = 0u; z < v; ++z)
-        for (uint y = 0u; y < v; ++y)
-            for (uint x = 0u; x < v; ++x) {
-                uint c = axis == 0u ? x : (axis == 1u ? y : z);
-                if (c != layer) continue;
-                uint i = x + v * (y + v * z);
-                r.w[i / 32u] |= 1u << (i % 32u);
-            }
-    return r;
-}
-
-/// `set` grown by one voxel across each face (6-connectivity), kept inside the cell. `faces` are
-/// bits_layer(axis, 0 or v-1) for −x,+x,−y,+y,−z,+z.
-GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
-    CellBits r = set;
-    uint stride = 1u;
-    for (uint a = 0u; a < 3u; ++a) {
-        r = bits_or(r, bits_up(bits_and_not(set, faces[2u * a + 1u]), stride));
-        r = bits_or(r, bits_down(bits_and_not(set, faces[2u * a]), stride));
-        stride *= v;
-    }
-    return r;
-}
-
-/// Keeps `component` (of `count` voxels) if it is among the two largest seen: `first` the largest, `second`
-/// the next (the earlier one wins a tie).
-GUST_INLINE void keep_largest(CellBits component, uint count, GUST_OUT(CellBits) first,
-                              GUST_OUT(uint) first_count, GUST_OUT(CellBits) second,
-                              GUST_OUT(uint) second_count) {
-    if (count > first_count) {
-        second = first;
-        second_count = first_count;
-        first = component;
-        first_count = count;
-    } else if (count > second_count) {
-        second = component;
-        second_count = count;
-    }
-}
-
-/// cell_parts for any v: the flood fill on whole CellBits.
-GUST_INLINE void cell_parts_general(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
-                                    GUST_OUT(CellBits) second) {
-    CellBits free_voxels = bits_and_not(bits_all(v), occupied);
-    CellBits remaining = free_voxels;
-    first = bits_none();
-    second = bits_none();
-    uint first_count = 0u, second_count = 0u;
-    uint n = v * v * v;
-    for (uint seeds = 0u; seeds < n; ++seeds) {
-        uint start = n;
-        for (uint i = 0u; i < kBitsWords && start == n; ++i)
-            if (remaining.w[i] != 0u) start = i * 32u + uint(findLSB(remaining.w[i]));
-        if (start == n) break;
-        CellBits component = bits_none();
-        component.w[start / 32u] = 1u << (start % 32u);
-        for (uint step = 0u; step < n; ++step) {
-            CellBits grown = bits_and(bits_dilate(component, v, faces), free_voxels);
-            if (bits_equal(grown, component)) break;
-            component = grown;
-        }
-        keep_largest(component, bits_count(component), first, first_count, second, second_count);
-        remaining = bits_and_not(remaining, component);
-    }
-}
-
-/// A cell of at most 64 voxels (v <= 4) as two words, low bits first.
-struct Bits64 {
-    uint lo;
-    uint hi;
-};
-
-GUST_INLINE Bits64 b64(uint lo, uint hi) {
-    Bits64 r;
-    r.lo = lo;
-    r.hi = hi;
-    return r;
-}
-
-/// Moved up by s (1..31; a cell of v <= 4 steps by 1, v and v^2) positions.
-GUST_INLINE Bits64 b64_up(Bits64 a, uint s) {
-    return b64(a.lo << s, (a.hi << s) | (a.lo >> (32u - s)));
-}
-
-/// Moved down by s (1..31) positions.
-GUST_INLINE Bits64 b64_down(Bits64 a, uint s) {
-    return b64((a.lo >> s) | (a.hi << (32u - s)), a.hi >> s);
-}
-
-/// cell_parts_general for v <= 4, with the same fill on two words: a shader keeps them in registers,
-/// where the general form's 16-word arrays, indexed by run-time shifts, go to memory (on an H100 that
-/// made the fill most of the solid pass).
-GUST_INLINE void cell_parts_small(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
-                                  GUST_OUT(CellBits) second) {
-    CellBits all = bits_all(v);
-    Bits64 free_voxels = b64(all.w[0] & ~occupied.w[0], all.w[1] & ~occupied.w[1]);
-    Bits64 remaining = free_voxels;
-    Bits64 best = b64(0u, 0u), next = b64(0u, 0u);
-    uint best_count = 0u, next_count = 0u;
-    uint n = v * v * v;
-    for (uint seeds = 0u; seeds < n; ++seeds) {
-        if (remaining.lo == 0u && remaining.hi == 0u) break;
-        Bits64 component = remaining.lo != 0u ? b64(remaining.lo & (0u - remaining.lo), 0u)
-                                              : b64(0u, remaining.hi & (0u - remaining.hi));
-        for (uint step = 0u; step < n; ++step) {
-            Bits64 grown = component;
-            uint stride = 1u;
-            for (uint a = 0u; a < 3u; ++a) {
-                Bits64 up = b64_up(
-                    b64(component.lo & ~faces[2u * a + 1u].w[0], component.hi & ~faces[2u * a + 1u].w[1]),
-                    stride);
-                Bits64 down = b64_down(
-                    b64(component.lo & ~faces[2u * a].w[0], component.hi & ~faces[2u * a].w[1]), stride);
-                grown = b64(grown.lo | up.lo | down.lo, grown.hi | up.hi | down.hi);
-                stride *= v;
-            }
-            grown = b64(grown.lo & free_voxels.lo, grown.hi & free_voxels.hi);
-            if (grown.lo == component.lo && grown.hi == component.hi) break;
-            component = grown;
-        }
-        uint count = uint(bitCount(component.lo)) + uint(bitCount(component.hi));
-        if (count > best_count) {
-            next = best;
-            next_count = best_count;
-            best = component;
-            best_count = count;
-        } else if (count > next_count) {
-            next = component;
-            next_count = count;
-        }
-        remaining = b64(remaining.lo & ~component.lo, remaining.hi & ~component.hi);
-    }
-    first = bits_none();
-    first.w[0] = best.lo;
-    first.w[1] = best.hi;
-    second = bits_none();
-    second.w[0] = next.lo;
-    second.w[1] = next.hi;
-}
-
-/// The parts of a cell: the two largest 6-connected components of its free voxels (the first found on a
-/// tie), largest first; empty where there are fewer. One pressure per cell cannot stand for two sides of
-/// a wall, so a cell's air is one part, and faces open only into it (face_open_count): then any chain of
-/// open faces is a chain of free voxels, and a watertight surface, however thin, lets no air through.
-/// Which part is the air is decided by whether it reaches an open domain side (the outside-air fill,
-/// docs/solver.md "Solid interiors"); a cell keeps two so that the air beside a wall can be the smaller
-/// part when the larger lies inside a closed mesh.
-GUST_INLINE void cell_parts(CellBits occupied, uint v, CellBits faces[6], GUST_OUT(CellBits) first,
-                            GUST_OUT(CellBits) second) {
-    if (v * v * v <= 64u)
-        cell_parts_small(occupied, v, faces, first, second);
-    else
-        cell_parts_general(occupied, v, faces, first, second);
-}
-
-/// Whether a set holds a voxel on cell side s (−x,+x,−y,+y,−z,+z).
-GUST_INLINE bool bits_touch(CellBits set, CellBits faces[6], uint s) {
-    return bits_count(bits_and(set, faces[s])) != 0u;
-}
-
-/// Voxel pairs across the face between cells `low` and `high` along `axis` that are both in the given
-/// sets (the two cells' air, or two parts when linking them).
-GUST_INLINE uint face_open_count(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
-    CellBits a = bits_and(low, faces[2u * axis + 1u]);
-    CellBits b = bits_and(high, faces[2u * axis]);
-    uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
-    return bits_count(bits_and(bits_down(a, shift), b));
-}
-
-/// Voxel pairs across the face between cells `low` and `high` along `axis` with a voxel of the given sets on
-/// either side (the static solid's, where a moving surface's push does not count: moving_share).
-GUST_INLINE uint face_any_count(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
-    CellBits a = bits_and(low, faces[2u * axis + 1u]);
-    CellBits b = bits_and(high, faces[2u * axis]);
-    uint shift = axis == 0u ? v - 1u : (axis == 1u ? (v - 1u) * v : (v - 1u) * v * v);
-    return bits_count(bits_or(bits_down(a, shift), b));
-}
-
-/// A sealed part's contact with solid voxels, as (voxels touched, of which static): in its own cell
-/// (`side` 6; `solid` and `still` are the cell's) or in the neighbour across face `side` (−x,+x,−y,+y,−z,
-/// +z; the neighbour's sets, counted as voxel pairs across the face).
-GUST_INLINE uvec2 part_contact(CellBits part, CellBits solid, CellBits still, uint side, uint v,
-                               CellBits faces[6]) {
-    if (side == 6u) {
-        CellBits ring = bits_and(bits_dilate(part, v, faces), solid);
-        return uvec2(bits_count(ring), bits_count(bits_and(ring, still)));
-    }
-    uint axis = side / 2u;
-    if ((side & 1u) != 0u)
-        return uvec2(face_open_count(part, solid, axis, v, faces),
-                     face_open_count(part, still, axis, v, faces));
-    return uvec2(face_open_count(solid, part, axis, v, faces), face_open_count(still, part, axis, v, faces));
-}
-
-/// A sealed region moves with the solid that encloses it: the mean velocity of the moving solid voxels
-/// its parts touch when those are at least half of all the solid voxels they touch, else still. `motion`
-/// is region_motion's first slot (velocity sums weighted in quarters, and the weights), `border` the
-/// second's x (4 per part that touches solid). So the inside of a static building stays still whatever
-/// moves in it or brushes its walls, and a crate's inside moves with the crate though the floor it slides
-/// on holds a sixth of its border.
-GUST_INLINE ivec4 enclosing_motion(ivec4 motion, int border) {
-    return motion.w > 0 && 2 * motion.w >= border ? motion : ivec4(0);
-}
-
-/// The share of a face's closed voxel pairs a moving solid pushes with: those with no static solid voxel.
-/// Where a moving surface touches a static one (a foot on the ground, a piston along its duct's wall) their
-/// voxels overlap, and a pair against the static solid carries no motion (it slides, the wall stays put).
-/// Without it the cells a moving and a static surface share pushed with their whole closed part: a piston
-/// filling a duct drove the air 30% faster than itself.
-GUST_INLINE float moving_share(uint closed, uint static_pairs) {
-    return closed > 0u ? float(closed - min(static_pairs, closed)) / float(closed) : 1.0f;
-}
-
-/// The share of one voxel pair in a face, 1 / v^2. Computed on the host (IEEE division); the shaders
-/// read it from SolverBindings::pair_share, so both sides multiply by the same float.
-GUST_INLINE float pair_share(uint v) {
-    return 1.0f / float(v * v);
-}
-
-/// Words of open_counts for `faces` level-0 faces, four to a word.
-GUST_INLINE uint open_count_words(uint faces) {
-    return (faces + 3u) / 4u;
-}
-
-/// Open voxel pairs of level-0 face `face` from its word of open_counts.
-GUST_INLINE uint open_count_in(uint word, uint face) {
-    return (word >> (8u * (face & 3u))) & 0xffu;
-}
-
-/// Open fraction of a face with `count` of its voxel pairs open. Level 0 stores the count, a byte per
-/// face (v <= 8), and every reader turns it into the fraction here.
-GUST_INLINE float open_fraction_of(uint count, float share) {
-    return float(count) * share;
-}
-
-/// Host side: the open fraction of a face between the air of two cells.
-GUST_INLINE float face_open_fraction(CellBits low, CellBits high, uint axis, uint v, CellBits faces[6]) {
-    return open_fraction_of(face_open_count(low, high, axis, v, faces), pair_share(v));
-}
-
-// ---- Emitters ------------------------------------------------------------------------------------------
-
-/// (1 - d/r)^p inside the radius, 0 outside (p = 0: uniform).
-GUST_INLINE float emitter_falloff(float d, float radius, float p) {
-    if (!(d < radius)) return 0.0f;
-    float x = 1.0f - d / radius;
-    return p == 0.0f ? 1.0f : pow(x, p);
-}
-
-/// The velocity an emitter drives the air towards at world point x, m/s (zero outside its reach).
-/// Directional: `direction` inside a sphere. Omni: radial, outwards for positive strength (push) and
-/// inwards for negative (pull). Vortex: around the axis through `position` along `direction`
-/// (right-handed for positive strength), falloff by distance from the centre. Capsule motor: along
-/// `direction` within `radius` of the segment of `length` from `position`. Cone motor: along the
-/// segment, within a radius growing from 0 at `position` to `radius` at its end.
-GUST_INLINE vec3 emitter_velocity(GpuEmitter e, vec3 x) {
-    vec3 d = x - e.position;
-    float dist = length(d);
-    if (e.type == kEmitterDirectional)
-        return e.direction * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
-    if (e.type == kEmitterOmni) {
-        if (dist < 1e-6f) return vec3(0.0f);
-        return d / dist * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
-    }
-    if (e.type == kEmitterVortex) {
-        vec3 around = cross(e.direction, d);
-        float r = length(around);
-        if (r < 1e-6f) return vec3(0.0f);
-        return around / r * (e.strength * emitter_falloff(dist, e.radius, e.falloff));
-    }
-    float along = clamp(dot(d, e.direction), 0.0f, e.extent);
-    float off = length(d - e.direction * along);
-    float radius = e.radius;
-    if (e.type == kEmitterCone) {
-        if (dot(d, e.direction) < 0.0f) return vec3(0.0f);
-        radius = e.extent > 0.0f ? e.radius * along / e.extent : e.radius;
-        if (!(radius > 0.0f)) return vec3(0.0f);
-    }
-    return e.direction * (e.strength * emitter_falloff(off, radius, e.falloff));
-}
-
-/// Moves one face velocity component towards an emitter's: an emitter speeds air up along its
-/// direction to its strength, and never slows air already going faster that way. `rate` is the
-/// share of the gap closed this step, 1 - exp(−dt/τ).
-GUST_INLINE float emitter_drive(float u, float target, float rate) {
-    if (target > 0.0f && u < target) return u + (target - u) * rate;
-    if (target < 0.0f && u > target) return u + (target - u) * rate;
-    return u;
-}
-
-// ---- Conjugate gradients ---------------------------------------------------------------------------
-
-/// Weight of the previous search direction. A V-cycle is not an exactly symmetric preconditioner, so
-/// the flexible (Polak–Ribière) form β = z·(r − r_old) / (z_old·r_old) is used (Notay 2000); it equals
-/// Fletcher–Reeves when the preconditioner is symmetric. 0 on the first iteration or a breakdown.
-GUST_INLINE float cg_beta(float rz, float z_dot_old_r, float old_rz) {
-    float beta = old_rz != 0.0f ? (rz - z_dot_old_r) / old_rz : 0.0f;
-    return abs(beta) < 1e30f ? beta : 0.0f;
-}
-
-/// Step length along the search direction p: (r·z) / (p·Lp); 0 when p·Lp vanishes (p is constant over a
-/// closed pocket, where L has no inverse) or the quotient is not finite.
-GUST_INLINE float cg_alpha(float rz, float p_dot_lp) {
-    float alpha = p_dot_lp != 0.0f ? rz / p_dot_lp : 0.0f;
-    return abs(alpha) < 1e30f ? alpha : 0.0f;
-}
-
-/// Scale s of the warm start x0 = s·φ_prev, from b·q and q·q with q = Lφ_prev: the s that minimises
-/// |b − s·q|², so the first residual is never larger (2-norm) than a start from zero gives. It follows a
-/// change of dt (φ = p·dt/ρ) and falls to about 0 when φ_prev belongs to another problem (the first
-/// step from still or uniform air, whose φ sets the flow moving, is then a poor start for the next).
-/// 0 when q vanishes or the quotient is not finite.
-GUST_INLINE float warm_scale(float b_dot_q, float q_dot_q) {
-    float s = q_dot_q > 0.0f ? b_dot_q / q_dot_q : 0.0f;
-    return abs(s) < 1e30f ? s : 0.0f;
-}
-
-/// Whether a solve has diverged: its max residual (NaN included) past kDivergenceGuard times the larger of
-/// max |b| and its first residual. Conjugate gradients on a consistent system do not grow that much (their
-/// max-norm residual wanders within a few times its start); a singular or inconsistent one can without
-/// bound, and projecting such a φ would set the air moving at any speed.
-GUST_INLINE bool solve_diverged(float residual, float first, float b_max) {
-    return !(residual <= kDivergenceGuard * max(first, b_max));
-}
-
-/// A fragment velocity (m/s) with its length clamped to `limit` (m/s, > 0): no solid pushes air faster.
-GUST_INLINE vec3 clamp_speed(vec3 velocity, float limit) {
-    float speed = length(velocity);
-    return speed > limit ? velocity * (limit / speed) : velocity;
+/// diffuse.comp reads face field SolverPush::mode (kFieldVelocity, then each iteration's target) and
+/// writes this one: the iterations alternate between kFieldTmp and kFieldBack.
+GUST_INLINE uint diffuse_target(uint from) {
+    return from == kFieldTmp ? kFieldBack : kFieldTmp;
 }
 
 GUST_NAMESPACE_END

@@ -2,8 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Per cell, the pressure solve's start: the solver's divergence as the right-hand side b (kCellTarget, and
 // the level-0 residual kCellRhs, which the Jacobi baseline relaxes against), its maximum and the fluid
-// cells. With pc.iterations 1 (the warm start, docs/solver.md) also q = Lφ of the last step's φ (kCellScratch)
-// and the sums b·q and q·q, which the workgroup that finishes last turns into the scale s of x0 = s·φ
+// cells. With pc.mode kStartWarm (the warm start, docs/solver.md) also q = Lφ of the last step's φ
+// (kCellScratch) and the sums b·q and q·q, which the workgroup that finishes last turns into the scale s of x0 = s·φ
 // (warm_scale; 0 without the warm start).
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -30,7 +30,7 @@ void main() {
         store_cell(kCellTarget, i, d);
         store_cell(kCellRhs, i, d);
         if (diag > 0.0) atomicAdd(group_fluid, 1u);
-        if (pc.iterations != 0u) {
+        if (pc.mode == kStartWarm) {
             float q = laplacian_cell(level0, c, kCellPhi);
             store_cell(kCellScratch, i, q);
             sums = q * vec2(d, q);
@@ -44,7 +44,7 @@ void main() {
         if (group_fluid > 0u) atomicAdd(st.s.fluid_cells, group_fluid);
         if (gl_WorkGroupID.x + gl_WorkGroupID.y == 0u) st.s.recorded = sb().b.cycles_recorded;
     }
-    if (pc.iterations == 0u) return;
+    if (pc.mode != kStartWarm) return;
     vec2 total;
     if (sum_dispatch(sums, total) && gl_LocalInvocationIndex == 0u) state().s.warm_scale = warm_scale(total.x, total.y);
 }

@@ -1,4 +1,5 @@
-// Layouts shared by the sparse-tree shaders and tree/src/tree.cpp (docs/design.md "Sparse tree").
+// Layouts shared by the sparse-tree shaders and voxelizer/src/sparse_tree.cpp (docs/architecture.md
+// "Sparse tree").
 //
 // Nodes live in blocks of b^3 (all children of one parent). A node is (child, touched): `child` is the
 // index of its child block (internal levels) or of its leaf mask block (last level), 0 when none;
@@ -117,6 +118,13 @@ GUST_INLINE uint child_slot(uvec3 v, uint level, uint levels, uint log2_branchin
     uint mask = (1u << log2_branching) - 1u;
     uvec3 c = (v >> shift) & mask;
     return c.x | (c.y << log2_branching) | (c.z << (2u * log2_branching));
+}
+
+/// Inverse of child_slot: the child's position inside its parent, in children per axis (each in
+/// [0, 2^log2_branching)). Also a voxel's position inside its leaf brick from its mask bit.
+GUST_INLINE uvec3 slot_offset(uint slot, uint log2_branching) {
+    uint mask = (1u << log2_branching) - 1u;
+    return uvec3(slot & mask, (slot >> log2_branching) & mask, slot >> (2u * log2_branching));
 }
 
 GUST_NAMESPACE_END

@@ -1,7 +1,8 @@
 // Set-up shared by the GPU solver and its CPU version: the multigrid hierarchy, face layers, emitters.
 #pragma once
 
-#include "solver/solver_io.h"
+#include "solver/solver_cells.h"
+#include "solver/solver_math.h"
 
 #include <gust/solver/wind_solver.hpp>
 #include <span>

@@ -1,11 +1,10 @@
-#include "solver_setup.hpp"
-#include "tree/tree_io.h"
+// WindSolver's creation (its pipelines, one per pass mode where a pass has several; its buffers and
+// bindings) and its API around the step: fields, queries, texels, scrolling. The step is recorded in
+// wind_solver_step.cpp.
+#include "wind_solver_impl.hpp"
 
-#include <algorithm>
-#include <array>
 #include <bit>
 #include <cstring>
-#include <gust/solver/wind_solver.hpp>
 
 namespace gust {
 
@@ -36,8 +35,8 @@ namespace {
 #include "gust_shaders/solid_motion_comp.h"
 #include "gust_shaders/start_comp.h"
 
+using detail::groups_for;
 using shaderio::GridLevel;
-using shaderio::kCellWords;
 using shaderio::kDispatchSlots;
 using shaderio::LevelDispatch;
 using shaderio::SolverBindings;
@@ -46,16 +45,6 @@ using shaderio::SolverState;
 
 template <std::size_t N> std::span<const std::uint32_t> words(const std::uint32_t (&a)[N]) {
     return {a, N};
-}
-
-LevelDispatch groups_for(std::uint64_t items) {
-    const std::uint64_t groups = (items + shaderio::kSolverGroupSize - 1) / shaderio::kSolverGroupSize;
-    return {std::uint32_t(std::min<std::uint64_t>(groups, 65535)), std::uint32_t((groups + 65534) / 65535),
-            1};
-}
-
-float from_bits(std::uint32_t bits) {
-    return std::bit_cast<float>(bits);
 }
 
 /// Workgroups of smooth.comp over a level: one per 8^3 tile.
@@ -71,63 +60,6 @@ std::uint64_t cells_of(glm::ivec3 dims) {
 }
 
 } // namespace
-
-struct WindSolver::Impl : gpu::HostObject {
-    explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
-    /// advect.comp and smooth.comp specialized to each mode (SolverPush::parity) the solver uses.
-    std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
-    std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
-    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_link, fluid_finish,
-        coarse_weights, diffuse, start, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll,
-        sample;
-    gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
-        pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
-        cell_motion, labels, region_motion, vorticity_buf, confinement, emitters, state, dispatch, bindings,
-        points, samples, state_readback;
-    gpu::Profiler profiler;
-    std::pmr::vector<GridLevel> levels;
-    /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.
-    std::uint32_t coarse_level = 0;
-    std::uint32_t emitter_count = 0;
-    std::uint32_t omni_count = 0; ///< the first emitter_data are omni (omni_first)
-    std::array<shaderio::GpuEmitter, shaderio::kMaxEmitters> emitter_data{}; ///< written by each step
-    /// Which of the two velocity buffers holds the velocity (SolverPush::swap bit 0): a pass writes the
-    /// next field into the other, and they trade places instead of being copied.
-    std::uint32_t swap = 0;
-    const gpu::Buffer& current_velocity() const { return swap ? velocity_tmp : velocity; }
-    const gpu::Buffer& other_velocity() const { return swap ? velocity : velocity_tmp; }
-    /// Records the bindings `b` into their buffer, between barriers (passes earlier in the command buffer
-    /// may still read the old ones).
-    void put_bindings(const gpu::Context& ctx, VkCommandBuffer cmd) const {
-        gpu::barrier(ctx, cmd);
-        gpu::update(ctx, cmd, bindings, &b, sizeof(b));
-        gpu::barrier(ctx, cmd);
-    }
-    /// Records sample.comp in `mode` (0 query points, 1 the texture's texels, 2 cell-centre velocities) over
-    /// `count` threads, after the bindings `b` the caller set.
-    void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
-                            std::uint64_t count) {
-        put_bindings(ctx, cmd);
-        SolverPush push{};
-        push.bindings = bindings.address();
-        push.parity = mode;
-        push.swap = swap;
-        const LevelDispatch g = groups_for(count);
-        sample.bind(cmd, &push, sizeof(push));
-        sample.dispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx, cmd);
-    }
-    /// φ holds the last solve of this field's history, so the next solve may start from it (the warm
-    /// start); false before the first step and after set_velocity replaced the field.
-    bool has_guess = false;
-    /// What the last step's solid_cells saw: a step whose solids differ in any of these (or the first, or
-    /// one after a scroll) redoes every cell's voxels; otherwise only the cells a moving surface reaches.
-    bool solids_stale = true;
-    const SparseTree* last_tree = nullptr;
-    std::uint64_t last_static_generation = 0;
-    glm::ivec3 last_voxel_offset{0};
-    SolverBindings b{};
-};
 
 WindSolver::WindSolver(gpu::Context& ctx) : ctx_(ctx) {}
 WindSolver::~WindSolver() = default;
@@ -190,7 +122,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
-    // advect.comp and smooth.comp once per mode (SolverPush::parity) the solver uses, the mode a
+    // advect.comp and smooth.comp once per mode (SolverPush::mode) the solver uses, the mode a
     // specialization constant: a compiler then keeps only that mode's code, where a CPU device would
     // execute every mode's.
     auto create_modes = [&](std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
@@ -203,9 +135,14 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         }
         return {};
     };
-    static constexpr std::uint32_t kMacCormackModes[] = {1, 2, 3}, kSemiLagrangianMode[] = {0},
-                                   kForcesMode[] = {4};
-    static constexpr std::uint32_t kPcgModes[] = {0, 1, 2, 3}, kMultigridModes[] = {1, 2, 4};
+    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectBackward,
+                                                         shaderio::kAdvectCorrect},
+                                   kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
+                                   kForcesMode[] = {shaderio::kAdvectForces};
+    static constexpr std::uint32_t kPcgModes[] = {shaderio::kSmoothFirst, shaderio::kSmoothDown,
+                                                  shaderio::kSmoothUp, shaderio::kSmoothUpBeta},
+                                   kMultigridModes[] = {shaderio::kSmoothDown, shaderio::kSmoothUp,
+                                                        shaderio::kSmoothFirstPlain};
     const std::span<const std::uint32_t> advect_modes =
         desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
         : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
@@ -382,7 +319,7 @@ Status WindSolver::set_velocity(std::span<const float> faces) {
 }
 
 void WindSolver::bind_texels(const gpu::Buffer& texels) {
-    impl_->b.texels = texels.address();
+    impl_->bound_texels = impl_->b.texels = texels.address();
 }
 
 namespace {
@@ -430,7 +367,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.b.origin = origin_;
         m.b.samples = out_buffer->address();
-        m.record_sample_pass(ctx_, cmd, 2, cell_count());
+        m.record_sample_pass(ctx_, cmd, shaderio::kSampleCells, cell_count());
     });
     if (!s) return s;
     std::vector<glm::vec3> out(cell_count());
@@ -474,7 +411,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     m.b.points = points;
     m.b.samples = samples;
     m.b.point_count = count;
-    m.record_sample_pass(ctx_, cmd, 0, count);
+    m.record_sample_pass(ctx_, cmd, shaderio::kSamplePoints, count);
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {
@@ -488,7 +425,9 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     Impl& m = *impl_;
     m.b.origin = origin_;
     m.b.texels = texels.address();
-    m.record_sample_pass(ctx_, cmd, 1, cell_count());
+    m.record_sample_pass(ctx_, cmd, shaderio::kSampleTexels, cell_count());
+    // The steps write the bound texels alone; the next pass's bindings carry them again.
+    m.b.texels = m.bound_texels;
 }
 
 Status WindSolver::scroll(glm::ivec3 cells) {
@@ -518,265 +457,6 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     gpu::barrier(ctx_, cmd);
     m.solids_stale = true;
     origin_ += glm::vec3(cells) * desc_.cell_size;
-}
-
-Result<WindStats> WindSolver::step(float dt, const SolidSource* solid) {
-    if (Status s = detail::validate_dt(dt); !s) return s;
-    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        record_passes(cmd, dt, solid);
-        record_readback(cmd, impl_->state_readback.handle(), 0);
-    });
-    if (!recorded) return recorded;
-    WindStats stats = stats_from(impl_->state_readback.mapped());
-    stats.ms = impl_->profiler.read();
-    return stats;
-}
-
-Status WindSolver::record_step(VkCommandBuffer cmd, float dt, const SolidSource* solid) {
-    if (Status s = detail::validate_dt(dt); !s) return s;
-    record_passes(cmd, dt, solid);
-    return Status{};
-}
-
-std::size_t WindSolver::readback_bytes() {
-    return sizeof(SolverState);
-}
-
-void WindSolver::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize offset) const {
-    gpu::record_readback(ctx_, cmd, impl_->state, sizeof(SolverState), dst, offset);
-}
-
-std::uint32_t WindSolver::cycles_per_step() const {
-    if (desc_.pressure == PressureSolver::Jacobi)
-        return (desc_.max_iterations + detail::kJacobiBlock - 1) / detail::kJacobiBlock;
-    return desc_.cycles_per_step > 0 ? std::min(desc_.cycles_per_step, desc_.max_cycles) : cycles_to_record_;
-}
-
-void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource* solid) {
-    Impl& m = *impl_;
-    const gpu::Dispatch& vk = ctx_.vk();
-    SolverBindings& b = m.b;
-    b.origin = origin_;
-    b.ambient = ambient_;
-    b.open_sides = shaderio::open_sides_for(ambient_);
-    b.emitter_count = m.emitter_count;
-    b.omni_count = m.omni_count;
-    b.tree_nodes = b.tree_masks = b.fragments = b.fragment_count = b.fragment_motion = 0;
-    b.tree_levels = 0;
-    b.fragment_capacity = 0;
-    if (solid && solid->tree) {
-        const SparseTree& tree = *solid->tree;
-        b.tree_nodes = tree.node_address();
-        b.tree_masks = tree.mask_address();
-        b.tree_levels = tree.depth();
-        b.tree_log2_branching = std::uint32_t(std::countr_zero(tree.branching()));
-        b.mask_words = shaderio::mask_words(b.tree_log2_branching);
-        b.mask_stride = shaderio::mask_stride(b.tree_log2_branching);
-        b.voxel_offset = solid->voxel_offset;
-    }
-    const SparseTree* tree = solid ? solid->tree : nullptr;
-    const std::uint64_t generation = solid ? solid->static_generation : 0;
-    const bool all_cells = m.solids_stale || tree != m.last_tree || generation != m.last_static_generation ||
-                           b.voxel_offset != m.last_voxel_offset;
-    m.solids_stale = false;
-    m.last_tree = tree;
-    m.last_static_generation = generation;
-    m.last_voxel_offset = b.voxel_offset;
-    if (solid && solid->fragments && solid->fragment_velocities) {
-        b.fragments = solid->fragments;
-        b.fragment_count = solid->fragment_count;
-        b.fragment_motion = solid->fragment_velocities;
-        b.fragment_capacity = std::uint32_t(std::min<std::uint64_t>(solid->fragment_capacity, 0xffffffffu));
-    }
-    const std::uint32_t levels = levels_;
-    const bool warm = desc_.warm_start && m.has_guess;
-    const std::uint32_t recorded = cycles_per_step();
-    b.cycles_recorded = recorded;
-    const LevelDispatch face_groups = groups_for(face_count());
-    const LevelDispatch cell_groups = groups_for(cell_count());
-    SolverPush push{};
-    push.bindings = m.bindings.address();
-    push.dt = dt;
-    auto run = [&](const gpu::Pipeline& p, LevelDispatch g) {
-        push.swap = (push.swap & ~1u) | m.swap;
-        p.bind(cmd, &push, sizeof(push));
-        p.dispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx_, cmd);
-    };
-    // Indirect dispatches are the pressure solve's passes, each followed by another dispatch (or one whose
-    // run() ends in a full barrier), so a compute barrier suffices.
-    auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
-        push.swap = (push.swap & ~1u) | m.swap;
-        p.bind(cmd, &push, sizeof(push));
-        p.dispatch_indirect(cmd, m.dispatch.handle(), slot * sizeof(LevelDispatch));
-        gpu::compute_barrier(ctx_, cmd);
-    };
-
-    m.profiler.reset(cmd);
-    m.put_bindings(ctx_, cmd);
-    if (m.emitter_count > 0)
-        gpu::update(ctx_, cmd, m.emitters, m.emitter_data.data(),
-                    m.emitter_count * sizeof(shaderio::GpuEmitter));
-    vk.vkCmdFillBuffer(cmd, m.state.handle(), 0, VK_WHOLE_SIZE, 0);
-    const VkBufferCopy reset{kDispatchSlots * sizeof(LevelDispatch), 0,
-                             kDispatchSlots * sizeof(LevelDispatch)};
-    vk.vkCmdCopyBuffer(cmd, m.dispatch.handle(), m.dispatch.handle(), 1, &reset);
-    gpu::barrier(ctx_, cmd);
-
-    // The solid boundary in three timed parts: the cells' voxels and the moving fragments (solid), the
-    // outside-air fill (fill), the faces' open fractions and solid velocities (faces).
-    m.profiler.begin(cmd, "solid");
-    push.parity = all_cells ? 1u : 0u;
-    run(m.solid_cells, cell_groups);
-    push.parity = 0;
-    m.solid_motion.bind(cmd, &push, sizeof(push));
-    m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
-    gpu::barrier(ctx_, cmd);
-    m.profiler.end(cmd);
-    m.profiler.begin(cmd, "fill");
-    run(m.fill_link, cell_groups);
-    run(m.fill_finish, cell_groups);
-    m.profiler.end(cmd);
-    m.profiler.begin(cmd, "faces");
-    run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
-    for (const gpu::Pipeline* p : {&m.fluid_link, &m.fluid_finish}) {
-        p->bind(cmd, &push, sizeof(push));
-        p->dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fluid_dispatch));
-        gpu::barrier(ctx_, cmd);
-    }
-    if (levels > 1) {
-        const GridLevel& last = m.levels.back();
-        run(m.coarse_weights,
-            groups_for(last.faces - m.levels[1].faces + std::uint64_t(shaderio::faces_total(last.dims))));
-    }
-    m.profiler.end(cmd);
-
-    // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
-    // then holds the velocity.
-    m.profiler.begin(cmd, "advect");
-    push.param = detail::emitter_rate(dt, desc_.emitter_response);
-    if (desc_.advection == Advection::MacCormack) {
-        for (std::uint32_t mode : {1u, 2u, 3u}) {
-            push.parity = mode;
-            run(m.advect[mode], face_groups);
-        }
-    } else {
-        push.parity = desc_.advection == Advection::SemiLagrangian ? 0u : 4u;
-        run(m.advect[push.parity], face_groups);
-    }
-    m.swap ^= 1u;
-    m.profiler.end(cmd);
-
-    if (desc_.viscosity > 0.0f) {
-        m.profiler.begin(cmd, "viscosity");
-        push.param = desc_.viscosity * dt / (desc_.cell_size * desc_.cell_size);
-        std::uint32_t from = shaderio::kFieldVelocity, to = shaderio::kFieldTmp;
-        for (std::uint32_t i = 0; i < detail::kViscosityIterations; ++i) {
-            push.parity = from;
-            push.iterations = to;
-            run(m.diffuse, face_groups);
-            from = to;
-            to = to == shaderio::kFieldTmp ? shaderio::kFieldBack : shaderio::kFieldTmp;
-        }
-        if (from == shaderio::kFieldBack) {
-            const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
-            vk.vkCmdCopyBuffer(cmd, m.velocity_back.handle(), m.other_velocity().handle(), 1, &region);
-            gpu::barrier(ctx_, cmd);
-        }
-        m.swap ^= 1u;
-        m.profiler.end(cmd);
-    }
-
-    m.profiler.begin(cmd, "pressure");
-    push.parity = 0;
-    push.level = 0;
-    push.iterations = warm ? 1u : 0u;
-    run(m.start, cell_groups);
-    const bool cg = desc_.pressure == PressureSolver::MultigridPCG;
-    if (desc_.pressure == PressureSolver::Jacobi) {
-        // The baseline starts from zero (no warm start) and relaxes in blocks, each followed by a check.
-        vk.vkCmdFillBuffer(cmd, m.cg_cells.handle(), 0, 2 * cell_count() * sizeof(float), 0);
-        gpu::barrier(ctx_, cmd);
-        for (std::uint32_t block = 0; block < recorded; ++block) {
-            for (std::uint32_t i = 0; i < detail::kJacobiBlock; ++i) {
-                push.parity = 0;
-                push.swap = (i & 1u) << 1;
-                run_slot(m.jacobi, 0);
-            }
-            push.parity = 1;
-            push.swap = 0;
-            run_slot(m.jacobi, 0);
-        }
-    } else {
-        const std::uint32_t coarse = m.coarse_level;
-        for (std::uint32_t k = 0; k < recorded; ++k) {
-            push.swap = (k & 1u) << 1;
-            push.iterations = k;
-            push.level = 0;
-            push.parity = cg ? 0u : 4u;
-            run_slot(m.smooth[push.parity], shaderio::kTileSlot);
-            for (std::uint32_t l = 0; l < coarse; ++l) {
-                push.level = l + 1;
-                run_slot(m.restrict_, l + 1);
-                if (l + 1 == coarse) break;
-                push.parity = 1;
-                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l + 1);
-            }
-            push.level = coarse;
-            push.parity = coarse == 0 && cg ? 1u : 0u;
-            push.iterations = detail::kCoarseSweeps;
-            run_slot(m.coarse_solve, shaderio::kCoarseSlot);
-            for (std::uint32_t l = coarse; l-- > 0;) {
-                push.level = l;
-                push.parity = l == 0 && cg ? 3u : 2u;
-                run_slot(m.smooth[push.parity], shaderio::kTileSlot + l);
-            }
-            if (cg) {
-                push.level = 0;
-                run_slot(m.cg, 0);
-            }
-        }
-    }
-    m.profiler.end(cmd);
-
-    // The gradient and the first pass of the extension, the second, then the cells' end of the step.
-    m.profiler.begin(cmd, "project");
-    push.swap = 0;
-    push.level = 0;
-    run(m.project, face_groups);
-    m.swap ^= 1u;
-    run(m.extend, face_groups);
-    m.swap ^= 1u;
-    run(m.finish, cell_groups);
-    m.profiler.end(cmd);
-    last_dt_ = dt;
-    m.has_guess = true;
-}
-
-gpu::Timings WindSolver::timings(std::uint64_t frame) const {
-    return impl_->profiler.read_frame(frame);
-}
-
-WindStats WindSolver::stats_from(const void* readback) {
-    SolverState st;
-    std::memcpy(&st, readback, sizeof(st));
-    WindStats stats(ctx_.memory());
-    stats.divergence_before = from_bits(st.divergence_before);
-    stats.divergence_after = from_bits(st.divergence_after);
-    stats.residual = from_bits(st.residual);
-    stats.diverged = st.diverged != 0;
-    stats.converged = !stats.diverged && stats.residual <= double(desc_.tolerance) * stats.divergence_before;
-    const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
-    const std::uint32_t per_check = jacobi ? detail::kJacobiBlock : 1;
-    stats.cycles = std::min(st.checks, st.recorded) * per_check;
-    stats.cycles_recorded = st.recorded * per_check;
-    if (!jacobi && desc_.cycles_per_step == 0)
-        cycles_to_record_ = detail::cycles_to_record(stats, desc_.max_cycles);
-    stats.cut_cells = st.cut_cells;
-    stats.fluid_cells = st.fluid_cells;
-    stats.sealed_cells = st.sealed_cells;
-    stats.moving_fragments = st.fragments;
-    return stats;
 }
 
 } // namespace gust

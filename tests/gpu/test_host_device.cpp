@@ -7,9 +7,12 @@
 #include <gtest/gtest.h>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
+#include <gust/gpu/image.hpp>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace gust::test {
@@ -23,6 +26,10 @@ struct Intercept {
     PFN_vkGetPhysicalDeviceProperties get_properties = nullptr;
     PFN_vkGetPhysicalDeviceFeatures2 get_features = nullptr;
     PFN_vkQueueSubmit2 queue_submit = nullptr;
+    PFN_vkCreateBuffer create_buffer = nullptr;
+    PFN_vkCreateImage create_image = nullptr;
+    PFN_vkCreateImageView create_image_view = nullptr;
+    PFN_vkSetDebugUtilsObjectNameEXT set_object_name = nullptr;
     std::uint32_t reported_api_version = 0; // non-zero: vkGetPhysicalDeviceProperties reports this
     bool hide_geometry_shader = false;      // vkGetPhysicalDeviceFeatures2 reports geometryShader off
     std::mutex* queue_mutex = nullptr;      // checked during every vkQueueSubmit2
@@ -31,6 +38,9 @@ struct Intercept {
     std::set<std::string> instance_names;     // asked of vkGetInstanceProcAddr with an instance
     std::set<std::string> device_names;       // asked of the vkGetDeviceProcAddr the instance returns
     std::set<std::string> given_device_names; // asked of HostDevice::get_device_proc_addr
+    using Object = std::pair<VkObjectType, std::uint64_t>;
+    std::set<Object> created;                   // buffers, images and image views created
+    std::map<Object, std::string> object_names; // given through vkSetDebugUtilsObjectNameEXT
 };
 Intercept intercept;
 
@@ -59,10 +69,45 @@ VKAPI_ATTR VkResult VKAPI_CALL host_queue_submit(VkQueue queue, std::uint32_t co
     return intercept.queue_submit(queue, count, submits, fence);
 }
 
+VKAPI_ATTR VkResult VKAPI_CALL host_create_buffer(VkDevice device, const VkBufferCreateInfo* info,
+                                                  const VkAllocationCallbacks* allocator, VkBuffer* buffer) {
+    const VkResult r = intercept.create_buffer(device, info, allocator, buffer);
+    if (r == VK_SUCCESS) intercept.created.emplace(VK_OBJECT_TYPE_BUFFER, std::uint64_t(*buffer));
+    return r;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL host_create_image(VkDevice device, const VkImageCreateInfo* info,
+                                                 const VkAllocationCallbacks* allocator, VkImage* image) {
+    const VkResult r = intercept.create_image(device, info, allocator, image);
+    if (r == VK_SUCCESS) intercept.created.emplace(VK_OBJECT_TYPE_IMAGE, std::uint64_t(*image));
+    return r;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL host_create_image_view(VkDevice device, const VkImageViewCreateInfo* info,
+                                                      const VkAllocationCallbacks* allocator,
+                                                      VkImageView* view) {
+    const VkResult r = intercept.create_image_view(device, info, allocator, view);
+    if (r == VK_SUCCESS) intercept.created.emplace(VK_OBJECT_TYPE_IMAGE_VIEW, std::uint64_t(*view));
+    return r;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL host_set_object_name(VkDevice device,
+                                                    const VkDebugUtilsObjectNameInfoEXT* info) {
+    intercept.object_names[{info->objectType, info->objectHandle}] =
+        info->pObjectName ? info->pObjectName : "";
+    return intercept.set_object_name(device, info);
+}
+
 VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL host_get_device_proc_addr(VkDevice device, const char* name) {
     intercept.device_names.insert(name);
     if (std::strcmp(name, "vkQueueSubmit2") == 0)
         return reinterpret_cast<PFN_vkVoidFunction>(host_queue_submit);
+    if (std::strcmp(name, "vkCreateBuffer") == 0)
+        return reinterpret_cast<PFN_vkVoidFunction>(host_create_buffer);
+    if (std::strcmp(name, "vkCreateImage") == 0)
+        return reinterpret_cast<PFN_vkVoidFunction>(host_create_image);
+    if (std::strcmp(name, "vkCreateImageView") == 0)
+        return reinterpret_cast<PFN_vkVoidFunction>(host_create_image_view);
     return intercept.get_device_proc_addr(device, name);
 }
 
@@ -79,6 +124,8 @@ VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL host_get_instance_proc_addr(VkInstance 
         return reinterpret_cast<PFN_vkVoidFunction>(host_get_features);
     if (std::strcmp(name, "vkGetDeviceProcAddr") == 0)
         return reinterpret_cast<PFN_vkVoidFunction>(host_get_device_proc_addr);
+    if (std::strcmp(name, "vkSetDebugUtilsObjectNameEXT") == 0)
+        return reinterpret_cast<PFN_vkVoidFunction>(host_set_object_name);
     return intercept.get_instance_proc_addr(instance, name);
 }
 
@@ -125,6 +172,7 @@ class HostDeviceTest : public ::testing::Test {
         load(intercept.get_properties, "vkGetPhysicalDeviceProperties");
         load(intercept.get_features, "vkGetPhysicalDeviceFeatures2");
         load(intercept.get_device_proc_addr, "vkGetDeviceProcAddr");
+        load(intercept.set_object_name, "vkSetDebugUtilsObjectNameEXT");
 
         // The first device gust can use, with its first graphics+compute queue family.
         PFN_vkEnumeratePhysicalDevices enumerate = nullptr;
@@ -175,6 +223,12 @@ class HostDeviceTest : public ::testing::Test {
         get_queue(device_, family_, 0, &queue_);
         intercept.queue_submit =
             reinterpret_cast<PFN_vkQueueSubmit2>(intercept.get_device_proc_addr(device_, "vkQueueSubmit2"));
+        intercept.create_buffer =
+            reinterpret_cast<PFN_vkCreateBuffer>(intercept.get_device_proc_addr(device_, "vkCreateBuffer"));
+        intercept.create_image =
+            reinterpret_cast<PFN_vkCreateImage>(intercept.get_device_proc_addr(device_, "vkCreateImage"));
+        intercept.create_image_view = reinterpret_cast<PFN_vkCreateImageView>(
+            intercept.get_device_proc_addr(device_, "vkCreateImageView"));
     }
 
     void TearDown() override {
@@ -288,6 +342,43 @@ TEST_F(HostDeviceTest, usesTheHostsGetDeviceProcAddrWhenGiven) {
     ASSERT_TRUE(adopted) << adopted.message();
     EXPECT_TRUE(intercept.given_device_names.count("vkCmdFillBuffer"));
     EXPECT_FALSE(intercept.device_names.count("vkCmdFillBuffer"));
+}
+
+TEST_F(HostDeviceTest, namesEveryBufferAndImageForCaptureTools) {
+    gpu::HostDevice host = host_device();
+    host.debug_utils = true;
+    auto adopted = gpu::Context::adopt(host);
+    ASSERT_TRUE(adopted) << adopted.message();
+    gpu::Context& ctx = **adopted;
+    {
+        auto buffer = gpu::Buffer::create(ctx, 256, gpu::MemoryUse::Device, 0, "test buffer");
+        ASSERT_TRUE(buffer) << buffer.message();
+        // Where device memory is not host-visible, both copies go through a staging buffer gust creates.
+        std::vector<std::uint32_t> words(64, 7u);
+        ASSERT_TRUE(gpu::upload(ctx, *buffer, words.data(), 256));
+        ASSERT_TRUE(gpu::download(ctx, *buffer, words.data(), 256));
+        gpu::ImageDesc desc;
+        desc.extent = {4, 4, 1};
+        desc.name = "test image";
+        auto image = gpu::Image::create(ctx, desc);
+        ASSERT_TRUE(image) << image.message();
+        ctx.name(VK_OBJECT_TYPE_QUEUE, std::uint64_t(queue_), "test queue");
+
+        const auto name_of = [](VkObjectType type, std::uint64_t handle) {
+            const auto it = intercept.object_names.find({type, handle});
+            return it == intercept.object_names.end() ? std::string("(none)") : it->second;
+        };
+        EXPECT_EQ(name_of(VK_OBJECT_TYPE_BUFFER, std::uint64_t(buffer->handle())), "test buffer");
+        EXPECT_EQ(name_of(VK_OBJECT_TYPE_IMAGE, std::uint64_t(image->handle())), "test image");
+        EXPECT_EQ(name_of(VK_OBJECT_TYPE_IMAGE_VIEW, std::uint64_t(image->view())), "test image");
+        EXPECT_EQ(name_of(VK_OBJECT_TYPE_QUEUE, std::uint64_t(queue_)), "test queue");
+        // The buffer, the image, its view and, where the buffer is not host-visible (not on lavapipe), the
+        // staging buffers.
+        EXPECT_GE(intercept.created.size(), 3u);
+        for (const auto& [type, handle] : intercept.created)
+            EXPECT_NE(name_of(type, handle), "(none)") << "object type " << type << " has no name";
+    }
+    EXPECT_EQ(ctx.validation_messages(), 0u) << ctx.last_validation_message();
 }
 
 TEST_F(HostDeviceTest, destroysOnlyWhatItCreated) {

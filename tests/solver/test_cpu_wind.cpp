@@ -2,7 +2,8 @@
 // arrays) against the GPU on small grids (16^3, and one with odd sides) with static and moving solids,
 // over two steps (the second with the warm-started pressure solve).
 #include "solver/solid_world.hpp"
-#include "solver/solver_io.h"
+#include "solver/solver_cells.h"
+#include "solver/solver_math.h"
 #include "support/gpu_env.hpp"
 
 #include <algorithm>

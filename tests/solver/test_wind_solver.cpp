@@ -2,12 +2,14 @@
 // through solid faces, analytic potential flow, drag and wakes, thin walls, multigrid convergence,
 // stability at large dt, bad input and scrolling. Small grids: lavapipe runs them in CI.
 #include "solver/solid_world.hpp"
-#include "solver/solver_io.h"
+#include "solver/solver_math.h"
 #include "support/gpu_env.hpp"
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <gust/solver/wind_solver.hpp>
 #include <limits>
@@ -844,6 +846,68 @@ TEST_F(WindSolverTest, scrollingMovesThePressureWithTheFieldOnTheGpuAndTheCpu) {
         kept += inside && (*gpu_before)[from] != 0.0f ? 1 : 0;
     }
     EXPECT_GT(kept, 100) << "the moved pressure is not all zero";
+}
+
+/// Texels of `texels` (8 bytes per cell: four half floats) that are not within a half float's rounding of
+/// `expected`'s; an unwritten texel (all bits set: NaN) never is.
+std::size_t texels_apart(const gpu::Buffer& texels, const gpu::Buffer& expected, std::size_t cells) {
+    std::vector<std::uint16_t> got(cells * 4), want(cells * 4);
+    std::memcpy(got.data(), texels.mapped(), cells * 8);
+    std::memcpy(want.data(), expected.mapped(), cells * 8);
+    std::size_t apart = 0;
+    for (std::size_t c = 0; c < cells; ++c)
+        for (std::size_t k = 0; k < 4; ++k) {
+            const float a = glm::unpackHalf1x16(got[4 * c + k]), b = glm::unpackHalf1x16(want[4 * c + k]);
+            if (!(std::abs(a - b) <= 1e-3f * std::max(1.0f, std::abs(b)))) {
+                ++apart;
+                break;
+            }
+        }
+    return apart;
+}
+
+// The plugin binds its texels once and reads them from every step (finish.comp writes them), and fills
+// them once with write_texels. A bound step's texels must be those write_texels gives for the field the
+// step left, every one written; and write_texels must leave the binding alone, so that the next step
+// writes the bound texels and not write_texels' buffer.
+TEST_F(WindSolverTest, aBoundStepWritesTheTexelsOfWriteTexelsAndWriteTexelsLeavesTheBindingAsItWas) {
+    SolverDesc desc;
+    desc.cells = {16, 8, 8};
+    auto solver = make(ctx(), desc);
+    ASSERT_TRUE(solver);
+    SolidWorld solids(ctx(), desc);
+    solids.update({{box({6.2f, 0.0f, 2.3f}, {9.6f, 5.1f, 5.7f}), glm::mat4(1.0f), std::nullopt}}, 0.05f);
+    ASSERT_TRUE(solver->set_ambient({3.0f, 0.0f, 0.5f}));
+    const Emitter vortex{.type = EmitterType::Vortex,
+                         .position = {4.0f, 4.0f, 4.0f},
+                         .direction = {0.0f, 1.0f, 0.0f},
+                         .radius = 3.0f,
+                         .strength = 4.0f};
+    ASSERT_TRUE(solver->set_emitters(std::span(&vortex, 1)));
+    const std::size_t cells = solver->cell_count();
+    auto bound = gpu::Buffer::create(ctx(), cells * 8, gpu::MemoryUse::Readback, 0, "test bound texels");
+    auto written = gpu::Buffer::create(ctx(), cells * 8, gpu::MemoryUse::Readback, 0, "test written texels");
+    ASSERT_TRUE(bound && written);
+    ASSERT_TRUE(solver->check_texels(*bound));
+    solver->bind_texels(*bound);
+    auto unwritten = [&](gpu::Buffer& texels) { std::memset(texels.mapped(), 0xff, cells * 8); };
+    const SolidSource source = solids.source();
+    for (int step = 0; step < 3; ++step) {
+        unwritten(*bound);
+        unwritten(*written);
+        auto stats = solver->step(0.05f, &source);
+        ASSERT_TRUE(stats) << stats.message();
+        std::vector<std::uint8_t> after(cells * 8);
+        std::memcpy(after.data(), written->mapped(), after.size());
+        EXPECT_TRUE(std::all_of(after.begin(), after.end(), [](std::uint8_t v) { return v == 0xff; }))
+            << "step " << step << " wrote write_texels' buffer";
+        ASSERT_TRUE(solver->write_texels(*written, [](VkCommandBuffer) {}));
+        EXPECT_EQ(texels_apart(*bound, *written, cells), 0u) << "step " << step;
+    }
+    auto velocity = solver->read_cell_velocity();
+    ASSERT_TRUE(velocity);
+    EXPECT_GT(glm::length((*velocity)[std::size_t(shaderio::cell_index({16, 8, 8}, {4, 4, 6}))]), 1.0f)
+        << "the texels compared hold a moving field";
 }
 
 } // namespace

@@ -1,6 +1,7 @@
 // The tree against from-scratch voxelization, frame after frame, for every branching factor.
 #include "support/gpu_env.hpp"
 #include "support/mesh_gen.hpp"
+#include "tree/tree_io.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +9,9 @@
 #include <gtest/gtest.h>
 #include <gust/voxelizer/sparse_tree.hpp>
 #include <gust/voxelizer/voxelizer.hpp>
+#include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <tuple>
 
@@ -252,6 +255,144 @@ TEST_F(TreeTest, sameSequenceTwiceGivesIdenticalTrees) {
     }
     EXPECT_EQ(runs[0], runs[1]);
     EXPECT_EQ(nodes[0], nodes[1]);
+}
+
+TEST(TreeSlots, slotOffsetIsTheChildsPositionInItsParent) {
+    for (std::uint32_t log2_b : {1u, 2u, 3u}) {
+        const std::uint32_t b = 1u << log2_b;
+        // Slots count x fastest, then y, then z.
+        std::uint32_t slot = 0;
+        for (std::uint32_t z = 0; z < b; ++z)
+            for (std::uint32_t y = 0; y < b; ++y)
+                for (std::uint32_t x = 0; x < b; ++x, ++slot)
+                    EXPECT_EQ(shaderio::slot_offset(slot, log2_b), glm::uvec3(x, y, z)) << "b " << b;
+    }
+}
+
+/// A fragment list written by the test, not by the voxelizer.
+struct KnownFragments {
+    KnownFragments(gpu::Context& ctx, const std::vector<glm::uvec3>& voxels) {
+        std::vector<std::uint32_t> keys;
+        for (const glm::uvec3& v : voxels)
+            keys.push_back(pack_voxel(v.x, v.y, v.z));
+        const std::uint32_t count = std::uint32_t(keys.size());
+        keys_ = std::move(gpu::Buffer::create(ctx, keys.size() * 4, gpu::MemoryUse::Device).value());
+        count_ = std::move(gpu::Buffer::create(ctx, 4, gpu::MemoryUse::Device).value());
+        EXPECT_TRUE(gpu::upload(ctx, keys_, keys.data(), keys.size() * 4));
+        EXPECT_TRUE(gpu::upload(ctx, count_, &count, 4));
+        source = {keys_.address(), count_.address(), keys.size()};
+    }
+    FragmentSource source;
+
+  private:
+    gpu::Buffer keys_, count_;
+};
+
+TEST_F(TreeTest, nodesAreDecodedLevelByLevelWithTheirCornersAndStates) {
+    // b = 4, res 64: levels of 64, 16 and 4 voxels per node (the last: bricks).
+    TreeDesc desc;
+    desc.branching = 4;
+    desc.res = 64;
+    auto tree = SparseTree::create(ctx(), desc);
+    ASSERT_TRUE(tree) << tree.message();
+    const std::vector<glm::uvec3> walls = {{0, 0, 0}, {5, 9, 13}, {6, 9, 13}, {63, 63, 63}};
+    const std::vector<glm::uvec3> mover = {{40, 2, 17}};
+    const KnownFragments fixed(ctx(), walls), moving(ctx(), mover);
+    ASSERT_TRUE((*tree)->update(&fixed.source, &moving.source));
+    auto nodes = (*tree)->nodes();
+    ASSERT_TRUE(nodes) << nodes.message();
+
+    // By hand: the refined nodes of each level are the voxels' corners rounded down to that level's
+    // extent; every node of a refined parent's block is listed.
+    const std::uint32_t extent[3] = {64, 16, 4};
+    using Corner = std::tuple<std::uint32_t, std::uint32_t, std::uint32_t>;
+    std::set<Corner> refined[3], static_refined[3];
+    for (std::uint32_t level = 0; level < 3; ++level) {
+        for (const glm::uvec3& v : walls) {
+            const glm::uvec3 c = v / extent[level] * extent[level];
+            refined[level].insert({c.x, c.y, c.z});
+            static_refined[level].insert({c.x, c.y, c.z});
+        }
+        for (const glm::uvec3& v : mover) {
+            const glm::uvec3 c = v / extent[level] * extent[level];
+            refined[level].insert({c.x, c.y, c.z});
+        }
+    }
+    // Root; 64 children of the root; 64 for each refined level-1 node (two for walls, one for the mover
+    // at (32, 0, 16), apart from the walls').
+    ASSERT_EQ(refined[1].size(), 3u);
+    ASSERT_EQ(nodes->size(), 1u + 64u + 64u * refined[1].size());
+    std::map<std::uint32_t, std::set<Corner>> listed;
+    std::uint32_t last_level = 0;
+    for (const TreeNodeView& n : *nodes) {
+        ASSERT_GE(n.level, last_level) << "coarse levels come first";
+        last_level = n.level;
+        ASSERT_LT(n.level, 3u);
+        EXPECT_EQ(n.extent, extent[n.level]);
+        const Corner c{n.min.x, n.min.y, n.min.z};
+        EXPECT_TRUE(listed[n.level].insert(c).second) << "a node listed twice";
+        EXPECT_EQ(n.refined, refined[n.level].count(c) == 1) << n.level << " " << n.min.x << " " << n.min.y;
+        const TreeNodeView::State expected = static_refined[n.level].count(c) ? TreeNodeView::State::Static
+                                             : refined[n.level].count(c)      ? TreeNodeView::State::Reached
+                                                                              : TreeNodeView::State::Stale;
+        EXPECT_EQ(n.state, expected) << "level " << n.level << " at " << n.min.x << " " << n.min.y << " "
+                                     << n.min.z;
+    }
+    // Every child of a refined node, at its place in the parent.
+    for (std::uint32_t level = 1; level < 3; ++level) {
+        std::set<Corner> children;
+        for (const auto& [x, y, z] : refined[level - 1])
+            for (std::uint32_t slot = 0; slot < 64; ++slot) {
+                const glm::uvec3 o(slot % 4, slot / 4 % 4, slot / 16);
+                const glm::uvec3 c = glm::uvec3(x, y, z) + o * extent[level];
+                children.insert({c.x, c.y, c.z});
+            }
+        EXPECT_EQ(listed[level], children) << "level " << level;
+    }
+
+    std::vector<std::uint32_t> expected_voxels;
+    for (const auto& set : {walls, mover})
+        for (const glm::uvec3& v : set)
+            expected_voxels.push_back(pack_voxel(v.x, v.y, v.z));
+    const auto leaves = (*tree)->leaf_voxels();
+    ASSERT_TRUE(leaves) << leaves.message();
+    EXPECT_EQ(std::vector<std::uint32_t>(leaves->begin(), leaves->end()), sorted_unique(expected_voxels));
+}
+
+TEST_F(TreeTest, grownPoolsHoldNothingUntilTheTreeIsRebuilt) {
+    TreeDesc desc;
+    desc.branching = 2;
+    desc.res = 16;
+    auto tree = SparseTree::create(ctx(), desc);
+    ASSERT_TRUE(tree) << tree.message();
+    const KnownFragments fixed(ctx(), {{1, 2, 3}, {9, 9, 9}});
+    ASSERT_TRUE((*tree)->update(&fixed.source, nullptr));
+    const TreePools before = (*tree)->pools();
+    ASSERT_TRUE((*tree)->reserve(before.node_blocks, before.mask_blocks));
+    EXPECT_FALSE((*tree)->rebuild_pending()) << "no growth, nothing dropped";
+    ASSERT_TRUE((*tree)->reserve(before.node_blocks * 2, before.mask_blocks + 1));
+    EXPECT_TRUE((*tree)->rebuild_pending());
+    EXPECT_EQ((*tree)->pools().node_blocks, before.node_blocks * 2);
+    EXPECT_TRUE((*tree)->leaf_voxels()->empty());
+    EXPECT_EQ((*tree)->nodes()->size(), 1u);
+    EXPECT_FALSE((*tree)->update(nullptr, &fixed.source)) << "an update that does not rebuild";
+    ASSERT_TRUE((*tree)->update(&fixed.source, nullptr));
+    EXPECT_FALSE((*tree)->rebuild_pending());
+    const std::vector<std::uint32_t> expected = {pack_voxel(1, 2, 3), pack_voxel(9, 9, 9)};
+    const auto leaves = (*tree)->leaf_voxels();
+    ASSERT_TRUE(leaves);
+    EXPECT_EQ(std::vector<std::uint32_t>(leaves->begin(), leaves->end()), expected);
+}
+
+TEST_F(TreeTest, fullPoolsCountEveryNodeRefined) {
+    TreeDesc desc;
+    desc.branching = 4;
+    desc.res = 64;
+    auto tree = SparseTree::create(ctx(), desc);
+    ASSERT_TRUE(tree);
+    // Node blocks: the root's, the root's children's, one per level-1 node (64); masks: 64 * 64 + block 0.
+    EXPECT_EQ((*tree)->full_pools().node_blocks, 1u + 1u + 64u);
+    EXPECT_EQ((*tree)->full_pools().mask_blocks, 4096u + 1u);
 }
 
 } // namespace

@@ -3,12 +3,15 @@
 #include "support/gpu_env.hpp"
 
 #include <algorithm>
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 #include <gust/scene/domain_grid.hpp>
 #include <gust/scene/primitives.hpp>
 #include <gust/scene/scene_runtime.hpp>
+#include <gust/voxelizer/cpu_reference.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <memory>
+#include <set>
 #include <string>
 #include <tuple>
 
@@ -234,6 +237,105 @@ TEST(WorldRecorded, growsWhatRanOutAndLaterFramesAreWhole) {
     for (std::uint64_t n = whole_from; n < frames; ++n)
         EXPECT_TRUE(matches[n]) << "frame " << n << " was recorded after the pools grew";
     EXPECT_EQ(ctx.validation_messages(), 0u) << ctx.last_validation_message();
+}
+
+/// Issue 31's overflowing first frame, small: a box turned about two axes fills about 11,900 bricks of
+/// 4^3 voxels on a 256^3 grid, where the default pools of branching 4 hold 4,095.
+struct TurnedBox {
+    TurnedBox() {
+        grid.res = 256;
+        grid.voxel_size = 1.0f / 256.0f;
+        model = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f));
+        model = glm::rotate(model, 0.35f, glm::vec3(0, 1, 0));
+        model = glm::rotate(model, 0.25f, glm::vec3(1, 0, 0));
+        const CpuVoxelization ref = voxelize_reference(cpu_instances(), grid);
+        reference = ref.voxels;
+    }
+    std::vector<InstanceDesc> cpu_instances() const { return {{view_of(mesh), model}}; }
+    /// The voxels of the tree of a fresh world after its first frame, blocking or recorded.
+    std::vector<std::uint32_t> first_frame(gpu::Context& ctx, bool recorded, WorldFrame& frame) const {
+        WorldDesc desc;
+        desc.grid = grid;
+        desc.method = VoxelizeMethod::Compute;
+        auto world = VoxelWorld::create(ctx, desc);
+        EXPECT_TRUE(world) << world.message();
+        if (!world) return {};
+        auto gpu_mesh = (*world)->upload(view_of(mesh));
+        EXPECT_TRUE(gpu_mesh);
+        const GpuInstance box{&*gpu_mesh, model};
+        (*world)->set_static({&box, 1});
+        if (recorded) {
+            auto readback = gpu::Buffer::create(ctx, VoxelWorld::readback_bytes(), gpu::MemoryUse::Readback);
+            EXPECT_TRUE(readback);
+            ctx.begin_frame(1);
+            Status status;
+            EXPECT_TRUE(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+                status = (*world)->record(cmd, {}, 0.1f);
+                gpu::barrier(ctx, cmd);
+                (*world)->record_readback(cmd, readback->handle(), 0);
+            }));
+            EXPECT_TRUE(status) << status.message();
+            auto done = (*world)->collect(readback->mapped());
+            EXPECT_TRUE(done) << done.message();
+            if (done) frame = *done;
+            ctx.retire(1);
+        } else {
+            auto done = (*world)->step({}, 0.1f);
+            EXPECT_TRUE(done) << done.message();
+            if (done) frame = *done;
+        }
+        auto leaves = (*world)->tree().leaf_voxels();
+        EXPECT_TRUE(leaves) << leaves.message();
+        return leaves ? std::vector<std::uint32_t>(leaves->begin(), leaves->end())
+                      : std::vector<std::uint32_t>{};
+    }
+    /// True when `voxels` equal the reference but for rounding on the boundary (diff_voxels).
+    bool matches_reference(const std::vector<std::uint32_t>& voxels) const {
+        const VoxelDiff diff = diff_voxels(voxels, reference);
+        return unexplained_differences(diff, cpu_instances(), grid).empty() &&
+               diff.missing.size() + diff.extra.size() < reference.size() / 1000;
+    }
+
+    GridDesc grid;
+    Mesh mesh = make_box_mesh(glm::vec3(-0.3f), glm::vec3(0.3f));
+    glm::mat4 model{1.0f};
+    std::vector<std::uint32_t> reference;
+};
+
+TEST_F(WorldTest, firstFrameOfABoxThatOverflowsDefaultPoolsIsWholeAndTheSameEveryRun) {
+    const TurnedBox box;
+    std::set<std::uint32_t> bricks;
+    for (std::uint32_t key : box.reference)
+        bricks.insert(pack_voxel(unpack_voxel(key).x / 4, unpack_voxel(key).y / 4, unpack_voxel(key).z / 4));
+    ASSERT_GT(bricks.size(), 4095u) << "the default pools would overflow";
+
+    std::vector<std::uint32_t> runs[2];
+    for (auto& run : runs) {
+        WorldFrame frame;
+        run = box.first_frame(ctx(), false, frame);
+        EXPECT_EQ(frame.tree.exhausted, 0u);
+        EXPECT_TRUE(frame.static_rebuilt);
+        EXPECT_EQ(frame.tree.voxels, run.size());
+        EXPECT_TRUE(box.matches_reference(run));
+    }
+    EXPECT_EQ(runs[0], runs[1]);
+}
+
+/// The same first frame recorded (frames in flight), which cannot be redone: the pools sized from the
+/// box's mesh hold it whole. The context is the test's own, since begin_frame() is for good.
+TEST(WorldRecorded, firstFrameOfABoxThatOverflowsDefaultPoolsIsWhole) {
+    gpu::ContextDesc context_desc;
+    context_desc.validation = true;
+    auto context = gpu::Context::create(context_desc);
+    ASSERT_TRUE(context) << context.message();
+    const TurnedBox box;
+    WorldFrame frame;
+    const std::vector<std::uint32_t> voxels = box.first_frame(**context, true, frame);
+    EXPECT_FALSE(frame.truncated);
+    EXPECT_EQ(frame.tree.exhausted, 0u);
+    EXPECT_GT(frame.pool_growths, 0u) << "grown from the estimate before the frame";
+    EXPECT_TRUE(box.matches_reference(voxels));
+    EXPECT_EQ((*context)->validation_messages(), 0u) << (*context)->last_validation_message();
 }
 
 } // namespace

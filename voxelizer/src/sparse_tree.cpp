@@ -94,18 +94,21 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
         *stage.pipeline = std::move(*pipeline);
     }
     auto state = gpu::Buffer::create(ctx, sizeof(TreeState), gpu::MemoryUse::Readback,
-                                     VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+                                     VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "gust tree state");
     if (!state) return state.status();
     tree->state_ = std::move(*state);
-    for (gpu::Buffer* bindings : {&tree->static_bindings_, &tree->dynamic_bindings_}) {
-        auto b = gpu::Buffer::create(ctx, sizeof(TreeBindings), gpu::MemoryUse::Device);
+    const std::pair<gpu::Buffer*, const char*> bindings[] = {
+        {&tree->static_bindings_, "gust tree static bindings"},
+        {&tree->dynamic_bindings_, "gust tree dynamic bindings"}};
+    for (const auto& [buffer, name] : bindings) {
+        auto b = gpu::Buffer::create(ctx, sizeof(TreeBindings), gpu::MemoryUse::Device, 0, name);
         if (!b) return b.status();
-        *bindings = std::move(*b);
+        *buffer = std::move(*b);
     }
     auto profiler = gpu::Profiler::create(ctx);
     if (!profiler) return profiler.status();
     tree->profiler_ = std::move(*profiler);
-    if (Status s = tree->allocate_pools(node_blocks, mask_blocks, false); !s) return s;
+    if (Status s = tree->allocate_pools(node_blocks, mask_blocks); !s) return s;
     if (Status s = tree->ensure_scratch(kMinScratch); !s) return s;
     TreeState empty{};
     empty.node_blocks_used = 1;
@@ -118,37 +121,32 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
     return tree;
 }
 
-Status SparseTree::allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep) {
+Status SparseTree::allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks) {
     const std::uint64_t children = 1ull << (3 * log2_b_);
     const std::uint64_t stride = shaderio::mask_stride(log2_b_);
     const std::uint64_t list = std::uint64_t(node_blocks) + mask_blocks;
     struct Want {
         gpu::Buffer* buffer;
         VkDeviceSize bytes;
+        const char* name;
     };
-    const Want wants[] = {{&nodes_, node_blocks * children * sizeof(glm::uvec2)},
-                          {&masks_, mask_blocks * stride * sizeof(std::uint32_t)},
-                          {&node_free_, node_blocks * sizeof(std::uint32_t)},
-                          {&mask_free_, mask_blocks * sizeof(std::uint32_t)},
-                          {&records_[0], list * sizeof(BlockRecord)},
-                          {&records_[1], list * sizeof(BlockRecord)},
-                          {&leaves_[0], list * sizeof(std::uint32_t)},
-                          {&leaves_[1], list * sizeof(std::uint32_t)}};
+    const Want wants[] = {{&nodes_, node_blocks * children * sizeof(glm::uvec2), "gust tree nodes"},
+                          {&masks_, mask_blocks * stride * sizeof(std::uint32_t), "gust tree masks"},
+                          {&node_free_, node_blocks * sizeof(std::uint32_t), "gust tree node free list"},
+                          {&mask_free_, mask_blocks * sizeof(std::uint32_t), "gust tree mask free list"},
+                          {&records_[0], list * sizeof(BlockRecord), "gust tree records even"},
+                          {&records_[1], list * sizeof(BlockRecord), "gust tree records odd"},
+                          {&leaves_[0], list * sizeof(std::uint32_t), "gust tree leaves even"},
+                          {&leaves_[1], list * sizeof(std::uint32_t), "gust tree leaves odd"}};
+    // All or nothing: a failed allocation leaves the old pools in place.
     std::pmr::vector<gpu::Buffer> fresh(ctx_.memory());
     for (const Want& want : wants) {
-        auto b = gpu::Buffer::create(ctx_, want.bytes, gpu::MemoryUse::Device);
+        auto b = gpu::Buffer::create(ctx_, want.bytes, gpu::MemoryUse::Device, 0, want.name);
         if (!b) return b.status();
         fresh.push_back(std::move(*b));
     }
-    if (keep) {
-        Status copied = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-            for (std::size_t i = 0; i < fresh.size(); ++i) {
-                const VkBufferCopy region{0, 0, wants[i].buffer->size()};
-                ctx_.vk().vkCmdCopyBuffer(cmd, wants[i].buffer->handle(), fresh[i].handle(), 1, &region);
-            }
-        });
-        if (!copied) return copied;
-    }
+    // Moving over a buffer releases it; while frames are in flight the Context keeps it until the frames
+    // recorded so far completed (Context::retire).
     for (std::size_t i = 0; i < fresh.size(); ++i)
         *wants[i].buffer = std::move(fresh[i]);
     node_blocks_ = node_blocks;
@@ -157,14 +155,37 @@ Status SparseTree::allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_
 }
 
 Status SparseTree::reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks) {
-    return allocate_pools(std::max(node_blocks, node_blocks_), std::max(mask_blocks, mask_blocks_), true);
+    node_blocks = std::max(node_blocks, node_blocks_);
+    mask_blocks = std::max(mask_blocks, mask_blocks_);
+    if (node_blocks == node_blocks_ && mask_blocks == mask_blocks_) return {};
+    // Block indices are baked into the nodes, so a copy would keep the tree; but every caller grows
+    // because a frame ran out, and that frame is rebuilt anyway. Not copying keeps growth free of a
+    // submission of its own, which a frame recorded into the host's command buffer cannot wait for.
+    if (Status s = allocate_pools(node_blocks, mask_blocks); !s) return s;
+    rebuild_pending_ = true;
+    return {};
+}
+
+TreePools SparseTree::full_pools() const {
+    // Every node refined: node blocks for the root's block and every internal node, a mask block for
+    // every node of the last level (plus the unused block 0).
+    std::uint64_t nodes = 1, level_nodes = 1;
+    for (std::uint32_t level = 0; level + 1 < levels_; ++level) {
+        nodes += level_nodes;
+        level_nodes <<= 3 * log2_b_;
+    }
+    const std::uint64_t limit = UINT32_MAX;
+    return {std::uint32_t(std::min(nodes, limit)), std::uint32_t(std::min(level_nodes + 1, limit))};
 }
 
 Status SparseTree::ensure_scratch(std::uint64_t fragments) {
     if (fragments <= scratch_capacity_) return {};
     const std::uint64_t capacity = std::max(fragments, kMinScratch);
-    for (gpu::Buffer* b : {&frag_node_, &requests_}) {
-        auto buffer = gpu::Buffer::create(ctx_, capacity * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    const std::pair<gpu::Buffer*, const char*> lists[] = {{&frag_node_, "gust tree fragment nodes"},
+                                                          {&requests_, "gust tree requests"}};
+    for (const auto& [b, name] : lists) {
+        auto buffer =
+            gpu::Buffer::create(ctx_, capacity * sizeof(std::uint32_t), gpu::MemoryUse::Device, 0, name);
         if (!buffer) return buffer.status();
         *b = std::move(*buffer);
     }
@@ -223,6 +244,9 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
 }
 
 Status SparseTree::prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
+    if (rebuild_pending_ && !rebuild_static)
+        return Status::failure("the tree's pools grew: its next update must rebuild it from the static "
+                               "fragments (rebuild_static), since the new pools hold nothing");
     std::uint64_t needed = 0;
     for (const FragmentSource* s : {rebuild_static, dynamic})
         if (s) needed = std::max(needed, s->capacity);
@@ -277,6 +301,7 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     profiler_.reset(cmd);
     profiler_.begin(cmd, "tree_begin");
     if (rebuild_static) {
+        rebuild_pending_ = false;
         TreeState empty{};
         empty.node_blocks_used = 1;
         empty.mask_blocks_used = 1;
@@ -354,43 +379,104 @@ Result<std::pmr::vector<glm::uvec2>> SparseTree::node_pool() const {
     return nodes;
 }
 
+template <class Visit> Status SparseTree::walk(std::span<const glm::uvec2> nodes, Visit&& visit) const {
+    const std::uint32_t children = 1u << (3 * log2_b_);
+    const std::size_t blocks = nodes.size() / children;
+    if (blocks == 0) return Status::failure("the tree's node pool does not hold the root's block");
+    struct Visited {
+        std::uint32_t node;
+        glm::uvec3 min; ///< in voxels
+    };
+    std::pmr::vector<Visited> level_nodes(ctx_.memory()), next(ctx_.memory());
+    level_nodes.push_back({0, glm::uvec3(0)});
+    // A block linked twice (or the root's block linked as a child) would mean a corrupt pool; refusing
+    // it bounds the walk.
+    std::pmr::vector<bool> reached(blocks, false, ctx_.memory());
+    reached[0] = true;
+    std::uint32_t extent = 1u << (log2_b_ * levels_);
+    for (std::uint32_t level = 0; !level_nodes.empty(); ++level, extent >>= log2_b_) {
+        const bool bricks = level + 1 == levels_;
+        next.clear();
+        for (const Visited& v : level_nodes) {
+            const glm::uvec2 node = nodes[v.node];
+            TreeNodeView view;
+            view.level = level;
+            view.min = v.min;
+            view.extent = extent;
+            view.state = node.y == shaderio::kPinned       ? TreeNodeView::State::Static
+                         : frame_ != 0 && node.y == frame_ ? TreeNodeView::State::Reached
+                                                           : TreeNodeView::State::Stale;
+            view.refined = node.x != 0;
+            if (Status s = visit(view, node.x); !s) return s;
+            if (bricks || node.x == 0) continue;
+            if (node.x >= blocks || reached[node.x])
+                return Status::failure("the tree's node pool is corrupt: node " + std::to_string(v.node) +
+                                       " at level " + std::to_string(level) + " links block " +
+                                       std::to_string(node.x) +
+                                       (node.x >= blocks ? " of " + std::to_string(blocks) + " in use"
+                                                         : ", which another node links too"));
+            reached[node.x] = true;
+            const std::uint32_t child_extent = extent >> log2_b_;
+            for (std::uint32_t c = 0; c < children; ++c)
+                next.push_back(
+                    {node.x * children + c, v.min + shaderio::slot_offset(c, log2_b_) * child_extent});
+        }
+        level_nodes.swap(next);
+    }
+    return {};
+}
+
+Result<std::pmr::vector<TreeNodeView>> SparseTree::nodes() const {
+    std::pmr::vector<TreeNodeView> out(ctx_.memory());
+    if (rebuild_pending_) {
+        // The grown pools hold nothing until the next update rebuilds the tree: an empty root.
+        TreeNodeView root;
+        root.extent = 1u << (log2_b_ * levels_);
+        out.push_back(root);
+        return out;
+    }
+    auto pool = node_pool();
+    if (!pool) return pool.status();
+    Status walked = walk(*pool, [&](const TreeNodeView& view, std::uint32_t) {
+        out.push_back(view);
+        return Status{};
+    });
+    if (!walked) return walked;
+    return out;
+}
+
 Result<std::pmr::vector<std::uint32_t>> SparseTree::leaf_voxels() const {
+    std::pmr::vector<std::uint32_t> out(ctx_.memory());
+    if (rebuild_pending_) return out;
     TreeState st{};
     std::memcpy(&st, state_.mapped(), sizeof(st));
     const std::uint32_t children = 1u << (3 * log2_b_);
     const std::uint32_t stride = shaderio::mask_stride(log2_b_);
     const std::uint32_t words = shaderio::mask_words(log2_b_);
-    std::pmr::vector<glm::uvec2> nodes(std::size_t(st.node_blocks_used) * children, ctx_.memory());
+    auto nodes = node_pool();
+    if (!nodes) return nodes.status();
     std::pmr::vector<std::uint32_t> masks(std::size_t(st.mask_blocks_used) * stride, ctx_.memory());
-    if (Status s = gpu::download(ctx_, nodes_, nodes.data(), nodes.size() * sizeof(glm::uvec2)); !s) return s;
     if (Status s = gpu::download(ctx_, masks_, masks.data(), masks.size() * sizeof(std::uint32_t)); !s)
         return s;
-
-    const std::uint32_t b = 1u << log2_b_;
-    const auto decode = [&](std::uint32_t slot) {
-        return glm::uvec3(slot & (b - 1), (slot >> log2_b_) & (b - 1), slot >> (2 * log2_b_));
-    };
-    std::pmr::vector<std::uint32_t> out(ctx_.memory());
-    const auto walk = [&](const auto& self, std::uint32_t node, std::uint32_t level, glm::uvec3 origin,
-                          std::uint32_t size) -> void {
-        const std::uint32_t block = nodes[node].x;
-        if (block == 0) return;
-        if (level + 1 == levels_) {
-            if (block >= st.mask_blocks_used) return;
-            const std::uint32_t* m = &masks[std::size_t(block) * stride];
-            for (std::uint32_t bit = 0; bit < children; ++bit)
-                if (((m[bit / 32] | m[words + bit / 32]) >> (bit % 32)) & 1u) {
-                    const glm::uvec3 v = origin + decode(bit);
-                    out.push_back(pack_voxel(v.x, v.y, v.z));
-                }
-            return;
-        }
-        if (block >= st.node_blocks_used) return;
-        const std::uint32_t child_size = size >> log2_b_;
-        for (std::uint32_t c = 0; c < children; ++c)
-            self(self, block * children + c, level + 1, origin + decode(c) * child_size, child_size);
-    };
-    walk(walk, 0, 0, glm::uvec3(0), 1u << (log2_b_ * levels_));
+    std::pmr::vector<bool> reached(st.mask_blocks_used, false, ctx_.memory());
+    Status walked = walk(*nodes, [&](const TreeNodeView& view, std::uint32_t block) {
+        if (view.level + 1 != levels_ || block == 0) return Status{};
+        if (block >= st.mask_blocks_used || reached[block])
+            return Status::failure("the tree's mask pool is corrupt: a brick at level " +
+                                   std::to_string(view.level) + " links mask block " + std::to_string(block) +
+                                   (block >= st.mask_blocks_used
+                                        ? " of " + std::to_string(st.mask_blocks_used) + " in use"
+                                        : ", which another brick links too"));
+        reached[block] = true;
+        const std::uint32_t* m = &masks[std::size_t(block) * stride];
+        for (std::uint32_t bit = 0; bit < children; ++bit)
+            if (((m[bit / 32] | m[words + bit / 32]) >> (bit % 32)) & 1u) {
+                const glm::uvec3 v = view.min + shaderio::slot_offset(bit, log2_b_);
+                out.push_back(pack_voxel(v.x, v.y, v.z));
+            }
+        return Status{};
+    });
+    if (!walked) return walked;
     std::sort(out.begin(), out.end());
     return out;
 }

@@ -204,7 +204,7 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
     if (!profiler) return profiler.status();
     v->profiler_ = std::move(*profiler);
     auto counters = gpu::Buffer::create(ctx, sizeof(VoxelizeCounters), gpu::MemoryUse::Readback,
-                                        VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+                                        VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "gust voxelizer counters");
     if (!counters) return counters.status();
     v->counters_ = std::move(*counters);
     if (Status s = v->ensure_large_list(kInitialLargeItems); !s) return s;
@@ -225,7 +225,8 @@ Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
         return Status::failure("the fragment list needs " + std::to_string(fragments) +
                                " entries, more than one device allocation holds (" + std::to_string(limit) +
                                "); lower the resolution or split the scene");
-    auto buffer = gpu::Buffer::create(ctx_, fragments * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    auto buffer = gpu::Buffer::create(ctx_, fragments * sizeof(std::uint32_t), gpu::MemoryUse::Device, 0,
+                                      "gust voxelizer fragments");
     if (!buffer) return buffer.status();
     fragments_ = std::move(*buffer);
     capacity_ = fragments;
@@ -234,7 +235,8 @@ Status Voxelizer::ensure_capacity(std::uint64_t fragments) {
 
 Status Voxelizer::ensure_velocity_capacity() {
     if (velocities_ && velocities_.size() >= capacity_ * sizeof(glm::uvec2)) return {};
-    auto buffer = gpu::Buffer::create(ctx_, capacity_ * sizeof(glm::uvec2), gpu::MemoryUse::Device);
+    auto buffer = gpu::Buffer::create(ctx_, capacity_ * sizeof(glm::uvec2), gpu::MemoryUse::Device, 0,
+                                      "gust voxelizer velocities");
     if (!buffer) return buffer.status();
     velocities_ = std::move(*buffer);
     return {};
@@ -243,7 +245,7 @@ Status Voxelizer::ensure_velocity_capacity() {
 Status Voxelizer::ensure_instances(std::size_t count) {
     const VkDeviceSize bytes = std::max<std::size_t>(count, 1) * sizeof(VoxelizeInstance);
     if (instances_ && instances_.size() >= bytes) return {};
-    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Device);
+    auto buffer = gpu::Buffer::create(ctx_, bytes, gpu::MemoryUse::Device, 0, "gust voxelizer instances");
     if (!buffer) return buffer.status();
     instances_ = std::move(*buffer);
     return {};
@@ -251,7 +253,8 @@ Status Voxelizer::ensure_instances(std::size_t count) {
 
 Status Voxelizer::rotate_positions(GpuMesh& mesh) {
     if (!mesh.prev_positions_) {
-        auto buffer = gpu::Buffer::create(ctx_, mesh.positions_.size(), gpu::MemoryUse::Device);
+        auto buffer = gpu::Buffer::create(ctx_, mesh.positions_.size(), gpu::MemoryUse::Device, 0,
+                                          "gust voxelizer previous positions");
         if (!buffer) return buffer.status();
         mesh.prev_positions_ = std::move(*buffer);
     }
@@ -300,7 +303,8 @@ Status Voxelizer::ensure_large_list(std::uint64_t items) {
     if (items > UINT32_MAX || items * sizeof(glm::uvec2) > ctx_.info().max_allocation_size)
         return Status::failure("the large-triangle queue needs " + std::to_string(items) +
                                " items, more than one device allocation holds");
-    auto buffer = gpu::Buffer::create(ctx_, items * sizeof(glm::uvec2), gpu::MemoryUse::Device);
+    auto buffer = gpu::Buffer::create(ctx_, items * sizeof(glm::uvec2), gpu::MemoryUse::Device, 0,
+                                      "gust voxelizer large triangles");
     if (!buffer) return buffer.status();
     large_list_ = std::move(*buffer);
     large_capacity_ = items;
@@ -334,11 +338,12 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
         const glm::vec3 p = mesh.position(v);
         std::memcpy(&packed[3 * v], &p, sizeof(p));
     }
-    auto positions = gpu::Buffer::create(ctx_, packed.size() * sizeof(float), gpu::MemoryUse::Device);
+    auto positions = gpu::Buffer::create(ctx_, packed.size() * sizeof(float), gpu::MemoryUse::Device, 0,
+                                         "gust voxelizer mesh positions");
     if (!positions) return positions.status();
     if (Status s = gpu::upload(ctx_, *positions, packed.data(), packed.size() * sizeof(float)); !s) return s;
-    auto indices =
-        gpu::Buffer::create(ctx_, mesh.index_count * sizeof(std::uint32_t), gpu::MemoryUse::Device);
+    auto indices = gpu::Buffer::create(ctx_, mesh.index_count * sizeof(std::uint32_t), gpu::MemoryUse::Device,
+                                       0, "gust voxelizer mesh indices");
     if (!indices) return indices.status();
     if (Status s = gpu::upload(ctx_, *indices, mesh.indices, mesh.index_count * sizeof(std::uint32_t)); !s)
         return s;

@@ -189,7 +189,10 @@ class Context : public HostObject {
 
     /// Whether VK_EXT_debug_utils is on, so that names and labels reach capture tools.
     bool debug_utils() const { return vk_.vkSetDebugUtilsObjectNameEXT != nullptr; }
-    /// Names a Vulkan object for capture tools (nothing without VK_EXT_debug_utils; `name` may be null).
+    /// Names a Vulkan object of this device for capture tools (RenderDoc, Nsight): `handle` is the object
+    /// cast to std::uint64_t (`std::uint64_t(sampler)`), `type` its VK_OBJECT_TYPE_*. Nothing without
+    /// VK_EXT_debug_utils; `name` may be null (then nothing either). Buffer::create, Image::create and the
+    /// Pipeline factories name their objects through it; call it for any other object gust creates.
     void name(VkObjectType type, std::uint64_t handle, const char* name) const;
     /// Opens a labelled region of `cmd` (a pass) for capture tools; close it with end_label().
     void begin_label(VkCommandBuffer cmd, const char* name) const;
@@ -256,6 +259,9 @@ class Context : public HostObject {
     Status pick_device(std::string_view override_spec);
     Status create_device();
     Status finish_device(std::uint32_t queue_index);
+    /// The pipeline cache, from ContextDesc::pipeline_cache when that file holds the cache of the device
+    /// `props` describes.
+    Status create_pipeline_cache(const VkPhysicalDeviceProperties& props);
 
     std::pmr::memory_resource* host_memory_;
     VulkanAllocator allocator_;

@@ -13,6 +13,8 @@ struct ImageDesc {
     VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
                               VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     bool volume = false; ///< force a 3D image even when depth is 1
+    /// Name of the image and its view in frame captures (a literal, or null); see Context::name().
+    const char* name = nullptr;
 };
 
 /// A device-local image, its memory and a view of the whole image. Move-only; starts in
@@ -20,7 +22,8 @@ struct ImageDesc {
 class Image {
   public:
     Image() = default;
-    /// Creates the image and its view; fails with a message when the format or size is unsupported.
+    /// Creates the image and its view, both named desc.name; fails with a message when the format or size
+    /// is unsupported.
     static Result<Image> create(Context& ctx, const ImageDesc& desc);
     ~Image();
     Image(Image&& other) noexcept;

@@ -48,7 +48,7 @@ inline constexpr std::size_t kMaxEmitterCount = 64;
 inline constexpr float kMaxEmitterStrength = 1e4f;
 inline constexpr float kMaxEmitterFalloff = 64.0f;
 
-/// Wind-source profiles (see emitter_velocity in shaders/solver/solver_io.h).
+/// Wind-source profiles (see emitter_velocity in shaders/solver/solver_math.h).
 enum class EmitterType { Directional, Omni, Vortex, CapsuleMotor, ConeMotor };
 
 /// A wind source. The air within reach is sped up along the emitter's flow towards `strength` with a
@@ -177,8 +177,9 @@ class WindSolver : public gpu::HostObject {
     /// Velocity (m/s, world) at each cell's centre, index x + X·(y + Y·z): the air's (the mean of its
     /// faces) where the cell has air, the solid's own where it has none. Blocks.
     Result<std::vector<glm::vec3>> read_cell_velocity();
-    /// Every step from now on also writes its wind texture's texels into `texels` (as record_texels(),
-    /// within the step's last pass); `texels` is checked by check_texels and outlives the solver.
+    /// Every step from now on also writes its wind texture's texels into `texels` within its last pass,
+    /// the same texels record_texels() writes for the field the step leaves: the one way a step writes
+    /// texels. `texels` is checked by check_texels and outlives the solver (or the next bind_texels).
     void bind_texels(const gpu::Buffer& texels);
     /// V-cycles (Jacobi: blocks) the next step records.
     std::uint32_t cycles_per_step() const;
@@ -188,7 +189,8 @@ class WindSolver : public gpu::HostObject {
     Result<std::pmr::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
     /// Writes each cell's texel into `texels` (8 bytes per cell, index x + X·(y + Y·z)): the velocity at
     /// the cell's centre (m/s) and 1 − its solid fraction, as four half floats; then records `then`
-    /// into the same submission, after a barrier. Blocks.
+    /// into the same submission, after a barrier. Blocks. The texels bound by bind_texels stay bound:
+    /// later steps write those, not `texels`.
     template <class Then> Status write_texels(const gpu::Buffer& texels, Then&& then) {
         if (Status s = check_texels(texels); !s) return s;
         return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
@@ -215,7 +217,8 @@ class WindSolver : public gpu::HostObject {
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
     /// Fails when `texels` is too small for write_texels() or record_texels().
     Status check_texels(const gpu::Buffer& texels) const;
-    /// write_texels() recorded, without `then` (`texels` checked by check_texels).
+    /// write_texels() recorded, without `then` (`texels` checked by check_texels); a full-grid pass, for a
+    /// texture's first fill (the steps write the bound texels themselves).
     void record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels);
     /// sample() recorded: `count` vec3 points at device address `points` (finite), velocities to `samples`.
     void record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDeviceAddress samples,

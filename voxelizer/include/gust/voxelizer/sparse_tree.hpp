@@ -10,6 +10,7 @@
 #include <gust/voxelizer/grid.hpp>
 #include <memory>
 #include <memory_resource>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,6 +35,27 @@ struct TreeDesc {
     /// Fragments come from a grid finer by 2^fragment_shift per axis (a shallower tree over the same
     /// fragments, as the seed's depth table builds); 0 for fragments at `res`.
     std::uint32_t fragment_shift = 0;
+};
+
+/// Blocks in each of the tree's pools.
+struct TreePools {
+    std::uint32_t node_blocks = 0; ///< blocks of branching^3 nodes (block 0 holds the root)
+    std::uint32_t mask_blocks = 0; ///< leaf-mask blocks, one per leaf brick (block 0 is never used)
+};
+
+/// One node of the tree, decoded on the host (SparseTree::nodes), for debug views and tests.
+struct TreeNodeView {
+    /// What reached the node in the last update.
+    enum class State : std::uint8_t {
+        Stale,   ///< no fragment reached it in the last update (coarsened after K such updates)
+        Reached, ///< a dynamic fragment reached it in the last update
+        Static,  ///< static fragments reached it: kept until the tree is rebuilt
+    };
+    std::uint32_t level = 0;    ///< 0: the root; depth - 1: leaf bricks of branching^3 voxels
+    glm::uvec3 min{0};          ///< min corner, in the tree's voxels
+    std::uint32_t extent = 0;   ///< voxels per axis: branching^(depth - level)
+    State state = State::Stale; ///< what reached it in the last update
+    bool refined = false;       ///< has a child block (a leaf brick: an occupancy mask)
 };
 
 /// A fragment list on the device, as the voxelizer leaves it.
@@ -75,7 +97,8 @@ class SparseTree : public gpu::HostObject {
 
     /// One frame: when `rebuild_static` is given, the tree is emptied and those fragments are inserted
     /// as static (never coarsened); then `dynamic` fragments (may be null) are inserted, last frame's
-    /// dynamic occupancy is replaced, and stale blocks are coarsened. Blocks until the GPU is done.
+    /// dynamic occupancy is replaced, and stale blocks are coarsened. Blocks until the GPU is done. Fails
+    /// without `rebuild_static` while rebuild_pending().
     Result<TreeStats> update(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
     /// Frames in flight: records update() into `cmd` without waiting; its stats come from
     /// record_readback() and stats_from() once the frame completed.
@@ -91,11 +114,26 @@ class SparseTree : public gpu::HostObject {
     /// current, once that frame completed; empty if none was recorded then.
     gpu::Timings timings(std::uint64_t frame) const;
 
-    /// Grows the pools (never shrinks); contents are kept. Takes effect from the next update.
+    /// Grows the pools to at least these many blocks (never shrinks) with new buffers, without copying
+    /// and without waiting: the old ones are released (retired by frame index while frames are in
+    /// flight). The tree then holds nothing, and its next update must rebuild it (`rebuild_static` given;
+    /// rebuild_pending()). Does nothing when the pools are that large already.
     Status reserve(std::uint32_t node_blocks, std::uint32_t mask_blocks);
+    /// True after reserve() grew the pools and before the update that rebuilds the tree.
+    bool rebuild_pending() const { return rebuild_pending_; }
+    /// Blocks the pools hold.
+    TreePools pools() const { return {node_blocks_, mask_blocks_}; }
+    /// The most blocks a tree of this shape can use (every node refined): growing beyond it gains nothing.
+    TreePools full_pools() const;
 
-    /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree).
+    /// Packed keys (sorted) of every voxel set in a leaf, static or dynamic (downloads the tree; blocks).
+    /// Fails on a corrupt pool (a block linked twice or beyond those in use).
     Result<std::pmr::vector<std::uint32_t>> leaf_voxels() const;
+    /// Every node of every allocated block, decoded level by level: the root, then all of level 1, and
+    /// so on, so that a prefix of the list holds the coarse levels whole. Downloads the node pool
+    /// (blocks until the GPU is done). Fails, rather than loop or read out of range, on a corrupt pool: a
+    /// child block linked twice, or beyond the blocks in use.
+    Result<std::pmr::vector<TreeNodeView>> nodes() const;
 
     /// The node pool's blocks in use (uvec2 per node: child block, touched; layout in
     /// shaders/tree/tree_io.h), downloaded for debug views and tests. Blocks until the GPU is done.
@@ -114,7 +152,9 @@ class SparseTree : public gpu::HostObject {
 
   private:
     explicit SparseTree(gpu::Context& ctx) : ctx_(ctx) {}
-    Status allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks, bool keep);
+    Status allocate_pools(std::uint32_t node_blocks, std::uint32_t mask_blocks);
+    /// Calls `visit(view, child)` for every node, level by level (see nodes()), `child` its child block.
+    template <class Visit> Status walk(std::span<const glm::uvec2> nodes, Visit&& visit) const;
     /// Stats from the tree's counters after the update that stamped `frame`.
     TreeStats stats_of(const shaderio::TreeState& state, std::uint32_t frame) const;
     Status ensure_scratch(std::uint64_t fragments);
@@ -132,6 +172,7 @@ class SparseTree : public gpu::HostObject {
     std::uint32_t node_blocks_ = 0;
     std::uint32_t mask_blocks_ = 0;
     std::uint32_t frame_ = 0;
+    bool rebuild_pending_ = false;
     std::uint64_t scratch_capacity_ = 0;
     gpu::Pipeline begin_, fragments_, clear_, visit_, plan_, alloc_, advance_, leaf_, coarsen_;
     gpu::Buffer state_, nodes_, masks_, node_free_, mask_free_;

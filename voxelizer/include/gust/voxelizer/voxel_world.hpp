@@ -15,7 +15,10 @@ namespace gust {
 /// The grid, the tree's shape and how to voxelize.
 struct WorldDesc {
     GridDesc grid; ///< grid.res must be a power of tree.branching
-    TreeDesc tree; ///< tree.res is taken from grid.res
+    /// tree.res is taken from grid.res. With tree.node_blocks and tree.mask_blocks both 0 the world sizes
+    /// the pools from its meshes before each frame (VoxelWorld::step, ::record), so that a frame rarely
+    /// runs out; given, the pools start at those sizes and grow only when they run out.
+    TreeDesc tree;
     VoxelizeMethod method = VoxelizeMethod::Auto;
 };
 
@@ -24,14 +27,17 @@ struct WorldFrame {
     /// `memory` holds the lists.
     explicit WorldFrame(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
         : static_voxelize(memory), dynamic_voxelize(memory), tree(memory), ms(memory) {}
-    std::uint64_t frame = 0;        ///< 0 for the first step
-    bool static_rebuilt = false;    ///< the static set changed and was voxelized again
+    std::uint64_t frame = 0; ///< 0 for the first step
+    /// The tree was rebuilt from the static set: it changed (and was voxelized again), or the pools grew.
+    bool static_rebuilt = false;
     VoxelizeStats static_voxelize;  ///< of the static set (the last rebuild's when not rebuilt now)
     VoxelizeStats dynamic_voxelize; ///< of this frame's dynamic instances
     TreeStats tree;                 ///< after the update
-    std::uint32_t pool_growths = 0; ///< times the pools were grown (and the update redone) this step
-    bool truncated = false;         ///< recorded frame: a list or pool ran out, so its solids are partial
-    gpu::Timings ms;                ///< milliseconds per pass (GPU where timed)
+    /// Times the tree's pools were grown for this frame: before it (the meshes' estimate exceeded them),
+    /// to redo it (step()), or after it ran out (collect(), for later frames).
+    std::uint32_t pool_growths = 0;
+    bool truncated = false; ///< recorded frame: a list or pool ran out, so its solids are partial
+    gpu::Timings ms;        ///< milliseconds per pass (GPU where timed)
 };
 
 /// Static and dynamic voxelization feeding one tree. Thread-compatible; the Context must outlive it.
@@ -58,12 +64,14 @@ class VoxelWorld : public gpu::HostObject {
     /// again and rebuilds the tree, whose voxels then index the moved grid.
     Status move_grid(glm::vec3 origin);
 
-    /// Voxelizes the dynamic instances (with velocities over `dt` seconds, > 0), updates the tree, and
-    /// grows its pools and redoes the update when they ran out. Blocks until the GPU is done.
+    /// Voxelizes the dynamic instances (with velocities over `dt` seconds, > 0) and updates the tree. Never
+    /// returns a partial tree: when the pools ran out they grow and the tree is rebuilt from the kept
+    /// fragment lists. Blocks until the GPU is done.
     Result<WorldFrame> step(std::span<const GpuInstance> dynamic, float dt);
 
     /// Frames in flight (gpu::Context::begin_frame): records step()'s work into `cmd` without waiting.
-    /// Nothing is grown within the frame; collect() does that for later frames.
+    /// Pools sized from the meshes' estimate are allocated before recording (never waiting); what runs
+    /// out all the same is grown by collect() for later frames.
     Status record(VkCommandBuffer cmd, std::span<const GpuInstance> dynamic, float dt);
     /// Bytes record_readback() writes.
     static std::size_t readback_bytes();
@@ -88,17 +96,28 @@ class VoxelWorld : public gpu::HostObject {
     VoxelWorld(gpu::Context& ctx, const WorldDesc& desc)
         : ctx_(&ctx), desc_(desc), static_set_(ctx.memory()), last_static_(ctx.memory()) {}
 
+    /// The one growth policy of step(), record() and collect(): grows the pools to at least `wanted` (the
+    /// meshes' estimate), doubled when `ran_out`, at most to the full tree; growing has the next update
+    /// rebuild the tree. Returns whether the pools grew; fails when they ran out at the full tree's size.
+    Result<bool> grow_pools(TreePools wanted, bool ran_out);
+    /// grow_pools() with the estimate for the static set and `dynamic`, when the world sizes its pools.
+    Result<bool> grow_for(std::span<const GpuInstance> dynamic);
+
     gpu::Context* ctx_ = nullptr;
     WorldDesc desc_;
     std::unique_ptr<Voxelizer> static_, dynamic_;
     std::unique_ptr<SparseTree> tree_;
     std::pmr::vector<GpuInstance> static_set_;
-    bool static_dirty_ = true;
+    bool static_dirty_ = true;   ///< the static set must be voxelized again (and the tree rebuilt)
+    bool rebuild_tree_ = false;  ///< the tree must be rebuilt from the kept static fragments (pools grew)
+    bool estimate_pools_ = true; ///< WorldDesc::tree gave no pool sizes
     std::uint64_t static_generation_ = 0;
     VoxelizeStats last_static_;
     std::uint64_t frame_ = 0;
-    std::uint64_t recorded_frame_ = 0;  ///< record(): the frame recorded last
-    bool recorded_rebuild_ = false;     ///< record(): whether it voxelized the static set
+    std::uint64_t recorded_frame_ = 0;   ///< record(): the frame recorded last
+    bool recorded_voxelized_ = false;    ///< record(): whether it voxelized the static set
+    bool recorded_rebuild_ = false;      ///< record(): whether it rebuilt the tree
+    std::uint32_t recorded_growths_ = 0; ///< record(): pool growths before it
     std::uint64_t pools_grown_for_ = 0; ///< collect(): frames from this one on were recorded with grown pools
 };
 

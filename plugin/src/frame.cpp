@@ -1,0 +1,217 @@
+// One frame, in the order of docs/design.md: inputs, scroll, voxelize, tree, solid, wind, outputs, readback.
+#include "frame.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <glm/gtc/type_ptr.hpp>
+
+namespace gust::detail {
+
+namespace {
+Outcome device_failure(const Status& s) {
+    return Outcome(ErrorCode::DeviceFailure, s.message());
+}
+/// The most cells the domain moves in one step (System::set_focus refuses larger moves of the focus).
+constexpr float kMaxScrollCells = 1e6f;
+} // namespace
+
+Frame::~Frame() {
+    if (sampler_) ctx_->vk().vkDestroySampler(ctx_->device(), sampler_, ctx_->allocator());
+}
+
+Outcome Frame::create_texture() {
+    const glm::uvec3 cells = solver_->desc().cells;
+    auto texels =
+        gpu::Buffer::create(*ctx_, solver_->cell_count() * 8, gpu::MemoryUse::Device, 0, "gust wind texels");
+    if (!texels) return device_failure(texels.status());
+    texels_ = std::move(*texels);
+    gpu::ImageDesc image;
+    image.extent = {cells.x, cells.y, cells.z};
+    image.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+    // Sampled by the engine, written by gust's copy, and copied out by an engine that exports or captures it.
+    image.usage =
+        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    image.volume = true;
+    image.name = "gust wind texture";
+    auto created = gpu::Image::create(*ctx_, image);
+    if (!created) return device_failure(created.status());
+    image_ = std::move(*created);
+    VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    sampler.magFilter = sampler.minFilter = VK_FILTER_LINEAR;
+    sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    sampler.addressModeU = sampler.addressModeV = sampler.addressModeW =
+        VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    if (ctx_->vk().vkCreateSampler(ctx_->device(), &sampler, ctx_->allocator(), &sampler_) != VK_SUCCESS)
+        return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
+    ctx_->name(VK_OBJECT_TYPE_SAMPLER, std::uint64_t(sampler_), "gust wind sampler");
+    texture_.image = image_.handle();
+    texture_.view = image_.view();
+    texture_.sampler = sampler_;
+    texture_.format = image_.format();
+    for (int a = 0; a < 3; ++a)
+        texture_.extent[a] = cells[a];
+    // The first fill (blocking, at creation); from then on the solver's last pass of each step writes them.
+    Status s = solver_->write_texels(texels_, [&](VkCommandBuffer cmd) { record_texture_copy(cmd); });
+    if (!s) return device_failure(s);
+    solver_->bind_texels(texels_);
+    publish_texture();
+    return {};
+}
+
+Outcome Frame::scroll_for(glm::vec3 focus, glm::ivec3& cells) const {
+    // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
+    const SolverDesc& d = solver_->desc();
+    const glm::vec3 wanted = focus - 0.5f * glm::vec3(d.cells) * d.cell_size;
+    const glm::vec3 shift = glm::round((wanted - solver_->origin()) / d.cell_size);
+    if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(kMaxScrollCells + 1.0f))))
+        return Outcome(ErrorCode::InvalidArgument, "the focus moved more than a million cells in one step");
+    cells = glm::ivec3(shift);
+    return {};
+}
+
+Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slot) {
+    // Per-frame storage first, so that nothing is recorded when it cannot be had.
+    const std::size_t readback = ReadbackLayout::bytes(in.points.size());
+    if (!slot.readback || slot.readback.size() < readback) {
+        auto grown = gpu::Buffer::create(*ctx_, readback, gpu::MemoryUse::Readback, 0, "gust frame readback");
+        if (!grown) return device_failure(grown.status());
+        slot.readback = std::move(*grown);
+    }
+    const std::size_t point_bytes = in.points.size() * sizeof(glm::vec3);
+    if (point_bytes > 0 && slot.points.size() < point_bytes) {
+        auto grown = gpu::Buffer::create(*ctx_, point_bytes, gpu::MemoryUse::Upload, 0, "gust query points");
+        if (!grown) return device_failure(grown.status());
+        slot.points = std::move(*grown);
+    }
+    const std::uint64_t dispatched = ctx_->work().dispatches;
+
+    // Inputs: whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
+    // comes before this frame's work.
+    gpu::barrier(*ctx_, cmd);
+    // Scroll: the wind moves in whole cells and the voxel grid follows the solver's origin.
+    if (in.shift != glm::ivec3(0)) {
+        solver_->record_scroll(cmd, in.shift);
+        if (Status s = world_->move_grid(solver_->origin()); !s) return device_failure(s);
+    }
+    // Voxelize and tree: the static set when it changed (or the grid moved), the dynamic set every frame.
+    if (in.fixed) world_->set_static(*in.fixed);
+    if (Status s = world_->record(cmd, in.dynamic, in.dt); !s) return device_failure(s);
+    // Solid and wind: the boundary from the tree, then the step; its last pass writes the texels.
+    const SolidSource solid = solid_source(*world_);
+    if (Status s = solver_->record_step(cmd, in.dt, &solid); !s) return device_failure(s);
+    // Outputs: the texture, and the async queries asked since the last frame.
+    record_texture_copy(cmd);
+    if (point_bytes > 0) {
+        std::memcpy(slot.points.mapped(), in.points.data(), point_bytes);
+        solver_->record_sample(cmd, slot.points.address(),
+                               slot.readback.address() + ReadbackLayout::answers(),
+                               std::uint32_t(in.points.size()));
+    }
+    // Readback: the counters reach the host once the frame completes; the host's later commands (its
+    // shaders sampling the wind texture) see every write of this frame.
+    world_->record_readback(cmd, slot.readback.handle(), ReadbackLayout::world);
+    solver_->record_readback(cmd, slot.readback.handle(), ReadbackLayout::wind());
+    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+    barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    barrier.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
+    barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_2_HOST_BIT;
+    barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT;
+    VkDependencyInfo dependency{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dependency.memoryBarrierCount = 1;
+    dependency.pMemoryBarriers = &barrier;
+    ctx_->vk().vkCmdPipelineBarrier2(cmd, &dependency);
+
+    slot.used = true;
+    slot.frame = ctx_->recording_frame();
+    slot.dispatches = ctx_->work().dispatches - dispatched;
+    ++recorded_;
+    publish_texture();
+    return {};
+}
+
+Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, FrameStats& stats,
+                       const glm::vec3*& answers) {
+    const auto* bytes = static_cast<const unsigned char*>(slot.readback.mapped());
+    auto world = world_->collect(bytes + ReadbackLayout::world);
+    if (!world) return device_failure(world.status());
+    WindStats wind = solver_->stats_from(bytes + ReadbackLayout::wind());
+    wind.ms = solver_->timings(slot.frame);
+    answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
+    stats_from(*world, wind, work, stats);
+    return {};
+}
+
+void Frame::stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
+                       FrameStats& st) const {
+    st.dispatches = work.dispatches;
+    st.submissions = std::uint32_t(work.submissions);
+    st.waits = std::uint32_t(work.waits);
+    const TreeStats& tree = world.tree;
+    st.frame = world.frame;
+    st.fragments = world.static_voxelize.fragments + world.dynamic_voxelize.fragments;
+    st.voxels = tree.voxels;
+    st.nodes = tree.nodes;
+    st.refined = tree.refined;
+    st.coarsened = tree.coarsened;
+    st.pool_bytes = tree.pool_bytes;
+    st.fragment_bytes = st.fragments * 4 + world.dynamic_voxelize.fragments * 8;
+    const std::uint64_t res = world_->grid().res;
+    st.dense_bytes = res * res * res * 4;
+    st.divergence_before = float(wind.divergence_before);
+    st.divergence_after = float(wind.divergence_after);
+    st.residual = float(wind.residual);
+    st.cycles = wind.cycles;
+    st.converged = wind.converged;
+    st.diverged = wind.diverged;
+    st.sealed_cells = wind.sealed_cells;
+    st.rejected_triangles = std::uint32_t(world.dynamic_voxelize.rejected +
+                                          (world.static_rebuilt ? world.static_voxelize.rejected : 0));
+    st.cut_cells = wind.cut_cells;
+    st.fluid_cells = wind.fluid_cells;
+    st.free_node_blocks = tree.free_node_blocks;
+    st.free_mask_blocks = tree.free_mask_blocks;
+    st.exhausted = tree.exhausted;
+    st.pool_growths = world.pool_growths;
+    st.static_rebuilt = world.static_rebuilt;
+    st.nodes_per_level.assign(tree.nodes_per_level.begin(), tree.nodes_per_level.end());
+    st.ms.assign(world.ms.begin(), world.ms.end());
+    for (const auto& [pass, ms] : wind.ms)
+        st.ms.emplace_back("wind_", ms).first.append(pass);
+    if (world.pool_growths > 0)
+        log(LogLevel::Info, "the voxel tree's pools grew " + std::to_string(world.pool_growths) + " times");
+    if (world.truncated)
+        log(LogLevel::Warning,
+            "frame " + std::to_string(world.frame) +
+                ": a fragment list or tree pool ran out, so its solids were partial; grown "
+                "for the frames recorded from now on");
+    if (wind.diverged)
+        log(LogLevel::Warning,
+            "frame " + std::to_string(world.frame) +
+                ": the pressure solve diverged and was stopped, so the frame's wind was not "
+                "projected (docs/solver.md, \"Stability\")");
+}
+
+void Frame::log(LogLevel level, const std::string& message) const {
+    if (hooks_->log) hooks_->log(hooks_->user, level, message.c_str());
+}
+
+void Frame::record_texture_copy(VkCommandBuffer cmd) {
+    image_.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    image_.copy_from(cmd, texels_);
+    image_.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+}
+
+void Frame::publish_texture() {
+    // World position -> [0, 1]^3 over the domain as it stands after this frame's scroll.
+    const SolverDesc& d = solver_->desc();
+    const glm::vec3 size = glm::vec3(d.cells) * d.cell_size, origin = solver_->origin();
+    glm::mat4 m(1.0f);
+    for (int a = 0; a < 3; ++a) {
+        m[a][a] = 1.0f / size[a];
+        m[3][a] = -origin[a] / size[a];
+    }
+    std::memcpy(texture_.world_to_texture.m, glm::value_ptr(m), sizeof(texture_.world_to_texture.m));
+    texture_.frame = recorded_;
+}
+
+} // namespace gust::detail

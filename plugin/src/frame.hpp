@@ -1,0 +1,101 @@
+// One frame of docs/design.md ("One frame"): what a step records into a command buffer, in order, and what
+// it brings back once the GPU has run it. System (system.cpp) is the API shell around it.
+#pragma once
+
+#include <cstdint>
+#include <gust/gpu/context.hpp>
+#include <gust/gpu/image.hpp>
+#include <gust/gust.hpp>
+#include <gust/solver/wind_solver.hpp>
+#include <gust/voxelizer/voxel_world.hpp>
+#include <memory_resource>
+#include <span>
+#include <vector>
+
+namespace gust::detail {
+
+/// Where a frame's results lie in its readback buffer: the voxel world's counters, the solver's, then one
+/// vec3 answer per async query point. The one place this layout is put together.
+struct ReadbackLayout {
+    static constexpr std::size_t world = 0;
+    static std::size_t wind() { return world + VoxelWorld::readback_bytes(); }
+    static std::size_t answers() { return (wind() + WindSolver::readback_bytes() + 15) / 16 * 16; }
+    /// Bytes for a frame asking `points` points (at least one, so the buffer always exists).
+    static std::size_t bytes(std::size_t points) {
+        return answers() + (points > 0 ? points : 1) * 3 * sizeof(float);
+    }
+};
+
+/// What the engine set for the frame, gathered by System without changing its own state.
+struct FrameInputs {
+    float dt = 0.0f;                      ///< seconds, checked by System
+    glm::ivec3 shift{0};                  ///< whole cells the domain moves (Frame::scroll_for)
+    std::span<const GpuInstance> dynamic; ///< moving and deforming instances, with their last transforms
+    const std::pmr::vector<GpuInstance>* fixed = nullptr; ///< the static set when it changed, else null
+    std::span<const glm::vec3> points; ///< async query points asked since the last frame, in order
+};
+
+/// Per-frame storage a recorded frame's results come back through (HostCommands: one per frame in flight,
+/// used again once that frame has completed).
+struct FrameSlot {
+    explicit FrameSlot(std::pmr::memory_resource* memory) : asked(memory) {}
+    gpu::Buffer readback;            ///< ReadbackLayout
+    gpu::Buffer points;              ///< the async query points the frame samples
+    std::pmr::vector<QueryId> asked; ///< the queries whose points the frame samples, in order
+    bool used = false;               ///< a recorded frame's results wait here
+    std::uint64_t frame = 0;         ///< the frame they belong to (gpu::Context::begin_frame)
+    std::uint64_t dispatches = 0;    ///< dispatches and draws the frame recorded
+};
+
+/// Records frames and collects them. Owns the wind texture (its texels are written once a frame, by the
+/// solver's last pass) and the frame counter; the domain's position is the solver's, which the frame
+/// scrolls and the voxel grid follows.
+class Frame {
+  public:
+    /// `hooks` (for the log) and the modules outlive the Frame.
+    Frame(gpu::Context& ctx, VoxelWorld& world, WindSolver& solver, const Hooks& hooks)
+        : ctx_(&ctx), world_(&world), solver_(&solver), hooks_(&hooks) {}
+    ~Frame();
+    Frame(const Frame&) = delete;
+    Frame& operator=(const Frame&) = delete;
+
+    /// Creates the wind texture, fills it from the solver's field and binds its texels to every step.
+    Outcome create_texture();
+
+    /// Whole cells the domain must move to centre on `focus`; fails when that is too far for one step.
+    Outcome scroll_for(glm::vec3 focus, glm::ivec3& cells) const;
+
+    /// Records a whole frame into `cmd`: inputs, scroll, voxelize, tree, solid, wind (its last pass writes
+    /// the texels), outputs (texture copy, async queries), the counters' readback into `slot`. Nothing on
+    /// the host advances unless it returns success.
+    Outcome record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slot);
+
+    /// Reads a completed frame's slot into `stats` (with `work`, the frame's GPU work counts) and points
+    /// `answers` at its async answers, in the order of `slot.asked` (valid until the slot is used again).
+    /// The world grows what ran out for the frames recorded later.
+    Outcome collect(const FrameSlot& slot, const gpu::WorkCounts& work, FrameStats& stats,
+                    const glm::vec3*& answers);
+
+    const WindTexture& texture() const { return texture_; }
+    /// Frames recorded so far.
+    std::uint64_t recorded() const { return recorded_; }
+
+  private:
+    void record_texture_copy(VkCommandBuffer cmd);
+    void publish_texture();
+    void stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
+                    FrameStats& stats) const;
+    void log(LogLevel level, const std::string& message) const;
+
+    gpu::Context* ctx_;
+    VoxelWorld* world_;
+    WindSolver* solver_;
+    const Hooks* hooks_;
+    gpu::Buffer texels_; ///< the solver's finish pass writes them; copied into image_
+    gpu::Image image_;
+    VkSampler sampler_ = VK_NULL_HANDLE;
+    WindTexture texture_;
+    std::uint64_t recorded_ = 0;
+};
+
+} // namespace gust::detail

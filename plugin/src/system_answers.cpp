@@ -1,0 +1,186 @@
+// System's answers: wind queries, the texture, stats, OpenVDB export and the debug views
+// (include/gust/gust.hpp).
+#include "system_impl.hpp"
+#if GUST_WITH_OPENVDB
+#include "vdb_writer.hpp"
+#endif
+
+#include <algorithm>
+
+namespace gust {
+
+using namespace detail;
+
+namespace {
+Outcome check_points(std::span<const Vec3> points) {
+    if (points.size() > kMaxQueryPoints)
+        return invalid(std::to_string(points.size()) + " points, more than the " +
+                       std::to_string(kMaxQueryPoints) + " a query takes");
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!finite(points[i])) return invalid("point " + std::to_string(i) + " is not finite");
+    return {};
+}
+} // namespace
+
+Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
+    if (velocities.size() != points.size())
+        return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
+                       std::to_string(points.size()) + " points");
+    if (Outcome o = check_points(points); !o) return o;
+    return guarded([&]() -> Outcome {
+        std::pmr::vector<glm::vec3> at(points.size(), &impl_->memory);
+        for (std::size_t i = 0; i < points.size(); ++i)
+            at[i] = to_glm(points[i]);
+        auto answers = impl_->solver->sample(at);
+        if (!answers) return device_failure(answers.status());
+        for (std::size_t i = 0; i < points.size(); ++i)
+            velocities[i] = to_vec3((*answers)[i]);
+        return {};
+    });
+}
+
+Outcome System::query_async(std::span<const Vec3> points, QueryId& id) {
+    id = 0;
+    if (Outcome o = check_points(points); !o) return o;
+    return guarded([&]() -> Outcome {
+        Impl::Pending pending(&impl_->memory);
+        pending.points.reserve(points.size());
+        for (const Vec3& p : points)
+            pending.points.push_back(to_glm(p));
+        const QueryId next = impl_->next_id++;
+        impl_->queries.emplace(next, std::move(pending));
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::fetch(QueryId id, std::span<Vec3> velocities) {
+    auto it = impl_->queries.find(id);
+    if (it == impl_->queries.end())
+        return Outcome(ErrorCode::InvalidHandle, "no query " + std::to_string(id));
+    if (!it->second.ready)
+        return Outcome(ErrorCode::NotReady, "query " + std::to_string(id) + " is answered by the next step");
+    if (velocities.size() != it->second.answer.size())
+        return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
+                       std::to_string(it->second.answer.size()) + " points");
+    for (std::size_t i = 0; i < velocities.size(); ++i)
+        velocities[i] = to_vec3(it->second.answer[i]);
+    impl_->queries.erase(it);
+    return {};
+}
+
+Outcome System::wind_at(const Vec3& point, WindSample& sample) {
+    sample = {};
+    if (!finite(point)) return invalid("point is not finite");
+    const float h = impl_->solver_desc.cell_size;
+    const Vec3 points[7] = {point,
+                            {point.x - h, point.y, point.z},
+                            {point.x + h, point.y, point.z},
+                            {point.x, point.y - h, point.z},
+                            {point.x, point.y + h, point.z},
+                            {point.x, point.y, point.z - h},
+                            {point.x, point.y, point.z + h}};
+    Vec3 v[7];
+    if (Outcome o = query(points, v); !o) return o;
+    glm::vec3 mean(0.0f);
+    for (int i = 1; i < 7; ++i)
+        mean += to_glm(v[i]) / 6.0f;
+    const glm::vec3 here = to_glm(v[0]);
+    sample.speed = glm::length(here);
+    sample.direction = sample.speed > 0.0f ? to_vec3(here / sample.speed) : Vec3{};
+    sample.gust = glm::length(here - mean);
+    return {};
+}
+
+const WindTexture& System::wind_texture() const {
+    return impl_->frame->texture();
+}
+const FrameStats& System::stats() const {
+    return impl_->stats;
+}
+Vec3 System::domain_origin() const {
+    return to_vec3(impl_->solver->origin());
+}
+const char* System::device_name() const {
+    return impl_->ctx->info().name.c_str();
+}
+
+Outcome System::export_vdb(const char* path) {
+    if (!path || !*path) return invalid("path is empty");
+#if GUST_WITH_OPENVDB
+    return guarded([&]() -> Outcome {
+        Impl& m = *impl_;
+        auto voxels = m.world->tree().leaf_voxels();
+        auto velocity = m.solver->read_cell_velocity();
+        auto solid = m.solver->read_solid_fraction();
+        auto pressure = m.solver->read_pressure();
+        for (const Status* s : {&voxels.status(), &velocity.status(), &solid.status(), &pressure.status()})
+            if (!*s) return device_failure(*s);
+        const vdb::WindGrids grids{
+            m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, *velocity, *pressure};
+        if (Status s = vdb::write_frame_vdb(path, *voxels, m.world->grid(), grids); !s)
+            return Outcome(ErrorCode::IoError, s.message());
+        return {};
+    });
+#else
+    return Outcome(ErrorCode::Unsupported, std::string("cannot write ") + path +
+                                               ": gust was built without OpenVDB (GUST_WITH_OPENVDB=OFF)");
+#endif
+}
+
+Outcome System::debug_voxel_grid(VoxelGridInfo& info) const {
+    const GridDesc& grid = impl_->world->grid();
+    const SparseTree& tree = impl_->world->tree();
+    info = {};
+    info.origin = to_vec3(grid.origin);
+    info.voxel_size = grid.voxel_size;
+    std::fill(std::begin(info.resolution), std::end(info.resolution), grid.res);
+    info.depth = tree.depth();
+    info.branching = tree.branching();
+    return {};
+}
+
+Outcome System::debug_voxels(std::span<VoxelCoord> out, std::size_t& count) {
+    count = 0;
+    return guarded([&]() -> Outcome {
+        auto keys = impl_->world->tree().leaf_voxels();
+        if (!keys) return device_failure(keys.status());
+        const std::size_t written = std::min(out.size(), keys->size());
+        for (std::size_t v = 0; v < written; ++v) {
+            const glm::uvec3 c = unpack_voxel((*keys)[v]);
+            out[v] = {c.x, c.y, c.z};
+        }
+        count = keys->size();
+        return {};
+    });
+}
+
+Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
+    count = 0;
+    return guarded([&]() -> Outcome {
+        // SparseTree decodes its own pool, coarse levels first, so a short `out` still holds them whole.
+        // A pool that does not decode (a block linked twice or out of range) breaks an internal invariant.
+        auto nodes = impl_->world->tree().nodes();
+        if (!nodes) {
+            static_cast<void>(impl_->check(false, "the tree's node pool decodes", __LINE__));
+            return device_failure(nodes.status());
+        }
+        const GridDesc& grid = impl_->world->grid();
+        const std::size_t written = std::min(out.size(), nodes->size());
+        for (std::size_t i = 0; i < written; ++i) {
+            const TreeNodeView& v = (*nodes)[i];
+            TreeNode& n = out[i];
+            n.min = to_vec3(grid.origin + glm::vec3(v.min) * grid.voxel_size);
+            n.size = float(v.extent) * grid.voxel_size;
+            n.level = v.level;
+            n.state = v.state == TreeNodeView::State::Static    ? TreeNodeState::Static
+                      : v.state == TreeNodeView::State::Reached ? TreeNodeState::Reached
+                                                                : TreeNodeState::Stale;
+            n.refined = v.refined;
+        }
+        count = nodes->size();
+        return {};
+    });
+}
+
+} // namespace gust

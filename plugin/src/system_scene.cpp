@@ -1,0 +1,184 @@
+// System's scene calls: meshes, instances, emitters, the ambient wind and the focus (include/gust/gust.hpp).
+#include "system_impl.hpp"
+
+#include <string>
+
+namespace gust {
+
+using namespace detail;
+
+namespace {
+bool finite(const Mat4& m) {
+    for (float f : m.m)
+        if (!std::isfinite(f)) return false;
+    return true;
+}
+/// Finite and affine: the last row is (0, 0, 0, 1). A projective matrix would voxelize a distorted mesh.
+Outcome check_transform(const Mat4& m, const char* name) {
+    if (!finite(m)) return invalid(std::string(name) + " must be finite");
+    if (m.m[3] != 0.0f || m.m[7] != 0.0f || m.m[11] != 0.0f || m.m[15] != 1.0f)
+        return invalid(std::string(name) +
+                       " must be affine: its last row (m[3], m[7], m[11], m[15]) must be 0, "
+                       "0, 0, 1");
+    return {};
+}
+} // namespace
+
+Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
+    id = 0;
+    if (desc.vertex_count > 0 && !desc.positions) return invalid("positions is null");
+    if (desc.index_count > 0 && !desc.indices) return invalid("indices is null");
+    if (desc.stride < 12)
+        return invalid("stride must be at least 12 bytes, got " + std::to_string(desc.stride));
+    const MeshView view{desc.positions, desc.vertex_count, desc.stride, desc.indices, desc.index_count};
+    for (std::uint32_t v = 0; v < desc.vertex_count; ++v) {
+        const glm::vec3 p = view.position(v);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return invalid("vertex " + std::to_string(v) + " is not finite");
+    }
+    return guarded([&]() -> Outcome {
+        auto mesh = impl_->world->upload(view);
+        if (!mesh) return invalid(mesh.message());
+        const MeshId next = impl_->next_id++;
+        impl_->meshes.emplace(next, Impl::Mesh{std::move(*mesh), desc.deforming, 0});
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::destroy_mesh(MeshId mesh) {
+    Outcome error;
+    const Impl::Mesh* m = impl_->find_mesh(mesh, error);
+    if (!m) return error;
+    if (m->instances > 0)
+        return Outcome(ErrorCode::InvalidHandle, "mesh " + std::to_string(mesh) + " is still used by " +
+                                                     std::to_string(m->instances) + " instances");
+    impl_->meshes.erase(mesh);
+    return {};
+}
+
+Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
+                             std::uint32_t stride, bool teleport) {
+    Outcome error;
+    Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
+    if (!m) return error;
+    if (vertex_count > 0 && !positions) return invalid("positions is null");
+    if (stride < 12) return invalid("stride must be at least 12 bytes, got " + std::to_string(stride));
+    return guarded([&]() -> Outcome {
+        std::pmr::vector<glm::vec3> packed(vertex_count, &impl_->memory);
+        for (std::uint32_t v = 0; v < vertex_count; ++v) {
+            const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(positions) +
+                                                           std::size_t(v) * stride);
+            packed[v] = {p[0], p[1], p[2]};
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+                return invalid("vertex " + std::to_string(v) + " is not finite");
+        }
+        if (Status s = impl_->world->update_positions(m->gpu, packed); !s) return device_failure(s);
+        m->teleport = m->teleport || teleport;
+        return {};
+    });
+}
+
+Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
+                             bool teleport) {
+    Outcome error;
+    Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
+    if (!m) return error;
+    if (impl_->ctx->owns_device()) return invalid("vertex buffers need a host device (SystemDesc::host)");
+    if (buffer == VK_NULL_HANDLE) return invalid("buffer is null");
+    if (offset % 4 != 0) return invalid("offset must be a multiple of 4");
+    return guarded([&]() -> Outcome {
+        if (Status s = impl_->world->copy_positions(m->gpu, buffer, offset); !s) return device_failure(s);
+        m->teleport = m->teleport || teleport;
+        return {};
+    });
+}
+
+Outcome System::Impl::add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,
+                                   InstanceId& id) {
+    id = 0;
+    Outcome error;
+    Mesh* m = find_mesh(mesh, error);
+    if (!m) return error;
+    if (Outcome o = check_transform(transform, "transform"); !o) return o;
+    if (previous)
+        if (Outcome o = check_transform(*previous, "previous"); !o) return o;
+    return guarded([&]() -> Outcome {
+        const InstanceId next = next_id++;
+        const bool dynamic = moving || m->deforming;
+        std::optional<glm::mat4> prev;
+        if (previous) prev = to_glm(*previous);
+        instances.emplace(next, Instance{mesh, to_glm(transform), prev, dynamic});
+        ++m->instances;
+        if (!dynamic) static_dirty = true;
+        id = next;
+        return {};
+    });
+}
+
+Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
+    return impl_->add_instance(mesh, transform, nullptr, moving, id);
+}
+
+Outcome System::create_moving_instance(MeshId mesh, const Mat4& transform, const Mat4& previous,
+                                       InstanceId& id) {
+    return impl_->add_instance(mesh, transform, &previous, true, id);
+}
+
+Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool teleport) {
+    auto it = impl_->instances.find(instance);
+    if (it == impl_->instances.end())
+        return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
+    if (Outcome o = check_transform(transform, "transform"); !o) return o;
+    it->second.model = to_glm(transform);
+    it->second.teleport = it->second.teleport || teleport;
+    if (!it->second.dynamic) impl_->static_dirty = true;
+    return {};
+}
+
+Outcome System::destroy_instance(InstanceId instance) {
+    auto it = impl_->instances.find(instance);
+    if (it == impl_->instances.end())
+        return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
+    --impl_->meshes.at(it->second.mesh).instances;
+    if (!it->second.dynamic) impl_->static_dirty = true;
+    impl_->instances.erase(it);
+    return {};
+}
+
+Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
+    return guarded([&]() -> Outcome {
+        std::pmr::vector<Emitter> out(&impl_->memory);
+        for (const WindEmitter& e : emitters) {
+            const int type = int(e.type);
+            if (type < 0 || type > int(WindEmitterType::ConeMotor))
+                return invalid("emitter " + std::to_string(out.size()) + ": unknown type " +
+                               std::to_string(type));
+            out.push_back(Emitter{EmitterType(type), to_glm(e.position), to_glm(e.direction), e.radius,
+                                  e.strength, e.falloff, e.length});
+        }
+        if (Status s = impl_->solver->set_emitters(out); !s) return invalid(s.message());
+        return {};
+    });
+}
+
+Outcome System::set_ambient(const Vec3& velocity) {
+    if (Status s = impl_->solver->set_ambient(to_glm(velocity)); !s) return invalid(s.message());
+    return {};
+}
+
+Outcome System::set_focus(const Vec3& position) {
+    if (!finite(position)) return invalid("focus must be finite");
+    // The next step scrolls by whole cells, counted in 32-bit integers: a move it could not make is
+    // refused here, keeping the old focus, rather than failing every step after.
+    const float h = impl_->solver_desc.cell_size;
+    if (too_far_out(to_glm(position), h)) return invalid(std::string("focus ") + kTooFarOut);
+    const glm::vec3 centre = impl_->solver->origin() + 0.5f * glm::vec3(impl_->solver_desc.cells) * h;
+    if (glm::any(glm::greaterThan(glm::abs(to_glm(position) - centre) / h, glm::vec3(kMaxFocusMoveCells))))
+        return invalid("focus is more than a million cells from the domain's centre; move it in smaller "
+                       "steps or create the System at the new place");
+    impl_->focus = to_glm(position);
+    return {};
+}
+
+} // namespace gust
