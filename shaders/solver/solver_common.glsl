@@ -400,13 +400,16 @@ vec3 solid_velocity_at(vec3 p, int cell, uint flags) {
     return (flags & kCellMoving) != 0u ? motion_velocity(IVec4Ref(hot.cell_motion).v[cell]) : vec3(0.0);
 }
 
-/// Velocity at cell i's centre as reported: the air's (the mean of its faces, and the omni emitters'
-/// wind), or in a cell without air the solid's own.
+/// Velocity at cell i's centre as reported: where the centre lies in the cell's air, the air's (its faces'
+/// means, a closed face left out: cell_air_velocity; and the omni emitters' wind), else the solid's own
+/// (in_solid: a cell without air, or a cut cell's centre beyond its wall, which reported the other side's
+/// wind).
 vec3 cell_output(int i) {
     uint flags = flags_at(i);
     ivec3 c = cell_from_index(grid_dims(), i);
-    if ((flags & kCellNoAir) != 0u) return solid_velocity_at(vec3(c) + 0.5, i, flags);
-    return cell_velocity(kFieldVelocity, c) + omni_velocity(vec3(c) + 0.5);
+    vec3 centre = vec3(c) + 0.5;
+    if (in_solid(centre, i, flags)) return solid_velocity_at(centre, i, flags);
+    return cell_air_velocity(kFieldVelocity, c) + omni_velocity(centre);
 }
 
 layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };

@@ -36,8 +36,43 @@ GUST_INLINE bool inside_grid(vec3 p) {
     return p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= n.x && p.y <= n.y && p.z <= n.z;
 }
 
+/// Whether face g of the lattice of component `axis` exists.
+GUST_INLINE bool face_in_lattice(uint axis, ivec3 g) {
+    ivec3 m = grid_dims() + axis_unit(axis);
+    return g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
+}
+
+/// Whether face g normal to `axis` exists and has open voxel pairs: air crosses it.
+GUST_INLINE bool face_open(uint axis, ivec3 g) {
+    return face_in_lattice(axis, g) && load_weight(face_index(grid_dims(), axis, g)) > 0.0f;
+}
+
+/// Whether air crosses from cell c to its neighbour c + s e_b (s = ±1).
+GUST_INLINE bool passage(ivec3 c, uint b, int s) {
+    return face_open(b, s > 0 ? c + axis_unit(b) : c);
+}
+
+/// The lattice point of component `axis` that `corner` of a trilinear stencil around a point in cell c
+/// reads: the corner itself when its cell (the corner's position across the two other axes, b and d) is
+/// reached from c through open faces (`reach`: the neighbour along b, along d, the diagonal one), else c's
+/// own face at that place along `axis`, so that the air on c's side stands in for whatever lies beyond a
+/// closed face.
+GUST_INLINE ivec3 visible_corner(ivec3 corner, ivec3 c, uint b, uint d, bvec3 reach) {
+    bool across_b = corner[b] != c[b], across_d = corner[d] != c[d];
+    bool seen = across_b ? (across_d ? reach.z : reach.x) : (across_d ? reach.y : true);
+    if (seen) return corner;
+    ivec3 own = corner;
+    own[b] = c[b];
+    own[d] = c[d];
+    return own;
+}
+
 /// Component `axis` of face field `field` at p, trilinear, and the smallest and largest of the eight
-/// lattice values it blends (MacCormack's clamp); the ambient wind outside the grid.
+/// lattice values it blends (MacCormack's clamp); the ambient wind outside the grid. The stencil spans p's
+/// cell c and up to three neighbours across the two other axes; a neighbour that no open face joins to c
+/// (a wall between them, thin or thick) is read as c's own value, so no sample mixes the air beyond a
+/// closed face into this side's (issue 31). Along `axis` the stencil reads c's own two faces: where one is
+/// closed it holds the wall's velocity or this side's extension (project_extend_face).
 GUST_INLINE float sample_component_range(uint field, uint axis, vec3 p, GUST_OUT(vec2) range) {
     if (!inside_grid(p)) {
         range = vec2(grid_ambient()[axis]);
@@ -47,14 +82,29 @@ GUST_INLINE float sample_component_range(uint field, uint axis, vec3 p, GUST_OUT
     vec3 t;
     component_lattice(axis, p, i0, i1, t);
     ivec3 n = grid_dims();
-    float c000 = load_face(field, face_index(n, axis, ivec3(i0.x, i0.y, i0.z)));
-    float c100 = load_face(field, face_index(n, axis, ivec3(i1.x, i0.y, i0.z)));
-    float c010 = load_face(field, face_index(n, axis, ivec3(i0.x, i1.y, i0.z)));
-    float c110 = load_face(field, face_index(n, axis, ivec3(i1.x, i1.y, i0.z)));
-    float c001 = load_face(field, face_index(n, axis, ivec3(i0.x, i0.y, i1.z)));
-    float c101 = load_face(field, face_index(n, axis, ivec3(i1.x, i0.y, i1.z)));
-    float c011 = load_face(field, face_index(n, axis, ivec3(i0.x, i1.y, i1.z)));
-    float c111 = load_face(field, face_index(n, axis, ivec3(i1.x, i1.y, i1.z)));
+    ivec3 c = clamp(ivec3(floor(p)), ivec3(0), n - ivec3(1));
+    uint b = (axis + 1u) % 3u, d = (axis + 2u) % 3u;
+    int sb = i0[b] == c[b] ? 1 : -1, sd = i0[d] == c[d] ? 1 : -1;
+    bool open_b = passage(c, b, sb), open_d = passage(c, d, sd);
+    bool diagonal = (open_b && passage(c + sb * axis_unit(b), d, sd)) ||
+                    (open_d && passage(c + sd * axis_unit(d), b, sb));
+    bvec3 reach = bvec3(open_b, open_d, diagonal);
+    float c000 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i0.x, i0.y, i0.z), c, b, d, reach)));
+    float c100 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i1.x, i0.y, i0.z), c, b, d, reach)));
+    float c010 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i0.x, i1.y, i0.z), c, b, d, reach)));
+    float c110 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i1.x, i1.y, i0.z), c, b, d, reach)));
+    float c001 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i0.x, i0.y, i1.z), c, b, d, reach)));
+    float c101 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i1.x, i0.y, i1.z), c, b, d, reach)));
+    float c011 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i0.x, i1.y, i1.z), c, b, d, reach)));
+    float c111 =
+        load_face(field, face_index(n, axis, visible_corner(ivec3(i1.x, i1.y, i1.z), c, b, d, reach)));
     range = vec2(min(min(min(c000, c100), min(c010, c110)), min(min(c001, c101), min(c011, c111))),
                  max(max(max(c000, c100), max(c010, c110)), max(max(c001, c101), max(c011, c111))));
     float c00 = mix(c000, c100, t.x), c10 = mix(c010, c110, t.x);
@@ -109,23 +159,65 @@ GUST_INLINE vec3 omni_velocity(vec3 p) {
     return u;
 }
 
+/// The way from `from` to `to` (cell units, starting in cell `at`) up to its first closed face: `to` when
+/// it crosses none (or leaves the grid, whose outside is the ambient wind), else the point where it meets the
+/// face, pulled just inside the cell before it. Cells are walked in the order the way enters them (Amanatides
+/// and Woo 1987); after 8 crossings, more than any trace at a CFL number below two makes, the way stops in
+/// the cell it reached.
+GUST_INLINE vec3 clip_to_air(vec3 from, vec3 to, ivec3 at) {
+    ivec3 n = grid_dims();
+    vec3 dir = to - from;
+    ivec3 heading = ivec3(sign(dir));
+    const float inset = 1e-3f;
+    for (int k = 0; k < 8; ++k) {
+        vec3 reach = vec3(2.0f);
+        for (uint a = 0u; a < 3u; ++a)
+            if (heading[a] != 0) reach[a] = (float(at[a] + max(heading[a], 0)) - from[a]) / dir[a];
+        uint b = reach.x <= reach.y && reach.x <= reach.z ? 0u : (reach.y <= reach.z ? 1u : 2u);
+        if (reach[b] >= 1.0f) return to;
+        ivec3 next = at + heading[b] * axis_unit(b);
+        if (!inside_cells(n, next)) return to;
+        if (!passage(at, b, heading[b]))
+            return clamp(from + reach[b] * dir, vec3(at) + vec3(inset), vec3(at + ivec3(1)) - vec3(inset));
+        at = next;
+    }
+    return clamp(to, vec3(at) + vec3(inset), vec3(at + ivec3(1)) - vec3(inset));
+}
+
 /// Where the air at face f's centre was dt seconds ago (dt < 0: where it will be), in cell units,
-/// midpoint rule, carried by the field and the omni emitters' wind.
+/// midpoint rule, carried by the field and the omni emitters' wind. Both legs stop at the first closed face
+/// they meet (clip_to_air), so air is never fetched from beyond a wall; the trace starts in the cell beside f
+/// it heads into.
 GUST_INLINE vec3 trace(uint axis, ivec3 f, float dt) {
     vec3 x = face_position(axis, f);
     float s = dt / grid_h();
     vec3 mid = x - 0.5f * s * (face_velocity(kFieldVelocity, axis, f) + omni_velocity(x));
-    return x - s * (sample_velocity(kFieldVelocity, mid) + omni_velocity(mid));
+    ivec3 start = f;
+    if (mid[axis] < x[axis]) start[axis] -= 1;
+    start = clamp(start, ivec3(0), grid_dims() - ivec3(1));
+    mid = clip_to_air(x, mid, start);
+    vec3 p = x - s * (sample_velocity(kFieldVelocity, mid) + omni_velocity(mid));
+    start = f;
+    if (p[axis] < x[axis]) start[axis] -= 1;
+    start = clamp(start, ivec3(0), grid_dims() - ivec3(1));
+    return clip_to_air(x, p, start);
 }
 
-/// Semi-Lagrangian: face f of `field` carried by the velocity field over dt.
+/// Semi-Lagrangian: face f of `field` carried by the velocity field over dt. A closed face keeps its value:
+/// the projection sets it from the solid (project_extend_face), and no air arrives there.
 GUST_INLINE float advect_face(uint field, uint axis, ivec3 f, float dt) {
+    if (!face_open(axis, f)) return load_face(field, face_index(grid_dims(), axis, f));
     return sample_component(field, axis, trace(axis, f, dt));
 }
 
 /// MacCormack's forward pass: face f of the velocity carried over dt, and in `range` the smallest and
 /// largest of the values it blended (kFieldLow, kFieldHigh for the correction's clamp).
 GUST_INLINE float advect_face_range(uint axis, ivec3 f, float dt, GUST_OUT(vec2) range) {
+    if (!face_open(axis, f)) {
+        float u = load_face(kFieldVelocity, face_index(grid_dims(), axis, f));
+        range = vec2(u);
+        return u;
+    }
     return sample_component_range(kFieldVelocity, axis, trace(axis, f, dt), range);
 }
 
@@ -149,30 +241,53 @@ GUST_INLINE vec3 cell_velocity(uint field, ivec3 c) {
     return v;
 }
 
-/// Curl of the cell-centred velocity by central differences (one-sided at the domain's faces), and
-/// its length.
-GUST_INLINE vec4 cell_vorticity(ivec3 c) {
+/// The air's velocity at cell c's centre: per axis the mean of its two faces, or the open one's alone where
+/// the other is closed (a wall on that face holds the solid's velocity or the extension, not the air here).
+GUST_INLINE vec3 cell_air_velocity(uint field, ivec3 c) {
     ivec3 n = grid_dims();
+    vec3 v = vec3(0.0f);
+    for (uint a = 0u; a < 3u; ++a) {
+        ivec3 hi = c + axis_unit(a);
+        float low = load_face(field, face_index(n, a, c)), high = load_face(field, face_index(n, a, hi));
+        bool open_low = face_open(a, c), open_high = face_open(a, hi);
+        v[a] = open_low == open_high ? 0.5f * (low + high) : (open_low ? low : high);
+    }
+    return v;
+}
+
+/// The neighbours of cell c along `axis` that a difference may use: c ± e_axis where air crosses to it,
+/// else c itself (one-sided at walls and the domain's faces; none through a closed face, issue 31).
+GUST_INLINE void difference_span(ivec3 c, uint axis, GUST_OUT(ivec3) lo, GUST_OUT(ivec3) hi) {
+    ivec3 n = grid_dims();
+    ivec3 e = axis_unit(axis);
+    hi = c[axis] + 1 < n[axis] && passage(c, axis, 1) ? c + e : c;
+    lo = c[axis] > 0 && passage(c, axis, -1) ? c - e : c;
+}
+
+/// Curl of the air's cell-centred velocity (cell_air_velocity) by central differences, one-sided where a
+/// closed face or the domain's face is on one side, none across one closed on both; and its length.
+GUST_INLINE vec4 cell_vorticity(ivec3 c) {
     vec3 d[3]; // d[a] = ∂v/∂x_a
     for (uint a = 0u; a < 3u; ++a) {
-        ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
-        ivec3 lo = max(c - axis_unit(a), ivec3(0));
+        ivec3 lo, hi;
+        difference_span(c, a, lo, hi);
         float span = float(hi[a] - lo[a]) * grid_h();
-        d[a] = span > 0.0f ? (cell_velocity(kFieldVelocity, hi) - cell_velocity(kFieldVelocity, lo)) / span
-                           : vec3(0.0f);
+        d[a] = span > 0.0f
+                   ? (cell_air_velocity(kFieldVelocity, hi) - cell_air_velocity(kFieldVelocity, lo)) / span
+                   : vec3(0.0f);
     }
     vec3 w = vec3(d[1].z - d[2].y, d[2].x - d[0].z, d[0].y - d[1].x);
     return vec4(w, length(w));
 }
 
 /// Vorticity confinement (Fedkiw et al. 2001) force at cell c, per unit mass: ε h (N × ω), N the unit
-/// gradient of |ω|.
+/// gradient of |ω|, whose differences take no cell beyond a closed face (difference_span).
 GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
     ivec3 n = grid_dims();
     vec3 g = vec3(0.0f);
     for (uint a = 0u; a < 3u; ++a) {
-        ivec3 hi = min(c + axis_unit(a), n - ivec3(1));
-        ivec3 lo = max(c - axis_unit(a), ivec3(0));
+        ivec3 lo, hi;
+        difference_span(c, a, lo, hi);
         float span = float(hi[a] - lo[a]) * grid_h();
         g[a] = span > 0.0f
                    ? (load_vorticity(cell_index(n, hi)).w - load_vorticity(cell_index(n, lo)).w) / span
@@ -421,12 +536,6 @@ GUST_INLINE float project_face(uint axis, ivec3 f, bool gradient) {
 
 // ---- The air's velocity extended into closed faces -----------------------------------------------------
 
-/// Whether face g of the lattice of component `axis` exists.
-GUST_INLINE bool face_in_lattice(uint axis, ivec3 g) {
-    ivec3 m = grid_dims() + axis_unit(axis);
-    return g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
-}
-
 /// Whether face g holds the air's velocity after `layer` extension passes: open (0), or closed next to an
 /// open face of its lattice (1).
 GUST_INLINE bool face_has_air(uint axis, ivec3 g, uint layer) {
@@ -441,39 +550,78 @@ GUST_INLINE bool face_has_air(uint axis, ivec3 g, uint layer) {
     return false;
 }
 
+/// Which lattice neighbours of closed face f (normal to `axis`) lend it their velocity in the first extension
+/// pass, as bits 2b + (s > 0) for the neighbour f + s e_b; the air's own side only. With air in one of f's
+/// two cells, the open neighbours that air reaches: its cell's other face along `axis`, and those beside f
+/// whose cell air crosses into from it. With air in both (a wall on f, as thin walls are), none: f keeps the
+/// wall's velocity, which both sides see, rather than a mean of the two sides' winds that carried the air
+/// through the wall (issue 31). With air in neither, every open neighbour, as a face inside a solid is read
+/// by nothing that takes air's velocity.
+GUST_INLINE uint extension_sources(uint axis, ivec3 f) {
+    ivec3 n = grid_dims();
+    ivec3 e = axis_unit(axis);
+    ivec3 lo = f - e;
+    bool in_lo = inside_cells(n, lo), in_hi = inside_cells(n, f);
+    uint lo_sources = 0u, hi_sources = 0u, any = 0u;
+    bool air_lo = in_lo && face_open(axis, lo), air_hi = in_hi && face_open(axis, f + e);
+    if (air_lo) lo_sources |= 1u << (2u * axis);
+    if (air_hi) hi_sources |= 1u << (2u * axis + 1u);
+    any = lo_sources | hi_sources;
+    for (uint b = 0u; b < 3u; ++b) {
+        if (b == axis) continue;
+        for (int s = -1; s <= 1; s += 2) {
+            uint bit = 1u << (2u * b + (s > 0 ? 1u : 0u));
+            bool from_lo = in_lo && passage(lo, b, s), from_hi = in_hi && passage(f, b, s);
+            air_lo = air_lo || from_lo;
+            air_hi = air_hi || from_hi;
+            if (!face_open(axis, f + s * axis_unit(b))) continue;
+            any |= bit;
+            if (from_lo) lo_sources |= bit;
+            if (from_hi) hi_sources |= bit;
+        }
+    }
+    if (air_lo && air_hi) return 0u;
+    return air_lo ? lo_sources : (air_hi ? hi_sources : any);
+}
+
 /// Face f after the projection and the first extension pass at once (project.comp): an open face its
-/// projected velocity, a closed one the mean of its open lattice neighbours' projected velocities, any
-/// other the solid's (extend_face's layer 1 over project_face's values, each computed where it is read).
+/// projected velocity, a closed one the mean of the projected velocities of the open lattice neighbours on
+/// its air's side (extension_sources), any other the solid's (extend_face's layer 1 over project_face's
+/// values, each computed where it is read).
 GUST_INLINE float project_extend_face(uint axis, ivec3 f, bool gradient) {
     ivec3 n = grid_dims();
     if (face_has_air(axis, f, 0u)) return project_face(axis, f, gradient);
+    uint sources = extension_sources(axis, f);
     float sum = 0.0f, count = 0.0f;
     for (uint b = 0u; b < 3u; ++b)
         for (int s = -1; s <= 1; s += 2) {
-            ivec3 nb = f + s * axis_unit(b);
-            if (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, 0u)) continue;
-            sum += project_face(axis, nb, gradient);
+            if ((sources >> (2u * b + (s > 0 ? 1u : 0u)) & 1u) == 0u) continue;
+            sum += project_face(axis, f + s * axis_unit(b), gradient);
             count += 1.0f;
         }
     return count > 0.0f ? sum / count : load_face(kFieldSolid, face_index(n, axis, f));
 }
 
 /// Face f of `field` after extension pass `layer` (1, then 2): a face that holds the air's velocity after
-/// layer − 1 passes keeps it; a closed face next to such faces of its lattice takes their mean; any other
+/// layer − 1 passes keeps it; a closed face takes the mean of its lattice neighbours on its air's side in the
+/// first pass (extension_sources), of those that hold the air's velocity after it in the second; any other
 /// keeps its value (the solid's velocity, from the projection). Two passes reach two faces into a solid,
 /// so advection, vorticity, texels and queries next to a wall read the air's velocity, never the solid's
 /// zeros: without it free-slip air beside a wall slowed a little every step (Bridson, Fluid Simulation
 /// for Computer Graphics, 2015, extrapolates velocity into the solid for the same reason). Closed faces
-/// carry no flux (face_flux), so the projection does not see these values.
+/// carry no flux (face_flux), so the projection does not see these values. The second pass fills only closed
+/// faces with no open lattice neighbour, deeper in a solid than the first reaches.
 GUST_INLINE float extend_face(uint field, uint axis, ivec3 f, uint layer) {
     ivec3 n = grid_dims();
     float u = load_face(field, face_index(n, axis, f));
     if (face_has_air(axis, f, layer - 1u)) return u;
+    uint sources = layer == 1u ? extension_sources(axis, f) : 63u;
     float sum = 0.0f, count = 0.0f;
     for (uint b = 0u; b < 3u; ++b)
         for (int s = -1; s <= 1; s += 2) {
             ivec3 nb = f + s * axis_unit(b);
-            if (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, layer - 1u)) continue;
+            if ((sources >> (2u * b + (s > 0 ? 1u : 0u)) & 1u) == 0u) continue;
+            if (layer != 1u && (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, 1u))) continue;
             sum += load_face(field, face_index(n, axis, nb));
             count += 1.0f;
         }
