@@ -123,7 +123,11 @@ void main() {
     if (pc.mode == kSolidChanged && (old & kCellDynamic) == 0u && !bricks_dynamic(lo, v)) {
         // Nothing here changed since the last step: its parts and static voxels stay as that step left them.
         if ((old & kCellCut) != 0u) {
-            flags.v[i] = old & (kCellCut | kCellStatic);
+            uint kept = old & (kCellCut | kCellStatic);
+            if ((old & kCellNoAir) == 0u)
+                for (uint k = 0u; k < kCellParts; ++k)
+                    if (part_crossed(part_of(i, old, k), air_of(i, old))) kept |= kCellCrossed << k;
+            flags.v[i] = kept;
             atomicAdd(state().s.cut_cells, 1u);
         }
         return;
@@ -160,10 +164,17 @@ void main() {
     load_face_masks(faces);
     CellBits parts[2];
     cell_parts(occupied, v, faces, parts[0], parts[1]);
+    uint cut = dynamic ? kCellCut | kCellDynamic : kCellCut;
+    // Against the last step's air, before its parts are overwritten (a cell without air then has none to
+    // cross from).
+    if ((old & kCellNoAir) == 0u) {
+        CellBits before = air_of(i, old);
+        for (uint k = 0u; k < kCellParts; ++k)
+            if (part_crossed(parts[k], before)) cut |= kCellCrossed << k;
+    }
     uint cw = hot.cell_words;
     for (uint k = 0u; k < kCellParts; ++k)
         for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_parts).v[(kCellParts * uint(i) + k) * cw + w] = parts[k].w[w];
-    uint cut = dynamic ? kCellCut | kCellDynamic : kCellCut;
     if (bits_count(held) != 0u) {
         for (uint w = 0u; w < cw; ++w) WordsRef(hot.cell_static).v[uint(i) * cw + w] = held.w[w];
         cut |= kCellStatic;

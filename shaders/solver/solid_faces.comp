@@ -4,7 +4,8 @@
 // sides (beyond the domain: all open), and the solid's normal velocity from the moving fragments of
 // both cells (or the sealed region a cell without air lies in), over the share of the face's closed pairs
 // that touch no static solid (moving_share); where one cell has no air, only the solid in the other's layer
-// next to the face (layer_motion).
+// next to the face (layer_motion). The faces of a cell whose air crossed a moving wall (air_crossed) take
+// that velocity as the air's too.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -112,7 +113,11 @@ void main() {
             masks = true;
             share = moving_share(v * v - open, face_any_count(static_at(lo, flags_lo), static_at(f, flags_hi), axis, v, faces));
         }
-        FloatsRef(hot.solid_velocity).v[i] = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
+        float solid = m.w > 0 ? share * float(m[axis]) / (kVelocityScale * float(m.w)) : 0.0;
+        FloatsRef(hot.solid_velocity).v[i] = solid;
+        // A cell whose air crossed a moving wall: its faces held the other side's air, which advection
+        // would carry on as this side's; they start from the wall's velocity.
+        if (air_crossed(flags_lo) || air_crossed(flags_hi)) FloatsRef(face_field(kFieldVelocity)).v[i] = solid;
     }
     WordsRef(hot.open_counts).v[t] = counts;
 }

@@ -252,6 +252,15 @@ GUST_INLINE void cell_parts(CellBits occupied, uint v, CellBits faces[6], GUST_O
         cell_parts_general(occupied, v, faces, first, second);
 }
 
+/// Whether a part of a cell holds air that was beyond a wall a step before: fewer than half its voxels were
+/// the cell's air then (`before`). Where a moving wall crosses the middle of a cell, the cell's air (its
+/// larger part) switches to the wall's other side, and the faces of the cell still hold the velocities of
+/// the side it left; solid_faces.comp sets them to the wall's.
+GUST_INLINE bool part_crossed(CellBits part, CellBits before) {
+    uint count = bits_count(part);
+    return count != 0u && 2u * bits_count(bits_and(part, before)) < count;
+}
+
 /// Whether a set holds a voxel on cell side s (−x,+x,−y,+y,−z,+z).
 GUST_INLINE bool bits_touch(CellBits set, CellBits faces[6], uint s) {
     return bits_count(bits_and(set, faces[s])) != 0u;

@@ -123,6 +123,14 @@ GUST_CONST uint kCellSecondPart = 8u; ///< its air is part 1 (part 0 is sealed)
 GUST_CONST uint kCellRegion = 16u;    ///< << k: node k of this cell roots a sealed region with motion sums
 GUST_CONST uint kCellStatic = 64u;    ///< holds static solid voxels: they are in SolverBindings::cell_static
 GUST_CONST uint kCellDynamic = 128u;  ///< held voxels of moving surfaces: the next step redoes its voxels
+GUST_CONST uint kCellCrossed = 256u;  ///< << k: part k is air from beyond a moving wall (part_crossed)
+
+/// Whether the air of a cell with these flags crossed a moving wall since the last step (part_crossed):
+/// its faces still hold the other side's velocities.
+GUST_INLINE bool air_crossed(uint flags) {
+    uint air = (flags & kCellSecondPart) != 0u ? 1u : 0u;
+    return (flags & kCellNoAir) == 0u && (flags & (kCellCrossed << air)) != 0u;
+}
 
 /// Union-find node of part k of cell `cell`; node 0 stands for the air beyond the open domain sides.
 GUST_CONST uint kOutsideNode = 0u;

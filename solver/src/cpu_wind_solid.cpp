@@ -183,6 +183,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
     stats.cut_cells = 0;
     each_cell(k.levels[0], [&](int i, glm::ivec3 c) {
         const std::size_t cell = std::size_t(i);
+        const bool had_air = (flags[cell] & kCellNoAir) == 0;
+        const CellBits before = had_air ? air_of(cell) : bits_none();
         flags[cell] = 0;
         if (!solid || solid->occupied.empty()) return;
         CellBits occupied = bits_none();
@@ -203,6 +205,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         if (bits_count(occupied) == 0) return;
         cell_parts(occupied, v, faces_layers, parts[kCellParts * cell], parts[kCellParts * cell + 1]);
         flags[cell] = kCellCut | (bits_count(fixed[cell]) != 0 ? kCellStatic : 0u);
+        for (std::uint32_t part = 0; had_air && part < kCellParts; ++part)
+            if (part_crossed(parts[kCellParts * cell + part], before)) flags[cell] |= kCellCrossed << part;
         ++stats.cut_cells;
     });
     if (solid)
@@ -254,6 +258,8 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
         }
         k.face[kFieldSolid][std::size_t(i)] =
             m.w > 0 ? share * float(m[int(axis)]) / (kVelocityScale * float(m.w)) : 0.0f;
+        if (air_crossed(flags_at(lo)) || air_crossed(flags_at(f)))
+            k.face[kFieldVelocity][std::size_t(i)] = k.face[kFieldSolid][std::size_t(i)];
     });
     seal_pockets(stats.sealed_cells);
 }
