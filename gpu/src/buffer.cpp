@@ -56,6 +56,7 @@ Result<Buffer> Buffer::create(Context& ctx, VkDeviceSize size, MemoryUse use, Vk
         return Result<Buffer>::failure("cannot allocate " + std::to_string(req.size) +
                                        " bytes: " + to_string(r));
     vk.vkBindBufferMemory(ctx.device(), b.buffer_, b.memory_, 0);
+    ctx.name(VK_OBJECT_TYPE_DEVICE_MEMORY, std::uint64_t(b.memory_), name);
 
     const VkMemoryPropertyFlags got = ctx.memory_flags(type);
     const VkMemoryPropertyFlags mappable =

@@ -39,6 +39,7 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
         return Result<Image>::failure("cannot allocate " + std::to_string(req.size) +
                                       " bytes: " + to_string(r));
     vk.vkBindImageMemory(ctx.device(), img.image_, img.memory_, 0);
+    ctx.name(VK_OBJECT_TYPE_DEVICE_MEMORY, std::uint64_t(img.memory_), desc.name);
     VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     view.image = img.image_;
     view.viewType = volume ? VK_IMAGE_VIEW_TYPE_3D : VK_IMAGE_VIEW_TYPE_2D;
