@@ -41,6 +41,8 @@ static const char* result_name(gust_result r) {
         return "GUST_ERROR_IO";
     case GUST_ERROR_UNSUPPORTED:
         return "GUST_ERROR_UNSUPPORTED";
+    case GUST_ERROR_BUSY:
+        return "GUST_ERROR_BUSY";
     }
     return "(not a gust_result)";
 }
