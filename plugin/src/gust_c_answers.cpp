@@ -68,11 +68,9 @@ gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* text
 }
 
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats) {
-    return on_system_reader(system, "gust_system_stats", [&](const gust::System& s) -> gust::Outcome {
+    return on_system(system, "gust_system_stats", [&](gust::System& s) -> gust::Outcome {
         if (!stats) return invalid("stats (the output) is NULL");
-        gust::FrameStats copy;
-        if (gust::Outcome o = s.read_stats(copy); !o) return o;
-        *stats = to_c(copy);
+        *stats = to_c(s.stats());
         return {};
     });
 }

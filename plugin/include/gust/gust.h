@@ -8,7 +8,7 @@
  * systems. Units are metres, seconds and m/s; positions and directions are world space; matrices are
  * float[16], column-major. Threading as gust.hpp's header says: one writer thread at a time (every call
  * not named here; an overlapping writer call fails with GUST_ERROR_BUSY), and any number of readers at
- * once, also while the writer steps: gust_system_sample and gust_system_stats. A reader call's or a
+ * once, also while the writer steps: gust_system_sample. A reader call's or a
  * GUST_ERROR_BUSY failure's message is kept per thread (gust_last_create_error), not in the system.
  * Different systems may be used from different threads.
  *
@@ -438,7 +438,7 @@ gust_result gust_system_wind_at(gust_system system, gust_vec3 point, gust_wind_s
 /// Fills `texture` with the wind texture's handles and mapping (handles owned by the system).
 gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* texture);
 
-/// Reader call (any thread): fills `stats` with the last step's statistics.
+/// Fills `stats` with the last step's statistics (a writer call; gust::System::read_stats is the reader's).
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats);
 
 /// Tree nodes per level of the last step's statistics (levels 1..depth-1, then leaf bricks): `*count`
