@@ -1,6 +1,6 @@
 // Times System::sample (one thread, CPU) beside System::query (a blocking GPU round trip), and a step with
 // the snapshot against one without, interleaved in one run (docs/api.md "Wind snapshot").
-//   gust_bench_snapshot [points]
+//   gust_bench_snapshot [points] [--no-steps]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -8,6 +8,7 @@
 #include <gust/gust.hpp>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
     std::printf("one point: sample %.2f us, query %.2f us\n", median(one_sample) * 1e6,
                 median(one_query) * 1e6);
     system.reset();
+    if (argc > 2 && std::string(argv[2]) == "--no-steps") return 0;
 
     const std::uint32_t sizes[2][3] = {{32, 16, 32}, {64, 64, 64}};
     for (const auto& n : sizes) {

@@ -68,35 +68,33 @@ void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::s
     const glm::vec3 size = glm::vec3(n), inv_h = glm::vec3(1.0f / d.cell_size);
     const glm::ivec3 last = n - 1, low = glm::max(n - 2, glm::ivec3(0));
     const glm::vec4* cells = d.cells.data();
-    const auto at = [&](int x, int y, int z) { return cells[x + n.x * (y + n.y * z)]; };
+    const int row = n.x, slice = n.x * n.y;
+    const auto lerp = [](const glm::vec4& a, const glm::vec4& b, float t) { return a + (b - a) * t; };
     for (std::size_t i = 0; i < points.size(); ++i) {
         // Cell units, as sample.comp: outside [0, n] (edges included) the ambient wind.
         const glm::vec3 p = (glm::vec3(points[i].x, points[i].y, points[i].z) - d.origin) * inv_h;
-        glm::vec3 u;
         if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= size.x && p.y <= size.y && p.z <= size.z)) {
-            u = d.ambient;
-        } else {
-            const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor(p)), glm::ivec3(0), last);
-            const glm::vec4 own = at(c.x, c.y, c.z);
-            if (own.w == 0.0f) {
-                // A cell without air: the solid's own velocity (query answers it there, not a blend).
-                u = glm::vec3(own);
-            } else {
-                // The sampler: texel centres at c + 0.5, clamped to the edge.
-                const glm::vec3 q = glm::clamp(p - 0.5f, glm::vec3(0.0f), glm::vec3(last));
-                const glm::ivec3 i0 = glm::min(glm::ivec3(q), low), i1 = glm::min(i0 + 1, last);
-                const glm::vec3 t = q - glm::vec3(i0);
-                const glm::vec3 c00 =
-                    glm::mix(glm::vec3(at(i0.x, i0.y, i0.z)), glm::vec3(at(i1.x, i0.y, i0.z)), t.x);
-                const glm::vec3 c10 =
-                    glm::mix(glm::vec3(at(i0.x, i1.y, i0.z)), glm::vec3(at(i1.x, i1.y, i0.z)), t.x);
-                const glm::vec3 c01 =
-                    glm::mix(glm::vec3(at(i0.x, i0.y, i1.z)), glm::vec3(at(i1.x, i0.y, i1.z)), t.x);
-                const glm::vec3 c11 =
-                    glm::mix(glm::vec3(at(i0.x, i1.y, i1.z)), glm::vec3(at(i1.x, i1.y, i1.z)), t.x);
-                u = glm::mix(glm::mix(c00, c10, t.y), glm::mix(c01, c11, t.y), t.z);
-            }
+            velocities[i] = {d.ambient.x, d.ambient.y, d.ambient.z};
+            continue;
         }
+        // p >= 0 here, so truncation is floor.
+        const glm::ivec3 c = glm::min(glm::ivec3(p), last);
+        const glm::vec4& own = cells[c.x + row * c.y + slice * c.z];
+        if (own.w == 0.0f) {
+            // A cell without air: the solid's own velocity (query answers it there, not a blend).
+            velocities[i] = {own.x, own.y, own.z};
+            continue;
+        }
+        // The sampler: texel centres at c + 0.5, clamped to the edge.
+        const glm::vec3 q = glm::clamp(p - 0.5f, glm::vec3(0.0f), glm::vec3(last));
+        const glm::ivec3 i0 = glm::min(glm::ivec3(q), low);
+        const glm::vec3 t = q - glm::vec3(i0);
+        const int dx = i0.x < last.x ? 1 : 0, dy = i0.y < last.y ? row : 0, dz = i0.z < last.z ? slice : 0;
+        const glm::vec4* c000 = cells + i0.x + row * i0.y + slice * i0.z;
+        const glm::vec4 x00 = lerp(c000[0], c000[dx], t.x), x10 = lerp(c000[dy], c000[dy + dx], t.x);
+        const glm::vec4 x01 = lerp(c000[dz], c000[dz + dx], t.x);
+        const glm::vec4 x11 = lerp(c000[dz + dy], c000[dz + dy + dx], t.x);
+        const glm::vec4 u = lerp(lerp(x00, x10, t.y), lerp(x01, x11, t.y), t.z);
         velocities[i] = {u.x, u.y, u.z};
     }
 }
