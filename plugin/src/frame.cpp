@@ -149,11 +149,11 @@ Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, Frame
     wind.ms = solver_->timings(slot.frame);
     answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
     stats_from(*world, wind, work, stats);
-    if (snapshot_ && slot.snapshot_recorded) publish_snapshot(slot);
     return {};
 }
 
 void Frame::publish_snapshot(const FrameSlot& slot) {
+    if (!snapshot_ || !slot.snapshot_recorded) return;
     // A bounded copy (the texels to floats); when every free copy is held by a reader, this frame is
     // skipped and readers keep the previous one.
     SnapshotData* d = snapshot_->begin_write();

@@ -88,6 +88,9 @@ class Frame {
     Outcome collect(const FrameSlot& slot, const gpu::WorkCounts& work, FrameStats& stats,
                     const glm::vec3*& answers);
 
+    /// SystemDesc::snapshot: publishes a completed frame's texels (after collect) for System::sample.
+    void publish_snapshot(const FrameSlot& slot);
+
     const WindTexture& texture() const { return texture_; }
     /// Frames recorded so far.
     std::uint64_t recorded() const { return recorded_; }
@@ -95,7 +98,6 @@ class Frame {
   private:
     void record_texture_copy(VkCommandBuffer cmd);
     void publish_texture();
-    void publish_snapshot(const FrameSlot& slot);
     void stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
                     FrameStats& stats) const;
     void log(LogLevel level, const std::string& message) const;

@@ -320,10 +320,12 @@ Outcome System::Impl::record(VkCommandBuffer commands, float dt, FrameSlot& slot
 Outcome System::Impl::collect(FrameSlot& slot, const gpu::WorkCounts& work) {
     const glm::vec3* answers = nullptr;
     {
-        // Readers copy the stats (read_stats) under the same lock; publishing the snapshot takes none.
+        // Readers copy the stats (read_stats) under the same lock.
         const std::lock_guard lock(stats_mutex);
         if (Outcome o = frame->collect(slot, work, stats, answers); !o) return o;
     }
+    // Outside the lock: the conversion grows with the grid, and read_stats need not wait for it.
+    frame->publish_snapshot(slot);
     std::size_t at = 0;
     for (QueryId id : slot.asked) {
         Pending& pending = queries.at(id);
