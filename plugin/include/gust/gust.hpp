@@ -448,7 +448,8 @@ class System {
     /// centres by the interpolation (query blends the faces) and in cut cells (query resolves solid voxels).
     /// The snapshot is the last step's (OwnQueue: as soon as step() returns; HostCommands: the frame
     /// recorded frames_in_flight steps ago, once collected). It is held for the duration of the call
-    /// only: two calls may answer from different steps (`info` says which). NotReady when the snapshot is
+    /// only: two calls may answer from different steps (`info` says which). A step whose free copies are
+    /// all still held by slower readers is not published (the previous stays). NotReady when the snapshot is
     /// off or no step has been published yet; InvalidArgument for a size mismatch or a non-finite point.
     Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities) const;
     Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities, SnapshotInfo& info) const;
