@@ -83,6 +83,12 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         if (!grown) return device_failure(grown.status());
         slot.points = std::move(*grown);
     }
+    if (snapshot_ && !slot.snapshot) {
+        auto created =
+            gpu::Buffer::create(*ctx_, texels_.size(), gpu::MemoryUse::Readback, 0, "gust snapshot");
+        if (!created) return device_failure(created.status());
+        slot.snapshot = std::move(*created);
+    }
     const std::uint64_t dispatched = ctx_->work().dispatches;
 
     // Inputs: whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
@@ -101,6 +107,7 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     if (Status s = solver_->record_step(cmd, in.dt, &solid); !s) return device_failure(s);
     // Outputs: the texture, and the async queries asked since the last frame.
     record_texture_copy(cmd);
+    if (snapshot_) gpu::record_readback(*ctx_, cmd, texels_, texels_.size(), slot.snapshot.handle(), 0);
     if (point_bytes > 0) {
         std::memcpy(slot.points.mapped(), in.points.data(), point_bytes);
         solver_->record_sample(cmd, slot.points.address(),
@@ -125,6 +132,10 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     slot.frame = ctx_->recording_frame();
     slot.dispatches = ctx_->work().dispatches - dispatched;
     ++recorded_;
+    slot.snapshot_recorded = snapshot_ != nullptr;
+    slot.snapshot_origin = solver_->origin();
+    slot.snapshot_ambient = solver_->ambient();
+    slot.snapshot_frame = recorded_;
     publish_texture();
     return {};
 }
@@ -139,6 +150,25 @@ Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, Frame
     answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
     stats_from(*world, wind, work, stats);
     return {};
+}
+
+void Frame::publish_snapshot(const FrameSlot& slot) {
+    if (!snapshot_ || !slot.snapshot_recorded) return;
+    // A bounded copy (the texels to floats); when every free copy is held by a reader, this frame is
+    // skipped and readers keep the previous one.
+    SnapshotData* d = snapshot_->begin_write();
+    if (!d) return;
+    const SolverDesc& desc = solver_->desc();
+    const auto* half = static_cast<const std::uint16_t*>(slot.snapshot.mapped());
+    for (std::size_t i = 0; i < d->cells.size(); ++i, half += 4)
+        d->cells[i] = {half_to_float(half[0]), half_to_float(half[1]), half_to_float(half[2]),
+                       half_to_float(half[3])};
+    d->origin = slot.snapshot_origin;
+    d->cell_size = desc.cell_size;
+    d->extent = glm::ivec3(desc.cells);
+    d->ambient = slot.snapshot_ambient;
+    d->frame = slot.snapshot_frame;
+    snapshot_->publish(d);
 }
 
 void Frame::stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,

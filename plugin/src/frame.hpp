@@ -2,6 +2,8 @@
 // it brings back once the GPU has run it. System (system.cpp) is the API shell around it.
 #pragma once
 
+#include "snapshot.hpp"
+
 #include <cstdint>
 #include <gust/gpu/context.hpp>
 #include <gust/gpu/image.hpp>
@@ -45,6 +47,12 @@ struct FrameSlot {
     bool used = false;               ///< a recorded frame's results wait here
     std::uint64_t frame = 0;         ///< the frame they belong to (gpu::Context::begin_frame)
     std::uint64_t dispatches = 0;    ///< dispatches and draws the frame recorded
+    /// SystemDesc::snapshot: the frame's wind texels (8 bytes a cell), and where the domain stood.
+    gpu::Buffer snapshot;
+    bool snapshot_recorded = false;
+    glm::vec3 snapshot_origin{0.0f};
+    glm::vec3 snapshot_ambient{0.0f};
+    std::uint64_t snapshot_frame = 0;
 };
 
 /// Records frames and collects them. Owns the wind texture (its texels are written once a frame, by the
@@ -62,6 +70,10 @@ class Frame {
     /// Creates the wind texture, fills it from the solver's field and binds its texels to every step.
     Outcome create_texture();
 
+    /// SystemDesc::snapshot: from now on every frame copies its texels into its slot, and collect
+    /// publishes them into `ring` (which outlives the Frame).
+    void enable_snapshot(SnapshotRing& ring) { snapshot_ = &ring; }
+
     /// Whole cells the domain must move to centre on `focus`; fails when that is too far for one step.
     Outcome scroll_for(glm::vec3 focus, glm::ivec3& cells) const;
 
@@ -75,6 +87,9 @@ class Frame {
     /// The world grows what ran out for the frames recorded later.
     Outcome collect(const FrameSlot& slot, const gpu::WorkCounts& work, FrameStats& stats,
                     const glm::vec3*& answers);
+
+    /// SystemDesc::snapshot: publishes a completed frame's texels (after collect) for System::sample.
+    void publish_snapshot(const FrameSlot& slot);
 
     const WindTexture& texture() const { return texture_; }
     /// Frames recorded so far.
@@ -96,6 +111,7 @@ class Frame {
     VkSampler sampler_ = VK_NULL_HANDLE;
     WindTexture texture_;
     std::uint64_t recorded_ = 0;
+    SnapshotRing* snapshot_ = nullptr;
 };
 
 } // namespace gust::detail

@@ -18,6 +18,7 @@ static_assert(GUST_ERROR_DEVICE_FAILURE == static_cast<int>(gust::ErrorCode::Dev
 static_assert(GUST_ERROR_NOT_READY == static_cast<int>(gust::ErrorCode::NotReady));
 static_assert(GUST_ERROR_IO == static_cast<int>(gust::ErrorCode::IoError));
 static_assert(GUST_ERROR_UNSUPPORTED == static_cast<int>(gust::ErrorCode::Unsupported));
+static_assert(GUST_ERROR_BUSY == static_cast<int>(gust::ErrorCode::Busy));
 
 static_assert(GUST_LOG_INFO == static_cast<int>(gust::LogLevel::Info));
 static_assert(GUST_LOG_WARNING == static_cast<int>(gust::LogLevel::Warning));
@@ -50,6 +51,7 @@ static_assert(GUST_TREE_NODE_STATIC == static_cast<int>(gust::TreeNodeState::Sta
 
 // The conversions below copy these arrays element by element.
 static_assert(sizeof(gust_wind_domain::cells) == sizeof(gust::WindDomain::cells));
+static_assert(sizeof(gust_vec3) == sizeof(gust::Vec3) && alignof(gust_vec3) == alignof(gust::Vec3));
 static_assert(sizeof(gust_wind_texture::world_to_texture) == sizeof(gust::Mat4::m));
 static_assert(sizeof(gust_wind_texture::extent) == sizeof(gust::WindTexture::extent));
 static_assert(sizeof(gust_voxel_grid_info::resolution) == sizeof(gust::VoxelGridInfo::resolution));

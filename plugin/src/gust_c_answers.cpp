@@ -75,6 +75,23 @@ gust_result gust_system_stats(gust_system system, gust_frame_stats* stats) {
     });
 }
 
+gust_result gust_system_sample(gust_system system, const gust_vec3* points, size_t count,
+                               gust_vec3* velocities, uint64_t* frame) {
+    return on_system_reader(system, "gust_system_sample", [&](const gust::System& s) -> gust::Outcome {
+        if (frame) *frame = 0;
+        if (count > 0 && !points) return invalid("points is NULL but count is " + std::to_string(count));
+        if (count > 0 && !velocities)
+            return invalid("velocities is NULL but count is " + std::to_string(count));
+        // gust_vec3 and gust::Vec3 are both three floats (gust_c.cpp checks): no copy.
+        const std::span in(reinterpret_cast<const gust::Vec3*>(points), count);
+        const std::span out(reinterpret_cast<gust::Vec3*>(velocities), count);
+        gust::SnapshotInfo info;
+        gust::Outcome outcome = s.sample(in, out, info);
+        if (outcome && frame) *frame = info.frame;
+        return outcome;
+    });
+}
+
 gust_result gust_system_stats_nodes_per_level(gust_system system, uint64_t* nodes, uint32_t capacity,
                                               uint32_t* count) {
     return on_system(system, "gust_system_stats_nodes_per_level", [&](gust::System& s) -> gust::Outcome {

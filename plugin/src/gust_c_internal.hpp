@@ -115,6 +115,9 @@ inline gust_result on_system(gust_system system, std::string_view function, Body
         }
         gust::Outcome outcome = body(*handle->system);
         if (outcome) return GUST_OK;
+        // The writer's message stays the writer's: a call refused as Busy keeps its own on its thread.
+        if (outcome.code() == gust::ErrorCode::Busy)
+            return fail_thread(to_result(outcome.code()), function, outcome.message());
         store_message(handle->message, handle->message_ptr, function, outcome.message());
         return to_result(outcome.code());
     } catch (...) {
@@ -123,6 +126,26 @@ inline gust_result on_system(gust_system system, std::string_view function, Body
             store_message(handle->message, handle->message_ptr, function, message);
             return code;
         }
+        return fail_thread(code, function, message);
+    }
+}
+
+// The same for a reader call (any thread, while another steps): a failure's message is kept per thread
+// (gust_last_create_error), since the system's own belongs to its writer.
+template <class Body>
+inline gust_result on_system_reader(gust_system system, std::string_view function, Body&& body) noexcept {
+    try {
+        Handle* handle = find(system);
+        if (!handle) {
+            return fail_thread(GUST_ERROR_INVALID_HANDLE, function,
+                               system ? "system is not alive (destroyed, or not from gust_system_create)"
+                                      : "system is NULL");
+        }
+        gust::Outcome outcome = body(static_cast<const gust::System&>(*handle->system));
+        if (outcome) return GUST_OK;
+        return fail_thread(to_result(outcome.code()), function, outcome.message());
+    } catch (...) {
+        auto [code, message] = from_exception();
         return fail_thread(code, function, message);
     }
 }
@@ -325,7 +348,7 @@ inline gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice
                                gust_hooks& hooks_in_handle) {
     gust::SystemDesc out;
     auto& [header_version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-           hooks, pipeline_cache] = out;
+           hooks, pipeline_cache, snapshot] = out;
     header_version = c.header_version;
     host = host_device;
     validation = c.validation;
@@ -337,12 +360,13 @@ inline gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice
     wind = to_cpp(c.wind);
     hooks = to_cpp(hooks_in_handle);
     pipeline_cache = c.pipeline_cache;
+    snapshot = c.snapshot;
     return out;
 }
 // The defaults: no host device and no hooks, whatever the C++ ones hold.
 inline gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_version) {
     const auto& [version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-                 hooks, pipeline_cache] = d;
+                 hooks, pipeline_cache, snapshot] = d;
     return {.header_version = header_version,
             .host = nullptr,
             .validation = validation,
@@ -353,7 +377,8 @@ inline gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_ver
             .domain = to_c(domain),
             .wind = to_c(wind),
             .hooks = {},
-            .pipeline_cache = pipeline_cache};
+            .pipeline_cache = pipeline_cache,
+            .snapshot = snapshot};
 }
 
 inline gust::MeshDesc to_cpp(const gust_mesh_desc& c) {

@@ -199,6 +199,10 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
 
         m.frame.emplace(*m.ctx, *m.world, *m.solver, m.hooks);
         if (Outcome o = m.frame->create_texture(); !o) return o;
+        if (desc.snapshot) {
+            m.snapshot.emplace(m.solver->cell_count(), &m.memory);
+            m.frame->enable_snapshot(*m.snapshot);
+        }
         if (desc.submission == Submission::HostCommands)
             for (std::uint32_t i = 0; i < desc.frames_in_flight; ++i)
                 m.slots.emplace_back(&m.memory);
@@ -315,7 +319,13 @@ Outcome System::Impl::record(VkCommandBuffer commands, float dt, FrameSlot& slot
 
 Outcome System::Impl::collect(FrameSlot& slot, const gpu::WorkCounts& work) {
     const glm::vec3* answers = nullptr;
-    if (Outcome o = frame->collect(slot, work, stats, answers); !o) return o;
+    {
+        // Readers copy the stats (read_stats) under the same lock.
+        const std::lock_guard lock(stats_mutex);
+        if (Outcome o = frame->collect(slot, work, stats, answers); !o) return o;
+    }
+    // Outside the lock: the conversion grows with the grid, and read_stats need not wait for it.
+    frame->publish_snapshot(slot);
     std::size_t at = 0;
     for (QueryId id : slot.asked) {
         Pending& pending = queries.at(id);
@@ -342,6 +352,8 @@ Outcome System::Impl::collect(FrameSlot& slot, const gpu::WorkCounts& work) {
 }
 
 Outcome System::step(float dt) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("step");
     if (impl_->submission == Submission::HostCommands)
         return invalid("with Submission::HostCommands, call step(dt, commands)");
     if (Outcome o = check_dt(dt); !o) return o;
@@ -366,6 +378,8 @@ Outcome System::step(float dt) {
 }
 
 Outcome System::step(float dt, VkCommandBuffer commands) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("step");
     if (impl_->submission != Submission::HostCommands)
         return invalid("step(dt, commands) needs Submission::HostCommands");
     if (commands == VK_NULL_HANDLE) return invalid("commands is null");

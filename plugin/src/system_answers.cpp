@@ -23,15 +23,21 @@ Outcome check_points(std::span<const Vec3> points) {
 } // namespace
 
 Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("query");
+    return impl_->query(points, velocities);
+}
+
+Outcome System::Impl::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
     if (velocities.size() != points.size())
         return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
                        std::to_string(points.size()) + " points");
     if (Outcome o = check_points(points); !o) return o;
     return guarded([&]() -> Outcome {
-        std::pmr::vector<glm::vec3> at(points.size(), &impl_->memory);
+        std::pmr::vector<glm::vec3> at(points.size(), &memory);
         for (std::size_t i = 0; i < points.size(); ++i)
             at[i] = to_glm(points[i]);
-        auto answers = impl_->solver->sample(at);
+        auto answers = solver->sample(at);
         if (!answers) return device_failure(answers.status());
         for (std::size_t i = 0; i < points.size(); ++i)
             velocities[i] = to_vec3((*answers)[i]);
@@ -40,6 +46,8 @@ Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) 
 }
 
 Outcome System::query_async(std::span<const Vec3> points, QueryId& id) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("query_async");
     id = 0;
     if (Outcome o = check_points(points); !o) return o;
     return guarded([&]() -> Outcome {
@@ -55,6 +63,8 @@ Outcome System::query_async(std::span<const Vec3> points, QueryId& id) {
 }
 
 Outcome System::fetch(QueryId id, std::span<Vec3> velocities) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("fetch");
     auto it = impl_->queries.find(id);
     if (it == impl_->queries.end())
         return Outcome(ErrorCode::InvalidHandle, "no query " + std::to_string(id));
@@ -70,6 +80,8 @@ Outcome System::fetch(QueryId id, std::span<Vec3> velocities) {
 }
 
 Outcome System::wind_at(const Vec3& point, WindSample& sample) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("wind_at");
     sample = {};
     if (!finite(point)) return invalid("point is not finite");
     const float h = impl_->solver_desc.cell_size;
@@ -81,7 +93,7 @@ Outcome System::wind_at(const Vec3& point, WindSample& sample) {
                             {point.x, point.y, point.z - h},
                             {point.x, point.y, point.z + h}};
     Vec3 v[7];
-    if (Outcome o = query(points, v); !o) return o;
+    if (Outcome o = impl_->query(points, v); !o) return o;
     glm::vec3 mean(0.0f);
     for (int i = 1; i < 7; ++i)
         mean += to_glm(v[i]) / 6.0f;
@@ -98,6 +110,42 @@ const WindTexture& System::wind_texture() const {
 const FrameStats& System::stats() const {
     return impl_->stats;
 }
+
+Outcome System::read_stats(FrameStats& out) const {
+    return guarded([&]() -> Outcome {
+        const std::lock_guard lock(impl_->stats_mutex);
+        out = impl_->stats;
+        return {};
+    });
+}
+
+Outcome System::sample(std::span<const Vec3> points, std::span<Vec3> velocities) const {
+    SnapshotInfo info;
+    return sample(points, velocities, info);
+}
+
+Outcome System::sample(std::span<const Vec3> points, std::span<Vec3> velocities, SnapshotInfo& info) const {
+    info = {};
+    if (velocities.size() != points.size())
+        return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
+                       std::to_string(points.size()) + " points");
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!finite(points[i])) return invalid("point " + std::to_string(i) + " is not finite");
+    if (!impl_->snapshot)
+        return Outcome(ErrorCode::NotReady,
+                       "the snapshot is off: create the System with SystemDesc::snapshot");
+    int held = 0;
+    const SnapshotData* data = impl_->snapshot->acquire(held);
+    if (!data) return Outcome(ErrorCode::NotReady, "no step has published a snapshot yet");
+    sample_snapshot(*data, points, velocities);
+    info.frame = data->frame;
+    info.origin = to_vec3(data->origin);
+    info.cell_size = data->cell_size;
+    for (int a = 0; a < 3; ++a)
+        info.extent[a] = std::uint32_t(data->extent[a]);
+    impl_->snapshot->release(held);
+    return {};
+}
 Vec3 System::domain_origin() const {
     return to_vec3(impl_->solver->origin());
 }
@@ -106,6 +154,8 @@ const char* System::device_name() const {
 }
 
 Outcome System::export_vdb(const char* path) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("export_vdb");
     if (!path || !*path) return invalid("path is empty");
 #if GUST_WITH_OPENVDB
     return guarded([&]() -> Outcome {
@@ -141,6 +191,8 @@ Outcome System::debug_voxel_grid(VoxelGridInfo& info) const {
 }
 
 Outcome System::debug_voxels(std::span<VoxelCoord> out, std::size_t& count) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("debug_voxels");
     count = 0;
     return guarded([&]() -> Outcome {
         auto keys = impl_->world->tree().leaf_voxels();
@@ -156,6 +208,8 @@ Outcome System::debug_voxels(std::span<VoxelCoord> out, std::size_t& count) {
 }
 
 Outcome System::debug_tree_nodes(std::span<TreeNode> out, std::size_t& count) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("debug_tree_nodes");
     count = 0;
     return guarded([&]() -> Outcome {
         // SparseTree decodes its own pool, coarse levels first, so a short `out` still holds them whole.

@@ -5,12 +5,14 @@
 #include "frame.hpp"
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <exception>
 #include <glm/gtc/type_ptr.hpp>
 #include <map>
 #include <memory>
 #include <memory_resource>
+#include <mutex>
 #include <new>
 #include <optional>
 #include <string>
@@ -139,7 +141,10 @@ struct System::Impl {
     bool static_dirty = true;
 
     FrameStats stats;
-    std::pmr::vector<detail::FrameSlot> slots; ///< HostCommands: one per frame in flight
+    mutable std::mutex stats_mutex; ///< held while a frame's stats are stored, and by read_stats
+    std::optional<detail::SnapshotRing> snapshot; ///< SystemDesc::snapshot
+    std::atomic<bool> writing{false};             ///< a thread is inside a writer call
+    std::pmr::vector<detail::FrameSlot> slots;    ///< HostCommands: one per frame in flight
     detail::FrameSlot blocking; ///< OwnQueue: the frame step(dt) records, submits and waits for
     /// Whether a step failed on the device or the host's memory part-way through, and why (cut to fit): the
     /// System's state is not known after that, so later steps refuse to run (never a frame of wrong wind).
@@ -175,6 +180,9 @@ struct System::Impl {
     /// DeviceFailure once a step has failed part-way (`failure`), else success.
     Outcome refuse_after_failure() const;
 
+    /// query() without the writer flag (wind_at's points).
+    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities);
+
     /// create_instance() and create_moving_instance(): `previous` (or null) is the transform one step before.
     Outcome add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,
                          InstanceId& id);
@@ -197,6 +205,27 @@ struct System::Impl {
                                     std::to_string(m->gpu.vertex_count()));
         return error ? m : nullptr;
     }
+};
+
+/// Marks a writer call for its duration; fails (ErrorCode::Busy) when another thread is inside one.
+class WriterCall {
+  public:
+    explicit WriterCall(System::Impl& impl) : flag_(impl.writing), owned_(!flag_.exchange(true)) {}
+    ~WriterCall() {
+        if (owned_) flag_.store(false);
+    }
+    WriterCall(const WriterCall&) = delete;
+    WriterCall& operator=(const WriterCall&) = delete;
+    explicit operator bool() const { return owned_; }
+    static Outcome busy(const char* call) {
+        return Outcome(ErrorCode::Busy, std::string(call) +
+                                            ": another thread is inside a writer call of this System "
+                                            "(one writer at a time; gust.hpp, \"Threading\")");
+    }
+
+  private:
+    std::atomic<bool>& flag_;
+    bool owned_;
 };
 
 } // namespace gust

@@ -25,6 +25,8 @@ Outcome check_transform(const Mat4& m, const char* name) {
 } // namespace
 
 Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("create_mesh");
     id = 0;
     if (desc.vertex_count > 0 && !desc.positions) return invalid("positions is null");
     if (desc.index_count > 0 && !desc.indices) return invalid("indices is null");
@@ -47,6 +49,8 @@ Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
 }
 
 Outcome System::destroy_mesh(MeshId mesh) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("destroy_mesh");
     Outcome error;
     const Impl::Mesh* m = impl_->find_mesh(mesh, error);
     if (!m) return error;
@@ -59,6 +63,8 @@ Outcome System::destroy_mesh(MeshId mesh) {
 
 Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t vertex_count,
                              std::uint32_t stride, bool teleport) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_vertices");
     Outcome error;
     Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
     if (!m) return error;
@@ -81,6 +87,8 @@ Outcome System::set_vertices(MeshId mesh, const float* positions, std::uint32_t 
 
 Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
                              bool teleport) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_vertices");
     Outcome error;
     Impl::Mesh* m = impl_->find_deforming(mesh, vertex_count, error);
     if (!m) return error;
@@ -117,15 +125,21 @@ Outcome System::Impl::add_instance(MeshId mesh, const Mat4& transform, const Mat
 }
 
 Outcome System::create_instance(MeshId mesh, const Mat4& transform, bool moving, InstanceId& id) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("create_instance");
     return impl_->add_instance(mesh, transform, nullptr, moving, id);
 }
 
 Outcome System::create_moving_instance(MeshId mesh, const Mat4& transform, const Mat4& previous,
                                        InstanceId& id) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("create_moving_instance");
     return impl_->add_instance(mesh, transform, &previous, true, id);
 }
 
 Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool teleport) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_transform");
     auto it = impl_->instances.find(instance);
     if (it == impl_->instances.end())
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
@@ -137,6 +151,8 @@ Outcome System::set_transform(InstanceId instance, const Mat4& transform, bool t
 }
 
 Outcome System::destroy_instance(InstanceId instance) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("destroy_instance");
     auto it = impl_->instances.find(instance);
     if (it == impl_->instances.end())
         return Outcome(ErrorCode::InvalidHandle, "no instance " + std::to_string(instance));
@@ -147,6 +163,8 @@ Outcome System::destroy_instance(InstanceId instance) {
 }
 
 Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_emitters");
     return guarded([&]() -> Outcome {
         std::pmr::vector<Emitter> out(&impl_->memory);
         for (const WindEmitter& e : emitters) {
@@ -163,11 +181,15 @@ Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
 }
 
 Outcome System::set_ambient(const Vec3& velocity) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_ambient");
     if (Status s = impl_->solver->set_ambient(to_glm(velocity)); !s) return invalid(s.message());
     return {};
 }
 
 Outcome System::set_focus(const Vec3& position) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_focus");
     if (!finite(position)) return invalid("focus must be finite");
     // The next step scrolls by whole cells, counted in 32-bit integers: a move it could not make is
     // refused here, keeping the old focus, rather than failing every step after.

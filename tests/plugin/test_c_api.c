@@ -41,6 +41,8 @@ static const char* result_name(gust_result r) {
         return "GUST_ERROR_IO";
     case GUST_ERROR_UNSUPPORTED:
         return "GUST_ERROR_UNSUPPORTED";
+    case GUST_ERROR_BUSY:
+        return "GUST_ERROR_BUSY";
     }
     return "(not a gust_result)";
 }
@@ -232,7 +234,7 @@ static void fills_the_documented_defaults(void) {
     CHECK(desc.domain.hysteresis == 8);
     CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 32);
     CHECK(desc.wind.pressure == GUST_PRESSURE_MULTIGRID_PCG && desc.wind.max_iterations == 4000);
-    CHECK(desc.pipeline_cache == NULL);
+    CHECK(desc.pipeline_cache == NULL && !desc.snapshot);
     CHECK(desc.wind.vorticity == 0.2f && desc.wind.viscosity == 0.0f);
     CHECK(desc.wind.advection == GUST_ADVECTION_MACCORMACK && desc.wind.max_solid_speed == 50.0f &&
           desc.wind.cycles_per_step == 2);
@@ -1091,6 +1093,31 @@ static void takes_the_pressure_solver_advection_hysteresis_and_pipeline_cache(vo
     remove(cache);
 }
 
+/* gust_system_sample answers from the CPU snapshot; a reader's failure message is kept per thread. */
+static void samples_the_snapshot(void) {
+    hook_counts counts = {0};
+    gust_system_desc desc = small_world_desc(&counts);
+    desc.snapshot = true;
+    gust_system system = NULL;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
+    const gust_vec3 points[2] = {{0.0f, 4.0f, 0.0f}, {500.0f, 4.0f, 0.0f}};
+    gust_vec3 out[2];
+    uint64_t frame = 7;
+    CHECK_FREE_RESULT(gust_system_sample(system, points, 2, out, &frame), GUST_ERROR_NOT_READY);
+    CHECK(frame == 0);
+    CHECK_RESULT(system, gust_system_set_ambient(system, vec3(2.0f, 0.0f, 0.0f)), GUST_OK);
+    CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+    CHECK_FREE_RESULT(gust_system_sample(system, points, 2, out, &frame), GUST_OK);
+    CHECK(frame == 1);
+    CHECK(out[1].x == 2.0f && out[1].y == 0.0f && out[1].z == 0.0f);
+    CHECK_FREE_RESULT(gust_system_sample(system, NULL, 2, out, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_FREE_RESULT(gust_system_sample(system, points, 2, NULL, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_FREE_RESULT(gust_system_sample(NULL, points, 2, out, NULL), GUST_ERROR_INVALID_HANDLE);
+    CHECK_FREE_RESULT(gust_system_sample(system, NULL, 0, NULL, NULL), GUST_OK);
+    CHECK_RESULT(system, gust_system_destroy(system), GUST_OK);
+    CHECK(atomic_load(&counts.errors) == 0);
+}
+
 int main(void) {
     reports_its_version_and_device_requirements();
     fills_the_documented_defaults();
@@ -1098,6 +1125,7 @@ int main(void) {
     simulates_a_small_world();
     takes_the_pressure_solver_advection_hysteresis_and_pipeline_cache();
     runs_on_a_host_device_with_host_commands();
+    samples_the_snapshot();
     if (g_failures > 0) {
         fprintf(stderr, "%d check(s) failed\n", g_failures);
         return 1;

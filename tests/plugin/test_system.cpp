@@ -541,7 +541,7 @@ TEST(SystemHostDevice, givesTheSameWindAsItsOwnDeviceInBothSubmissionModes) {
 /// A System recording into a host's frames, `frames` in flight.
 class HostFrames : public ::testing::Test {
   protected:
-    void start(std::uint32_t frames) {
+    void start(std::uint32_t frames, bool snapshot = false) {
         ASSERT_TRUE(host_.ok()) << host_.error();
         ASSERT_TRUE(host_.start_frames(frames));
         SystemDesc desc = small_desc(watch_);
@@ -549,6 +549,7 @@ class HostFrames : public ::testing::Test {
         desc.host = &host_.device();
         desc.submission = Submission::HostCommands;
         desc.frames_in_flight = frames;
+        desc.snapshot = snapshot;
         const Outcome created = System::create(desc, system_);
         ASSERT_TRUE(created) << created.message();
     }
@@ -587,6 +588,28 @@ TEST_F(HostFrames, destroyingTheSystemWithFramesInFlightWaitsForThem) {
     frame();
     system_.reset();
     EXPECT_EQ(host_.messages(), 0);
+}
+
+// With frames in flight the snapshot of frame n is published when its slot comes round again, as the stats:
+// frames_in_flight steps later, without a wait.
+TEST_F(HostFrames, theSnapshotArrivesFramesInFlightStepsLater) {
+    start(2, true);
+    ASSERT_TRUE(system_->set_ambient({2.0f, 0.0f, 1.0f}));
+    const Vec3 points[] = {{0.0f, 4.0f, 0.0f}, {100.0f, 4.0f, 0.0f}};
+    Vec3 out[2];
+    SnapshotInfo info;
+    frame();
+    frame();
+    EXPECT_EQ(system_->sample(points, out, info).code(), ErrorCode::NotReady);
+    frame();
+    ASSERT_TRUE(system_->sample(points, out, info));
+    EXPECT_EQ(info.frame, 1u);
+    EXPECT_FLOAT_EQ(out[1].x, 2.0f) << "outside the domain: the ambient wind";
+    EXPECT_FLOAT_EQ(out[1].z, 1.0f);
+    frame();
+    ASSERT_TRUE(system_->sample(points, out, info));
+    EXPECT_EQ(info.frame, 2u);
+    EXPECT_TRUE(std::isfinite(out[0].x) && std::isfinite(out[0].y) && std::isfinite(out[0].z));
 }
 
 // An engine that asks and never fetches does not grow gust's memory for the rest of its session: an answer

@@ -6,8 +6,11 @@
  * system to hold the message (gust_system_create, calls given a NULL or destroyed system, free functions),
  * gust_last_create_error() holds it, per thread. Nothing crashes on NULL pointers, unknown ids or destroyed
  * systems. Units are metres, seconds and m/s; positions and directions are world space; matrices are
- * float[16], column-major. A system is thread-compatible: one thread calls it at a time; different systems
- * may be used from different threads.
+ * float[16], column-major. Threading as gust.hpp's header says: one writer thread at a time (every call
+ * not named here; an overlapping writer call fails with GUST_ERROR_BUSY), and any number of readers at
+ * once, also while the writer steps: gust_system_sample. A reader call's or a
+ * GUST_ERROR_BUSY failure's message is kept per thread (gust_last_create_error), not in the system.
+ * Different systems may be used from different threads.
  *
  * HelloWorld:
  *     gust_system_desc desc;
@@ -57,6 +60,7 @@ typedef enum gust_result {
     GUST_ERROR_NOT_READY = 6,          ///< an asynchronous answer is not there yet
     GUST_ERROR_IO = 7,                 ///< a file could not be written
     GUST_ERROR_UNSUPPORTED = 8,        ///< built without the optional part this call needs (OpenVDB)
+    GUST_ERROR_BUSY = 9,               ///< another thread is inside a writer call of this system
 } gust_result;
 
 /// The wind subsystem (opaque). Create one per world; a destroyed handle is never reused.
@@ -189,6 +193,9 @@ typedef struct gust_system_desc {
     /// gust_system_destroy, so the next process need not compile its pipelines; NULL keeps it in memory.
     /// Only a missing or empty file or a gust cache is replaced; any other file is left as it is.
     const char* pipeline_cache;
+    /// Publish each step's wind to CPU memory for gust_system_sample (gust::SystemDesc::snapshot: 8 bytes a
+    /// cell per frame in flight plus 48 bytes a cell).
+    bool snapshot;
 } gust_system_desc;
 
 /// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices; read during the call.
@@ -409,6 +416,13 @@ gust_result gust_system_step_commands(gust_system system, float dt, VkCommandBuf
 gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,
                               gust_vec3* velocities);
 
+/// Reader call (any thread, while another steps): wind velocity (m/s) at `count` points from the latest
+/// snapshot published to CPU memory (gust_system_desc::snapshot), without the GPU; gust::System::sample
+/// says how it matches gust_system_query. `*frame` (may be NULL) receives the step it answered from.
+/// GUST_ERROR_NOT_READY when the snapshot is off or nothing is published yet.
+gust_result gust_system_sample(gust_system system, const gust_vec3* points, size_t count,
+                               gust_vec3* velocities, uint64_t* frame);
+
 /// Queues `count` points (copied); the answer is ready after the next step and is fetched with
 /// gust_system_fetch. `*query` receives its ticket.
 gust_result gust_system_query_async(gust_system system, const gust_vec3* points, size_t count,
@@ -424,7 +438,7 @@ gust_result gust_system_wind_at(gust_system system, gust_vec3 point, gust_wind_s
 /// Fills `texture` with the wind texture's handles and mapping (handles owned by the system).
 gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* texture);
 
-/// Fills `stats` with the last step's statistics.
+/// Fills `stats` with the last step's statistics (a writer call; gust::System::read_stats is the reader's).
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats);
 
 /// Tree nodes per level of the last step's statistics (levels 1..depth-1, then leaf bricks): `*count`

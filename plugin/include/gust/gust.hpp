@@ -5,7 +5,20 @@
 // wind-source sample (direction, speed, gust). Nothing here throws: calls return a gust::Outcome whose
 // message names the argument and the reason. Units are metres, seconds and m/s; positions and
 // directions are world space; matrices are column-major (as GLM, Vulkan and OpenGL store them).
-// A System is thread-compatible: one thread calls it at a time.
+//
+// Threading (docs/api.md "Lifetimes and threading"), as Jolt's: one writer, many readers.
+// - Writer calls: every member not listed below (create_*, destroy_*, set_*, step, query, query_async,
+//   fetch, wind_at, export_vdb, debug_voxels, debug_tree_nodes) and the accessors that return references
+//   (stats(), wind_texture()). One thread at a time makes them, which may change from call to call when
+//   the host orders the calls (a mutex, a job dependency). A writer call made while another thread is
+//   inside one fails with ErrorCode::Busy instead of corrupting the System (a cheap flag, not a lock: it
+//   catches overlapping calls, not every race).
+// - Reader calls: sample() and read_stats(). Any number of threads may make them at once, also while
+//   another thread is inside a writer call (step included). They never block the writer: sample holds the
+//   latest published snapshot for the duration of the call, and a step publishing meanwhile fills another
+//   copy; read_stats copies under a lock the writer holds only while it stores a frame's statistics.
+// - Creation and destruction are neither: no reader may be inside the System when it is destroyed.
+// Different Systems may be used from different threads without any ordering.
 #pragma once
 
 #include <cstddef>
@@ -39,6 +52,7 @@ enum class ErrorCode : std::int32_t {
     NotReady = 6,          ///< an asynchronous answer is not there yet
     IoError = 7,           ///< a file could not be written
     Unsupported = 8,       ///< built without the optional part this call needs (OpenVDB)
+    Busy = 9,              ///< another thread is inside a writer call of this System (header comment)
 };
 
 /// The outcome of a call: a code and, when not Ok, a message naming the argument and the reason.
@@ -202,6 +216,12 @@ struct SystemDesc {
     /// left as it is. Its folder is created when missing; a failure to write is ignored. Null: the cache
     /// stays in memory. Read during create().
     const char* pipeline_cache = nullptr;
+    /// Publish every step's wind to CPU memory for sample() (any thread, no GPU round trip). It costs host
+    /// memory: 8 bytes a cell for each frame in flight (host-visible readback; OwnQueue: one), plus 16 bytes
+    /// a cell for each of the 3 published copies: (8 · frames + 48) bytes a cell, 0.9 MB at 32x16x32 with
+    /// OwnQueue, 14.7 MB at 64^3, 940 MB at 256^3. A step copies the texels (8 bytes a cell) on the GPU and
+    /// converts them to floats on the CPU when the frame is collected.
+    bool snapshot = false;
 };
 
 /// Ids of meshes and instances: 0 is never valid; a destroyed id is never reused.
@@ -302,6 +322,14 @@ struct FrameStats {
     /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate).
     using Timings = std::pmr::vector<std::pair<std::pmr::string, double>>;
     Timings ms;
+};
+
+/// The snapshot a System::sample call answered from.
+struct SnapshotInfo {
+    std::uint64_t frame = 0;      ///< WindTexture::frame of the step that wrote it (1 after the first)
+    Vec3 origin{};                ///< the domain's min corner then, m
+    float cell_size = 0.0f;       ///< m
+    std::uint32_t extent[3] = {}; ///< cells per axis
 };
 
 /// Ticket of an asynchronous query (0 is never valid).
@@ -412,12 +440,30 @@ class System {
     Outcome query_async(std::span<const Vec3> points, QueryId& id);
     /// The answer to `id` (then forgotten); NotReady before the next step().
     Outcome fetch(QueryId id, std::span<Vec3> velocities);
+    /// Reader call (any thread, any number at once, also while another thread steps): the wind at each
+    /// point from the latest published snapshot (SystemDesc::snapshot), on the CPU, without waiting for the
+    /// GPU. As the wind texture's sampler reads it (trilinear on cell centres, clamped to the edge), with
+    /// query's rules: outside the domain (beyond its faces) the ambient wind of that step, in a cell with no
+    /// air its solid's velocity. It differs from query by half-float rounding at cell centres, and between
+    /// centres by the interpolation (query blends the faces) and in cut cells (query resolves solid voxels).
+    /// The snapshot is the last step's (OwnQueue: as soon as step() returns; HostCommands: the frame
+    /// recorded frames_in_flight steps ago, once collected). It is held for the duration of the call
+    /// only: two calls may answer from different steps (`info` says which). A step whose free copies are
+    /// all still held by slower readers is not published (the previous stays). NotReady when the snapshot is
+    /// off or no step has been published yet; InvalidArgument for a size mismatch or a non-finite point.
+    Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities) const;
+    Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities, SnapshotInfo& info) const;
+    /// Reader call: a copy of the last collected step's statistics (stats() is a writer call). `out`'s
+    /// vectors keep their own memory resource.
+    Outcome read_stats(FrameStats& out) const;
+
     /// Wind at one point in the form engines' wind sources use.
     Outcome wind_at(const Vec3& point, WindSample& sample);
 
     /// The wind texture (valid until the System is destroyed; contents change at each step).
     const WindTexture& wind_texture() const;
-    /// The last step's statistics (HostCommands: those of the frame recorded frames_in_flight steps ago).
+    /// Writer call (read_stats from other threads): the last step's statistics (HostCommands: those of the
+    /// frame recorded frames_in_flight steps ago).
     const FrameStats& stats() const;
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
