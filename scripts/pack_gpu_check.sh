@@ -43,7 +43,8 @@ base_system='^(linux-vdso\.so|ld-linux-x86-64\.so|libc\.so|libm\.so|libdl\.so|li
 fallback='^(libstdc\+\+\.so|libgcc_s\.so)'
 layer_json=/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json
 
-export CCACHE_DIR="${CCACHE_DIR:-/work/.ccache}" CCACHE_BASEDIR="${CCACHE_BASEDIR:-/work}"
+# Paths relative to the checkout's parent, so checkouts side by side share ccache's entries.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$root")}"
 launcher=()
 if command -v ccache >/dev/null; then
     launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
@@ -98,8 +99,9 @@ tar -C "$stage" -cf - . | xz -T0 -9 >"$pack/gpucheck.tar.xz"
 cp "$stage/MANIFEST" "$pack/MANIFEST"
 
 if ! ls "$root"/.gl/*.deb >/dev/null 2>&1; then
-    mkdir -p "$root/.gl" /tmp/amd64/partial
-    o=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64)
+    lists="$(mktemp -d)"
+    mkdir -p "$root/.gl" "$lists/partial"
+    o=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists="$lists")
     apt-get "${o[@]}" update >/dev/null
     (cd "$root/.gl" && apt-get "${o[@]}" download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 fi
