@@ -60,6 +60,15 @@ fs::path temp_vdb(const std::string& name) {
     return fs::temp_directory_path() / ("gust_cli_" + name + ".vdb");
 }
 
+/// Writes an OBJ box centred on the origin with half extents `half` (m), its quads facing outwards.
+void write_box(const fs::path& path, glm::vec3 half) {
+    std::ofstream obj(path);
+    for (int v = 0; v < 8; ++v)
+        obj << "v " << (v & 1 ? half.x : -half.x) << ' ' << (v & 2 ? half.y : -half.y) << ' '
+            << (v & 4 ? half.z : -half.z) << '\n';
+    obj << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+}
+
 /// Reads the "occupancy" grid back; null when absent or of another type.
 openvdb::BoolGrid::Ptr read_occupancy(const fs::path& path) {
     openvdb::initialize();
@@ -435,9 +444,7 @@ TEST(CliSimulate, closedBoxesAreSolidInsideAndAKeyframeJumpLeavesTheWindCalm) {
     const fs::path dir = fs::temp_directory_path() / "gust_cli_simulate_solid";
     fs::remove_all(dir);
     fs::create_directories(dir);
-    std::ofstream(dir / "box.obj") << "v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\n"
-                                      "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
-                                      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    write_box(dir / "box.obj", {1, 1, 1});
     std::ofstream(dir / "scene.json") << R"({
       "dt": 0.02,
       "domain": {"center": [0, 0, 0], "cells": [32, 16, 16], "cell_size": 1.0, "voxels_per_cell": 4},
@@ -514,12 +521,8 @@ TEST(CliSimulate, aSceneRunTwiceGivesTheSameGridsBitForBitFromAWholeFirstFrame) 
     const fs::path dir = fs::temp_directory_path() / "gust_cli_simulate_twice";
     fs::remove_all(dir);
     fs::create_directories(dir);
-    std::ofstream(dir / "box.obj") << "v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\n"
-                                      "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
-                                      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
-    std::ofstream(dir / "slab.obj") << "v -12 -5 -12\nv 12 -5 -12\nv -12 5 -12\nv 12 5 -12\n"
-                                       "v -12 -5 12\nv 12 -5 12\nv -12 5 12\nv 12 5 12\n"
-                                       "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    write_box(dir / "box.obj", {1, 1, 1});
+    write_box(dir / "slab.obj", {12, 5, 12});
     std::ofstream(dir / "scene.json") << R"({
       "dt": 0.05,
       "domain": {"center": [0, 0, 0], "cells": [32, 16, 32], "cell_size": 1.0, "voxels_per_cell": 8},
@@ -829,9 +832,7 @@ TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
 /// omni emitter, with `solver` as the scene's "solver" object and `hysteresis` as the domain's.
 std::vector<nlohmann::json> simulate_boxes(const fs::path& dir, const std::string& solver, int hysteresis,
                                            int frames) {
-    std::ofstream(dir / "box.obj") << "v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\n"
-                                      "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
-                                      "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    write_box(dir / "box.obj", {1, 1, 1});
     std::ofstream(dir / "scene.json") << R"({
       "dt": 0.05,
       "domain": {"center": [0, 0, 0], "cells": [16, 8, 16], "cell_size": 1.0, "voxels_per_cell": 2,
