@@ -14,6 +14,7 @@
 #define GUST_CONST inline constexpr
 #define GUST_ADDRESS std::uint64_t
 #define GUST_OUT(type) type&
+#define GUST_INOUT(type) type&
 #else
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_buffer_reference : require
@@ -24,6 +25,7 @@
 #define GUST_CONST const
 #define GUST_ADDRESS uint64_t
 #define GUST_OUT(type) out type
+#define GUST_INOUT(type) inout type
 #endif
 
 #endif

@@ -95,7 +95,7 @@ void main() {
             add = kCellNoAir;
             if (counts[0] != 0u) atomicAdd(group_sealed, 1u);
         }
-        FloatsRef(hot.cell_solid).v[i] = 1.0 - float(air) / float(v * v * v);
+        FloatsRef(hot.cell_solid).v[i] = solid_fraction_of(air, v, sb().b.voxel_share);
         bool sealed[kCellParts];
         for (uint k = 0u; k < kCellParts; ++k)
             sealed[k] = counts[k] != 0u && roots[k] != kOutsideNode;

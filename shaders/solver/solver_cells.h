@@ -122,10 +122,11 @@ GUST_INLINE CellBits bits_dilate(CellBits set, uint v, CellBits faces[6]) {
 }
 
 /// Keeps `component` (of `count` voxels) if it is among the two largest seen: `first` the largest, `second`
-/// the next (the earlier one wins a tie).
-GUST_INLINE void keep_largest(CellBits component, uint count, GUST_OUT(CellBits) first,
-                              GUST_OUT(uint) first_count, GUST_OUT(CellBits) second,
-                              GUST_OUT(uint) second_count) {
+/// the next (the earlier one wins a tie). The four are read as well as written: `inout`, since a GLSL `out`
+/// parameter starts undefined (C++ references hid that; an NVIDIA GPU then sealed cells at random).
+GUST_INLINE void keep_largest(CellBits component, uint count, GUST_INOUT(CellBits) first,
+                              GUST_INOUT(uint) first_count, GUST_INOUT(CellBits) second,
+                              GUST_INOUT(uint) second_count) {
     if (count > first_count) {
         second = first;
         second_count = first_count;
@@ -323,6 +324,19 @@ GUST_INLINE float moving_share(uint closed, uint static_pairs) {
 /// read it from SolverBindings::pair_share, so both sides multiply by the same float.
 GUST_INLINE float pair_share(uint v) {
     return 1.0f / float(v * v);
+}
+
+/// The share of one voxel in a cell, 1 / v^3: computed on the host, read by the shaders from
+/// SolverBindings::voxel_share (as pair_share).
+GUST_INLINE float voxel_share(uint v) {
+    return 1.0f / float(v * v * v);
+}
+
+/// Solid fraction of a cell of v^3 voxels of which `air` are its air: 1 with none, else the solid voxels
+/// times voxel_share, one correctly rounded multiplication. A shader's division may be off by an ulp (an
+/// NVIDIA GPU's was), and the host's is exact: both sides must give the same float.
+GUST_INLINE float solid_fraction_of(uint air, uint v, float share) {
+    return air == 0u ? 1.0f : float(v * v * v - air) * share;
 }
 
 /// Words of open_counts for `faces` level-0 faces, four to a word.

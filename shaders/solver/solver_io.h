@@ -222,6 +222,7 @@ struct SolverBindings {
     uint point_count;         ///< entries in points
     uint level0_faces;        ///< faces of level 0 (in open_counts); weights holds the levels after
     float pair_share;         ///< pair_share(voxels_per_cell)
+    float voxel_share;        ///< voxel_share(voxels_per_cell)
     float max_solid_speed;    ///< m/s: fragment velocities are clamped to this length
     uint smoothing;           ///< red-black sweeps per V-cycle level and leg (SolverDesc::smoothing)
     uint cycles_recorded;     ///< V-cycles (Jacobi: blocks) this step records, for the stats

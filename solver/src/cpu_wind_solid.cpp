@@ -160,7 +160,7 @@ void CpuWind::Impl::fill(std::uint32_t& sealed_cells) {
             flags[cell] |= kCellNoAir;
             if (counts[0] != 0) ++sealed_cells;
         }
-        solid_fraction[cell] = 1.0f - float(air) / float(v * v * v);
+        solid_fraction[cell] = solid_fraction_of(air, v, voxel_share(v));
     });
     // After every cell's flags are set, as the GPU's atomics make no difference to the sums' order.
     each_cell(k.levels[0], [&](int i, glm::ivec3) {

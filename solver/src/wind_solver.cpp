@@ -234,6 +234,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.open_counts = m.open_counts.address();
     b.level0_faces = std::uint32_t(faces);
     b.pair_share = shaderio::pair_share(desc.voxels_per_cell);
+    b.voxel_share = shaderio::voxel_share(desc.voxels_per_cell);
     b.solid_velocity = m.solid_velocity.address();
     b.pressure = m.pressure.address();
     b.pressure_up = m.pressure_up.address();
