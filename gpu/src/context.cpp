@@ -75,8 +75,8 @@ const char* to_string(VkResult result) {
 }
 
 Context::Context(std::pmr::memory_resource* memory)
-    : host_memory_(memory),
-      allocator_(memory), info_{.name = std::pmr::string(memory), .driver = std::pmr::string(memory)},
+    : host_memory_(memory), allocator_(memory),
+      objects_before_(memory), info_{.name = std::pmr::string(memory), .driver = std::pmr::string(memory)},
       device_names_(memory), released_(memory), last_message_(memory) {}
 
 Result<std::unique_ptr<Context>> Context::create(const ContextDesc& desc) {
@@ -181,7 +181,10 @@ Context::~Context() {
         if (owns_device_) vk_.vkDestroyDevice(device_, allocator());
     }
     if (messenger_) vk_.vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, allocator());
-    if (instance_ && owns_device_) vk_.vkDestroyInstance(instance_, allocator());
+    if (instance_ && owns_device_) {
+        keep_drivers_loaded(objects_before_);
+        vk_.vkDestroyInstance(instance_, allocator());
+    }
     if (loader_) dlclose(loader_);
 }
 

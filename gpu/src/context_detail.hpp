@@ -43,6 +43,15 @@ struct FeatureChain {
     FeatureChain& operator=(const FeatureChain&) = delete;
 };
 
+/// Load addresses of the shared objects the process holds now.
+std::pmr::vector<std::uintptr_t> loaded_objects(std::pmr::memory_resource* memory);
+/// Marks every shared object loaded since `before` (loaded_objects) as never to be unloaded. The Vulkan
+/// loader unloads its drivers with the last instance and loads them again with the next, and glibc never
+/// gives back the static TLS of an unloaded library: NVIDIA's driver (libnvidia-tls) failed to load at
+/// the 30th System of one process ("cannot allocate memory in static TLS block", so vkCreateInstance
+/// found no driver). Kept loaded, each later instance finds it in place.
+void keep_drivers_loaded(std::span<const std::uintptr_t> before);
+
 /// Adds `name` to a comma-separated list.
 void append(std::string& list, const char* name);
 /// "1.3" for VK_API_VERSION_1_3.

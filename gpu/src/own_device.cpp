@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
+#include <link.h>
 
 namespace gust::gpu {
 
@@ -43,8 +44,33 @@ int type_rank(VkPhysicalDeviceType type) {
 
 } // namespace
 
+std::pmr::vector<std::uintptr_t> detail::loaded_objects(std::pmr::memory_resource* memory) {
+    std::pmr::vector<std::uintptr_t> objects(memory);
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, std::size_t, void* out) {
+            static_cast<std::pmr::vector<std::uintptr_t>*>(out)->push_back(info->dlpi_addr);
+            return 0;
+        },
+        &objects);
+    std::sort(objects.begin(), objects.end());
+    return objects;
+}
+
+void detail::keep_drivers_loaded(std::span<const std::uintptr_t> before) {
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, std::size_t, void* data) {
+            const auto* old = static_cast<const std::span<const std::uintptr_t>*>(data);
+            if (info->dlpi_name && info->dlpi_name[0] != '\0' &&
+                !std::binary_search(old->begin(), old->end(), info->dlpi_addr))
+                dlopen(info->dlpi_name, RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE);
+            return 0;
+        },
+        &before);
+}
+
 Status Context::init(const ContextDesc& desc) {
     on_message_ = desc.on_message;
+    objects_before_ = loaded_objects(host_memory_);
     loader_ = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
     if (!loader_) return Status::failure("cannot load the Vulkan loader libvulkan.so.1 (install libvulkan1)");
     vk_.vkGetInstanceProcAddr =

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <gust/gust.hpp>
 #include <limits>
+#include <link.h>
+#include <set>
 #include <string>
 #include <unistd.h>
 #if GUST_WITH_OPENVDB
@@ -423,6 +425,37 @@ TEST_F(SystemTest, rejectsBadTimeStepsPointsAndEmittersAndKeepsWorking) {
     EXPECT_EQ(system_->step(0.05f, VK_NULL_HANDLE).code(), ErrorCode::InvalidArgument) << "own-queue system";
     EXPECT_EQ(system_->export_vdb(nullptr).code(), ErrorCode::InvalidArgument);
     ASSERT_TRUE(system_->step(0.05f));
+}
+
+/// Paths of the shared objects the process holds.
+std::set<std::string> loaded_objects() {
+    std::set<std::string> names;
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, std::size_t, void* out) {
+            if (info->dlpi_name && info->dlpi_name[0] != '\0')
+                static_cast<std::set<std::string>*>(out)->insert(info->dlpi_name);
+            return 0;
+        },
+        &names);
+    return names;
+}
+
+// The Vulkan loader unloads its drivers with the last instance, and glibc never gives back a library's
+// static TLS: an NVIDIA driver loaded again and again ran out of it at the 30th System of one process, and
+// vkCreateInstance found no driver. A System that goes leaves every library it brought loaded.
+TEST(SystemCreate, aDestroyedSystemLeavesTheDriversItLoadedForTheNext) {
+    Watch watch;
+    std::unique_ptr<System> system;
+    ASSERT_TRUE(System::create(small_desc(watch), system));
+    const std::set<std::string> living = loaded_objects();
+    system.reset();
+    const std::set<std::string> after = loaded_objects();
+    for (const std::string& name : living)
+        EXPECT_TRUE(after.count(name)) << name << " was unloaded with the System";
+    ASSERT_TRUE(System::create(small_desc(watch), system));
+    system.reset();
+    EXPECT_EQ(loaded_objects(), after) << "the next System loads nothing again";
+    EXPECT_EQ(watch.errors, 0) << watch.last;
 }
 
 TEST(SystemCreate, rejectsAnotherHeaderVersionAndBadDescriptions) {

@@ -267,6 +267,9 @@ class Context : public HostObject {
     VulkanAllocator allocator_;
     Dispatch vk_;
     void* loader_ = nullptr;
+    /// Load addresses of the shared objects in the process before init() opened the loader: those loaded
+    /// since (the loader's drivers and layers) are kept loaded when the instance goes (keep_drivers_loaded).
+    std::pmr::vector<std::uintptr_t> objects_before_;
     VkInstance instance_ = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
     VkPhysicalDevice physical_ = VK_NULL_HANDLE;
