@@ -302,14 +302,7 @@ GUST_INLINE vec3 confinement_force(ivec3 c, float epsilon) {
 /// early in the step (solid_cells.comp) for confinement_change, which would otherwise redo both for the two
 /// cells of every face.
 GUST_INLINE vec4 cell_confinement(ivec3 c, float epsilon) {
-    vec3 u = cell_velocity(kFieldVelocity, c);
-    vec3 f = confinement_force(c, epsilon);
-    float uu = dot(u, u);
-    // Only the part across the air's motion: it turns the air (swirl) and does no work on it (f·u = 0), so
-    // confinement puts back rotation that numerical diffusion took, not speed. Along the motion it sped
-    // up the air of wakes, whose swirl runs with the stream on one side (issue 31: 2.2-2.4 U).
-    if (uu > 1e-12f) f -= (dot(f, u) / uu) * u;
-    return vec4(f, sqrt(uu));
+    return vec4(confinement_force(c, epsilon), length(cell_velocity(kFieldVelocity, c)));
 }
 
 /// Vorticity confinement's change of face f over dt, from the vorticity the last step ended with
