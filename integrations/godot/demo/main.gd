@@ -20,7 +20,8 @@ var max_frames = 0
 var wind_on = true
 var screenshot = ""
 var check = false
-var gust_ms = 0.0
+var step_ms = 0.0
+var publish_ms = 0.0
 var start_ms = 0
 
 func _ready():
@@ -109,7 +110,8 @@ func _physics_process(delta):
 
 func _process(_delta):
 	frames += 1
-	gust_ms += wind.get_step_ms() + wind.get_publish_ms()
+	step_ms += wind.get_step_ms()
+	publish_ms += wind.get_publish_ms()
 	if check:
 		run_check()
 	elif max_frames > 0 and frames >= max_frames:
@@ -159,5 +161,7 @@ func finish():
 	var seconds = (OS.get_ticks_msec() - start_ms) / 1000.0
 	if screenshot != "" and not check:
 		grab().save_png(screenshot)
-	print("GUST_DEMO %d frames in %.2f s: %.1f frames/s, gust %.2f ms a frame (%.0f %% of the frame), device %s" % [frames, seconds, frames / seconds, gust_ms / frames, 100.0 * gust_ms / frames / (1000.0 * seconds / frames), wind.get_device_name()])
+	var frame_ms = 1000.0 * seconds / frames
+	var gust_ms = (step_ms + publish_ms) / frames
+	print("GUST_DEMO %d frames in %.2f s: %.1f frames/s (%.1f ms a frame), gust %.1f ms a frame (%.0f %%: step %.1f ms, texture %.1f ms), device %s" % [frames, seconds, frames / seconds, frame_ms, gust_ms, 100.0 * gust_ms / frame_ms, step_ms / frames, publish_ms / frames, wind.get_device_name()])
 	get_tree().quit()
