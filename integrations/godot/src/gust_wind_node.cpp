@@ -67,6 +67,7 @@ template <class F> void set_config(Wind& w, F change) {
         error("GustWind." + message + " (the previous value is kept)", "GustWind");
         return;
     }
+    std::unique_lock lock(w.host_mutex);
     w.config = next;
     w.dirty = true;
 }
@@ -112,7 +113,11 @@ void set_ambient(godot_object*, void*, void* u, godot_variant* v) {
         error("GustWind." + message + " (the previous value is kept)", "GustWind");
         return;
     }
-    w.config.ambient = next.ambient;
+    {
+        // Readers answer the ambient wind before the first step: they read it under the lock.
+        std::unique_lock lock(w.host_mutex);
+        w.config.ambient = next.ambient;
+    }
     if (Outcome o = w.host.set_ambient(next.ambient); !o) {
         report(w, o.message());
     }
@@ -378,6 +383,7 @@ bool tick(Wind& w, double dt) {
         report(w, "step: " + o.message());
         return false;
     }
+    w.last_error.clear();
     publish(w, tree);
     return true;
 }
