@@ -1,7 +1,8 @@
 // Skinning from bones (MeshDesc::skin, System::set_bones) against the CPU-posed path (set_vertices): a bar of
 // two bones bending is posed on the CPU by the shader's own blend (skin_io.h) and handed to one System as
 // vertices, and to another as a bone palette. Both must voxelize the same voxels and blow the same wind,
-// frame after frame, teleports included; bad skins and palettes are refused and the System keeps working.
+// frame after frame, teleports included; so must the sample's Fox and CesiumMan, posed by AnimatedMesh. Bad
+// skins and palettes are refused and the System keeps working.
 #include "system_test_support.hpp"
 #include "voxelizer/skin_io.h"
 
@@ -11,6 +12,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <gtest/gtest.h>
 #include <gust/gust.hpp>
+#include <gust/scene/animated_mesh.hpp>
 #include <limits>
 #include <span>
 #include <tuple>
@@ -237,6 +239,73 @@ TEST_F(Skinning, theLastOfSetVerticesAndSetBonesBeforeAStepSetsThePose) {
     ASSERT_TRUE(bones_->set_vertices(bone_mesh_, straight_vertices.data(), bar_.vertex_count()));
     ASSERT_TRUE(bones_->step(0.05f));
     EXPECT_EQ(voxels_of(*bones_), voxels_of(*vertices_)) << "vertices after bones";
+}
+
+// The sample's characters, walking: CPU-posed by AnimatedMesh::pose on one System, skinned on the GPU from
+// AnimatedMesh::bone_palette on the other, on a grid of 12.5 cm voxels.
+TEST(SkinningCharacters, theFoxAndCesiumManFromBonesMatchTheirCpuPosesVoxelForVoxel) {
+    struct Character {
+        gust::AnimatedMesh animation;
+        AnimatedMesh::BoneSkin skin;
+        glm::mat4 place;
+        MeshId mesh[2] = {0, 0};
+    };
+    std::vector<Character> characters;
+    for (const auto& [file, place] :
+         {std::pair{"characters/CesiumMan.glb",
+                    glm::translate(glm::mat4(1.0f), glm::vec3(-0.9f, 0.01f, 0.1f))},
+          std::pair{"characters/Fox.glb",
+                    glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.9f, 0.01f, -0.2f)),
+                               glm::vec3(0.01f))}}) {
+        Result<AnimatedMesh> loaded = AnimatedMesh::load(std::string(GUST_ASSETS_DIR) + "/" + file);
+        ASSERT_TRUE(loaded.ok()) << loaded.message();
+        Result<AnimatedMesh::BoneSkin> skin = loaded->bone_skin();
+        ASSERT_TRUE(skin.ok()) << skin.message();
+        characters.push_back({std::move(*loaded), std::move(*skin), place});
+    }
+    Watch watch[2];
+    std::unique_ptr<System> systems[2]; // [0]: posed vertices, [1]: bones
+    for (int s = 0; s < 2; ++s) {
+        SystemDesc desc = small_desc(watch[s]);
+        desc.domain.cell_size = 0.25f;
+        desc.domain.focus = {0.0f, 1.0f, 0.0f};
+        ASSERT_TRUE(System::create(desc, systems[s]));
+        for (Character& c : characters) {
+            const MeshSkin skin{c.skin.joint_count, c.skin.joints.data(), c.skin.weights.data()};
+            MeshDesc mesh;
+            mesh.positions = &c.skin.bind[0].x;
+            mesh.vertex_count = std::uint32_t(c.skin.bind.size());
+            mesh.indices = c.animation.rest_pose().indices.data();
+            mesh.index_count = std::uint32_t(c.animation.rest_pose().indices.size());
+            mesh.deforming = true;
+            mesh.skin = s == 1 ? &skin : nullptr;
+            ASSERT_TRUE(systems[s]->create_mesh(mesh, c.mesh[s]));
+            InstanceId instance = 0;
+            ASSERT_TRUE(systems[s]->create_instance(c.mesh[s], to_api(c.place), false, instance));
+        }
+    }
+    for (int frame = 0; frame < 4; ++frame) {
+        SCOPED_TRACE(frame);
+        const double t = 0.3 * frame;
+        for (Character& c : characters) {
+            std::vector<glm::vec3> posed;
+            c.animation.pose(0, t, true, posed);
+            ASSERT_TRUE(systems[0]->set_vertices(c.mesh[0], &posed[0].x, std::uint32_t(posed.size())));
+            std::vector<glm::mat4> palette;
+            c.animation.bone_palette(0, t, true, palette);
+            const std::vector<Mat4> bones = to_api(palette);
+            ASSERT_TRUE(systems[1]->set_bones(c.mesh[1], bones.data(), std::uint32_t(bones.size())));
+        }
+        for (auto& system : systems)
+            ASSERT_TRUE(system->step(0.05f));
+        const auto expected = voxels_of(*systems[0]);
+        EXPECT_GT(expected.size(), 200u) << "both characters are voxelized";
+        EXPECT_EQ(voxels_of(*systems[1]), expected);
+    }
+    for (auto& system : systems)
+        system.reset();
+    for (const Watch& w : watch)
+        EXPECT_EQ(w.errors, 0) << w.last;
 }
 
 TEST_F(Skinning, rejectsBadSkinsAndPalettesWithAClearErrorAndKeepsWorking) {
