@@ -78,8 +78,9 @@ struct Footprint {
 } // namespace
 
 std::size_t World::add_mesh(gust::Mesh mesh) {
-    meshes_.push_back({std::move(mesh), nullptr, 0});
+    meshes_.push_back({std::move(mesh), nullptr, 0, {}});
     posed_.push_back(meshes_.back().mesh.positions);
+    palettes_.emplace_back();
     return meshes_.size() - 1;
 }
 
@@ -140,9 +141,12 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
         gust::Result<gust::AnimatedMesh> animated = gust::AnimatedMesh::load(assets / file);
         if (!animated) throw std::runtime_error(animated.message());
         auto shared = std::make_shared<gust::AnimatedMesh>(std::move(*animated));
+        gust::Result<gust::AnimatedMesh::BoneSkin> bones = shared->bone_skin();
+        if (!bones) throw std::runtime_error((assets / file).string() + ": " + bones.message());
         const std::size_t mesh = add_mesh(shared->rest_pose());
         meshes_[mesh].animation = shared;
         meshes_[mesh].clip = shared->find_clip(clip_name).value_or(0);
+        meshes_[mesh].bones = std::move(*bones);
         return mesh;
     };
     objects_.push_back({"fox",
@@ -246,6 +250,7 @@ void World::update(double t) {
         o.lap = lap;
         posed_[o.mesh].clear();
         mesh.animation->pose(mesh.clip, clip_t, true, posed_[o.mesh]);
+        mesh.animation->bone_palette(mesh.clip, clip_t, true, palettes_[o.mesh]);
     };
     for (WorldObject& o : objects_) {
         if (o.name == "fox") {
@@ -297,13 +302,18 @@ void World::attach(gust::System& wind) {
     for (WorldObject& o : objects_) {
         if (o.kind == ObjectKind::Tree || o.kind == ObjectKind::Prop) continue;
         if (!gust_meshes_[o.mesh]) {
-            const std::vector<glm::vec3>& positions = posed_[o.mesh];
+            // gust skins the characters from their bone palettes: their mesh is the bind pose with a skin.
+            const bool skinned = o.kind == ObjectKind::Skinned;
+            const gust::AnimatedMesh::BoneSkin& bones = meshes_[o.mesh].bones;
+            const std::vector<glm::vec3>& positions = skinned ? bones.bind : posed_[o.mesh];
+            const gust::MeshSkin skin{bones.joint_count, bones.joints.data(), bones.weights.data()};
             gust::MeshDesc desc;
             desc.positions = &positions[0].x;
             desc.vertex_count = static_cast<std::uint32_t>(positions.size());
             desc.indices = meshes_[o.mesh].mesh.indices.data();
             desc.index_count = static_cast<std::uint32_t>(meshes_[o.mesh].mesh.indices.size());
-            desc.deforming = o.kind == ObjectKind::Skinned;
+            desc.deforming = skinned;
+            desc.skin = skinned ? &skin : nullptr;
             if (gust::Outcome made = wind.create_mesh(desc, gust_meshes_[o.mesh]); !made)
                 throw std::runtime_error("gust mesh " + o.name + ": " + made.message());
         }
@@ -319,10 +329,12 @@ gust::Outcome World::step_wind(gust::System& wind, float dt, double t) {
         if (o.kind == ObjectKind::Rigid || o.kind == ObjectKind::Skinned)
             if (gust::Outcome moved = wind.set_transform(o.instance, to_gust(o.model)); !moved) return moved;
         if (o.kind == ObjectKind::Skinned) {
-            const std::vector<glm::vec3>& positions = posed_[o.mesh];
-            if (gust::Outcome posed =
-                    wind.set_vertices(gust_meshes_[o.mesh], &positions[0].x,
-                                      static_cast<std::uint32_t>(positions.size()), 12, o.wrapped);
+            // The palette, not the posed vertices: gust skins them on the GPU.
+            std::vector<gust::Mat4> palette;
+            for (const glm::mat4& m : palettes_[o.mesh])
+                palette.push_back(to_gust(m));
+            if (gust::Outcome posed = wind.set_bones(gust_meshes_[o.mesh], palette.data(),
+                                                     static_cast<std::uint32_t>(palette.size()), o.wrapped);
                 !posed)
                 return posed;
         }

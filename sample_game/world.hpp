@@ -30,6 +30,7 @@ struct WorldMesh {
     gust::Mesh mesh;                               ///< rest pose (skinned) or the only pose
     std::shared_ptr<gust::AnimatedMesh> animation; ///< skinned meshes only
     std::size_t clip = 0;                          ///< the walk clip
+    gust::AnimatedMesh::BoneSkin bones;            ///< skinned meshes: gust's skin (bind pose, influences)
 };
 
 /// A placed mesh.
@@ -78,8 +79,10 @@ class World {
 
     const std::vector<WorldMesh>& meshes() const { return meshes_; }
     const std::vector<WorldObject>& objects() const { return objects_; }
-    /// The posed vertices of a skinned mesh this frame (its rest pose for other meshes).
+    /// The posed vertices of a skinned mesh this frame (its rest pose for other meshes), for drawing.
     const std::vector<glm::vec3>& posed(std::size_t mesh) const { return posed_[mesh]; }
+    /// A skinned mesh's bone palette this frame (WorldMesh::bones), which gust skins from.
+    const std::vector<glm::mat4>& palette(std::size_t mesh) const { return palettes_[mesh]; }
     /// Grass blades first, then one entry per tree.
     const std::vector<FoliageSeed>& foliage() const { return foliage_; }
     std::uint32_t grass_count() const { return grass_count_; }
@@ -102,6 +105,7 @@ class World {
     WorldSettings settings_;
     std::vector<WorldMesh> meshes_;
     std::vector<std::vector<glm::vec3>> posed_;
+    std::vector<std::vector<glm::mat4>> palettes_; ///< skinned meshes only
     std::vector<WorldObject> objects_;
     std::vector<gust::MeshId> gust_meshes_;
     std::vector<FoliageSeed> foliage_;

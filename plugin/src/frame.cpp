@@ -92,8 +92,9 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     const std::uint64_t dispatched = ctx_->work().dispatches;
 
     // Inputs: whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
-    // comes before this frame's work.
+    // comes before this frame's work; then the meshes posed from bones are skinned into their positions.
     gpu::barrier(*ctx_, cmd);
+    world_->record_skinning(cmd, in.dynamic);
     // Scroll: the wind moves in whole cells and the voxel grid follows the solver's origin.
     if (in.shift != glm::ivec3(0)) {
         solver_->record_scroll(cmd, in.shift);

@@ -183,7 +183,8 @@ gust_result gust_system_create_mesh(gust_system system, const gust_mesh_desc* de
         *mesh = 0;
         if (!desc) return invalid("desc is NULL");
         gust::MeshId id = 0;
-        gust::Outcome outcome = s.create_mesh(to_cpp(*desc), id);
+        gust::MeshSkin skin;
+        gust::Outcome outcome = s.create_mesh(to_cpp(*desc, skin), id);
         if (outcome) *mesh = id;
         return outcome;
     });
@@ -205,6 +206,16 @@ gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, 
                                             VkDeviceSize offset, uint32_t vertex_count, bool teleport) {
     return on_system(system, "gust_system_set_vertices_buffer", [&](gust::System& s) {
         return s.set_vertices(mesh, buffer, offset, vertex_count, teleport);
+    });
+}
+
+// The palette's floats are read as gust::Mat4s, which are 16 floats and nothing else.
+static_assert(sizeof(gust::Mat4) == 16 * sizeof(float) && alignof(gust::Mat4) == alignof(float));
+
+gust_result gust_system_set_bones(gust_system system, gust_mesh mesh, const float* palette, uint32_t count,
+                                  bool teleport) {
+    return on_system(system, "gust_system_set_bones", [&](gust::System& s) {
+        return s.set_bones(mesh, reinterpret_cast<const gust::Mat4*>(palette), count, teleport);
     });
 }
 

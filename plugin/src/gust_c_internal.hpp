@@ -381,25 +381,41 @@ inline gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_ver
             .snapshot = snapshot};
 }
 
-inline gust::MeshDesc to_cpp(const gust_mesh_desc& c) {
+inline gust::MeshSkin to_cpp(const gust_mesh_skin& c) {
+    gust::MeshSkin out;
+    auto& [joint_count, joints, weights] = out;
+    joint_count = c.joint_count;
+    joints = c.joints;
+    weights = c.weights;
+    return out;
+}
+/// `skin` receives the C skin's copy when there is one, and the result points at it.
+inline gust::MeshDesc to_cpp(const gust_mesh_desc& c, gust::MeshSkin& skin) {
     gust::MeshDesc out;
-    auto& [positions, vertex_count, stride, indices, index_count, deforming] = out;
+    auto& [positions, vertex_count, stride, indices, index_count, deforming, skin_pointer] = out;
     positions = c.positions;
     vertex_count = c.vertex_count;
     stride = c.stride;
     indices = c.indices;
     index_count = c.index_count;
     deforming = c.deforming;
+    if (c.skin) {
+        skin = to_cpp(*c.skin);
+        skin_pointer = &skin;
+    }
     return out;
 }
+/// A MeshDesc's fields; its skin is not carried over (the defaults have none).
 inline gust_mesh_desc to_c(const gust::MeshDesc& m) {
-    const auto& [positions, vertex_count, stride, indices, index_count, deforming] = m;
+    const auto& [positions, vertex_count, stride, indices, index_count, deforming, skin] = m;
+    static_cast<void>(skin);
     return {.positions = positions,
             .vertex_count = vertex_count,
             .stride = stride,
             .indices = indices,
             .index_count = index_count,
-            .deforming = deforming};
+            .deforming = deforming,
+            .skin = nullptr};
 }
 
 // The type is passed on unchecked: System::set_emitters rejects unknown ones.

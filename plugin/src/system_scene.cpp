@@ -1,6 +1,7 @@
 // System's scene calls: meshes, instances, emitters, the ambient wind and the focus (include/gust/gust.hpp).
 #include "system_impl.hpp"
 
+#include <optional>
 #include <string>
 
 namespace gust {
@@ -32,14 +33,17 @@ Outcome System::create_mesh(const MeshDesc& desc, MeshId& id) {
     if (desc.index_count > 0 && !desc.indices) return invalid("indices is null");
     if (desc.stride < 12)
         return invalid("stride must be at least 12 bytes, got " + std::to_string(desc.stride));
+    if (desc.skin && !desc.deforming) return invalid("a skin needs a deforming mesh (MeshDesc::deforming)");
     const MeshView view{desc.positions, desc.vertex_count, desc.stride, desc.indices, desc.index_count};
     for (std::uint32_t v = 0; v < desc.vertex_count; ++v) {
         const glm::vec3 p = view.position(v);
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
             return invalid("vertex " + std::to_string(v) + " is not finite");
     }
+    std::optional<SkinView> skin;
+    if (desc.skin) skin = SkinView{desc.skin->joints, desc.skin->weights, desc.skin->joint_count};
     return guarded([&]() -> Outcome {
-        auto mesh = impl_->world->upload(view);
+        auto mesh = impl_->world->upload(view, skin ? &*skin : nullptr);
         if (!mesh) return invalid(mesh.message());
         const MeshId next = impl_->next_id++;
         impl_->meshes.emplace(next, Impl::Mesh{std::move(*mesh), desc.deforming, 0});
@@ -97,6 +101,32 @@ Outcome System::set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, 
     if (offset % 4 != 0) return invalid("offset must be a multiple of 4");
     return guarded([&]() -> Outcome {
         if (Status s = impl_->world->copy_positions(m->gpu, buffer, offset); !s) return device_failure(s);
+        m->teleport = m->teleport || teleport;
+        return {};
+    });
+}
+
+Outcome System::set_bones(MeshId mesh, const Mat4* palette, std::uint32_t count, bool teleport) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_bones");
+    Outcome error;
+    Impl::Mesh* m = impl_->find_mesh(mesh, error);
+    if (!m) return error;
+    if (!m->deforming) return invalid("mesh " + std::to_string(mesh) + " was not created as deforming");
+    const std::uint32_t joints = m->gpu.joint_count();
+    if (joints == 0) return invalid("mesh " + std::to_string(mesh) + " has no skin (MeshDesc::skin)");
+    if (count != joints)
+        return invalid("got " + std::to_string(count) + " bone matrices for a skin of " +
+                       std::to_string(joints) + " joints");
+    if (!palette) return invalid("palette is null");
+    for (std::uint32_t j = 0; j < count; ++j)
+        if (Outcome o = check_transform(palette[j], "bone matrix"); !o)
+            return invalid(o.message() + " (joint " + std::to_string(j) + ")");
+    return guarded([&]() -> Outcome {
+        std::pmr::vector<glm::mat4> bones(count, &impl_->memory);
+        for (std::uint32_t j = 0; j < count; ++j)
+            bones[j] = to_glm(palette[j]);
+        if (Status s = impl_->world->pose_from_bones(m->gpu, bones); !s) return invalid(s.message());
         m->teleport = m->teleport || teleport;
         return {};
     });

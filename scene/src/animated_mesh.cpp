@@ -39,27 +39,65 @@ std::vector<glm::dmat4> rest_locals(const anim::Rig& rig) {
     return local;
 }
 
-// Every vertex placed by the nodes' local transforms `local`. Joints are placed by the file's hierarchy;
-// rigid meshes by the same walk that built the geometry, with the same arithmetic, so that the rest pose
-// of an unskinned file reproduces build_gltf's positions exactly.
-void place(const anim::Rig& rig, const std::vector<glm::dmat4>& local, std::vector<glm::vec3>& out) {
+/// What moves the vertices for the nodes' local transforms: the walk's transform of every node (rigid
+/// meshes) and every skin's joint matrices.
+struct Placements {
+    std::vector<glm::dmat4> walk;
+    std::vector<std::vector<glm::dmat4>> joints;
+};
+
+// Joints are placed by the file's hierarchy; rigid meshes by the same walk that built the geometry, with the
+// same arithmetic, so that the rest pose of an unskinned file reproduces build_gltf's positions exactly.
+Placements placements(const anim::Rig& rig, const std::vector<glm::dmat4>& local) {
     std::vector<glm::dmat4> global(rig.nodes.size());
     for (std::size_t n : rig.hierarchy_order) {
         const int p = rig.parent[n];
         global[n] = p < 0 ? local[n] : global[static_cast<std::size_t>(p)] * local[n];
     }
-    std::vector<glm::dmat4> walk(rig.nodes.size());
+    Placements out;
+    out.walk.resize(rig.nodes.size());
     for (int node : rig.walk_order) {
         const auto n = static_cast<std::size_t>(node);
         const int from = rig.walk_parent[n];
-        walk[n] = (from < 0 ? glm::dmat4(1.0) : walk[static_cast<std::size_t>(from)]) * local[n];
+        out.walk[n] = (from < 0 ? glm::dmat4(1.0) : out.walk[static_cast<std::size_t>(from)]) * local[n];
     }
-    std::vector<std::vector<glm::dmat4>> joints(rig.skins.size());
+    out.joints.resize(rig.skins.size());
     for (std::size_t s = 0; s < rig.skins.size(); ++s) {
         const anim::Skin& skin = rig.skins[s];
         for (std::size_t j = 0; j < skin.joints.size(); ++j)
-            joints[s].push_back(global[skin.joints[j]] * skin.inverse_bind[j]);
+            out.joints[s].push_back(global[skin.joints[j]] * skin.inverse_bind[j]);
     }
+    return out;
+}
+
+/// Where AnimatedMesh::bone_skin's palette puts each matrix: every skin's joints in turn, then one entry
+/// for each rigidly placed (walk) block, then the identity (fixed blocks, vertices without weights).
+struct PaletteLayout {
+    std::vector<std::size_t> skin_first; ///< per skin
+    std::vector<std::size_t> block;      ///< per block: its entry (walk blocks) or the identity's
+    std::size_t identity = 0;
+    std::size_t size = 0;
+};
+
+PaletteLayout palette_layout(const anim::Rig& rig) {
+    PaletteLayout out;
+    for (const anim::Skin& skin : rig.skins) {
+        out.skin_first.push_back(out.size);
+        out.size += skin.joints.size();
+    }
+    for (const anim::Block& block : rig.blocks)
+        out.block.push_back(block.placement == anim::Placement::walk ? out.size++ : 0);
+    out.identity = out.size++;
+    for (std::size_t b = 0; b < rig.blocks.size(); ++b)
+        if (rig.blocks[b].placement != anim::Placement::walk) out.block[b] = out.identity;
+    return out;
+}
+
+// Every vertex placed by the nodes' local transforms `local`.
+void place(const anim::Rig& rig, const std::vector<glm::dmat4>& local, std::vector<glm::vec3>& out) {
+    const Placements placed = placements(rig, local);
+    const std::vector<glm::dmat4>& walk = placed.walk;
+    const std::vector<std::vector<glm::dmat4>>& joints = placed.joints;
 
     out.resize(rig.raw.size());
     const anim::Influences& influences = rig.influences;
@@ -205,7 +243,58 @@ bool AnimatedMesh::skinned() const {
     return data_->rig.skinned;
 }
 
+Result<AnimatedMesh::BoneSkin> AnimatedMesh::bone_skin() const {
+    const anim::Rig& rig = data_->rig;
+    const PaletteLayout layout = palette_layout(rig);
+    if (layout.size > kMaxBones)
+        return Result<BoneSkin>::failure("the palette would need " + std::to_string(layout.size) +
+                                         " matrices, more than " + std::to_string(kMaxBones));
+    BoneSkin out;
+    out.bind = rig.raw;
+    out.joint_count = static_cast<std::uint32_t>(layout.size);
+    out.joints.assign(4 * rig.raw.size(), static_cast<std::uint16_t>(layout.identity));
+    out.weights.assign(4 * rig.raw.size(), 0.0f);
+    const anim::Influences& influences = rig.influences;
+    for (std::size_t b = 0; b < rig.blocks.size(); ++b) {
+        const anim::Block& block = rig.blocks[b];
+        for (std::uint32_t v = block.first; v < block.first + block.count; ++v) {
+            const std::uint32_t first = influences.begin[v], last = influences.begin[v + 1];
+            if (block.placement != anim::Placement::skin || first == last) {
+                out.joints[4 * v] = static_cast<std::uint16_t>(layout.block[b]);
+                out.weights[4 * v] = 1.0f;
+                continue;
+            }
+            if (last - first > 4)
+                return Result<BoneSkin>::failure("vertex " + std::to_string(v) + " follows " +
+                                                 std::to_string(last - first) + " joints, more than 4");
+            for (std::uint32_t i = first; i < last; ++i) {
+                out.joints[4 * v + (i - first)] =
+                    static_cast<std::uint16_t>(layout.skin_first[block.skin] + influences.joint[i]);
+                out.weights[4 * v + (i - first)] = static_cast<float>(influences.weight[i]);
+            }
+        }
+    }
+    return out;
+}
+
+void AnimatedMesh::bone_palette(std::size_t clip, double t, bool loop, std::vector<glm::mat4>& out) const {
+    const anim::Rig& rig = data_->rig;
+    const Placements placed = placements(rig, locals_at(clip, t, loop));
+    const PaletteLayout layout = palette_layout(rig);
+    out.assign(layout.size, glm::mat4(1.0f));
+    for (std::size_t s = 0; s < rig.skins.size(); ++s)
+        for (std::size_t j = 0; j < placed.joints[s].size(); ++j)
+            out[layout.skin_first[s] + j] = glm::mat4(placed.joints[s][j]);
+    for (std::size_t b = 0; b < rig.blocks.size(); ++b)
+        if (rig.blocks[b].placement == anim::Placement::walk)
+            out[layout.block[b]] = glm::mat4(placed.walk[rig.blocks[b].node]);
+}
+
 void AnimatedMesh::pose(std::size_t clip, double t, bool loop, std::vector<glm::vec3>& out) const {
+    place(data_->rig, locals_at(clip, t, loop), out);
+}
+
+std::vector<glm::dmat4> AnimatedMesh::locals_at(std::size_t clip, double t, bool loop) const {
     const Data& d = *data_;
     std::vector<glm::dmat4> local = rest_locals(d.rig);
     if (clip < d.clips.size()) {
@@ -240,7 +329,7 @@ void AnimatedMesh::pose(std::size_t clip, double t, bool loop, std::vector<glm::
         for (std::size_t i = 0; i < c.targets.size(); ++i)
             local[c.targets[i]] = detail::trs_matrix(trs[i].translation, trs[i].rotation, trs[i].scale);
     }
-    place(d.rig, local, out);
+    return local;
 }
 
 namespace detail {

@@ -415,6 +415,45 @@ static void rejects_bad_meshes_and_instances(gust_system system, gust_mesh box, 
                  GUST_ERROR_INVALID_HANDLE);
     CHECK_RESULT(system, gust_system_set_vertices_buffer(system, skinned, VK_NULL_HANDLE, 0, 8, false),
                  GUST_ERROR_INVALID_ARGUMENT);
+
+    /* Bones: a skin of two joints, the box's top (y = 1) following joint 1; only a deforming mesh with a skin
+     * takes a palette, of exactly its joint count, finite. */
+    CHECK_RESULT(system, gust_system_set_bones(system, skinned, transform, 1, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    uint16_t joints[8 * 4] = {0};
+    float weights[8 * 4] = {0.0f};
+    for (int v = 0; v < 8; ++v) {
+        joints[4 * v] = kBoxPositions[4 * v + 1] > 0.0f ? 1 : 0;
+        weights[4 * v] = 1.0f;
+    }
+    gust_mesh_skin skin = {2, joints, weights};
+    gust_mesh boned = 0;
+    desc = box_desc();
+    desc.skin = &skin;
+    CHECK_RESULT(system, gust_system_create_mesh(system, &desc, &boned), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK(boned == 0);
+    desc.deforming = true;
+    weights[5] = NAN;
+    CHECK_RESULT(system, gust_system_create_mesh(system, &desc, &boned), GUST_ERROR_INVALID_ARGUMENT);
+    weights[5] = 0.0f;
+    joints[6] = 2;
+    CHECK_RESULT(system, gust_system_create_mesh(system, &desc, &boned), GUST_ERROR_INVALID_ARGUMENT);
+    joints[6] = 0;
+    CHECK_RESULT(system, gust_system_create_mesh(system, &desc, &boned), GUST_OK);
+    float palette[2 * 16];
+    scale_translate(palette, 1.0f, vec3(0.0f, 0.0f, 0.0f));
+    scale_translate(palette + 16, 1.0f, vec3(0.0f, 0.5f, 0.0f));
+    CHECK_RESULT(system, gust_system_set_bones(system, boned, palette, 2, false), GUST_OK);
+    CHECK_RESULT(system, gust_system_set_bones(system, boned, palette, 2, true), GUST_OK);
+    CHECK_RESULT(system, gust_system_set_bones(system, boned, palette, 1, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_bones(system, boned, NULL, 2, false), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_bones(system, box, palette, 2, false), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_set_bones(system, 12345, palette, 2, false), GUST_ERROR_INVALID_HANDLE);
+    palette[16 + 13] = NAN;
+    CHECK_RESULT(system, gust_system_set_bones(system, boned, palette, 2, false),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_destroy_mesh(system, boned), GUST_OK);
     CHECK_RESULT(system, gust_system_destroy_mesh(system, skinned), GUST_OK);
 }
 

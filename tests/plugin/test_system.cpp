@@ -2,6 +2,7 @@
 #include "host_vulkan.hpp"
 #include "system_test_support.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -749,6 +750,45 @@ TEST_F(HostFrames, keepWhatARecordedFrameUsesUntilItCompletes) {
     for (int f = 0; f < 3; ++f)
         frame();
     EXPECT_EQ(system_->stats().voxels, 0u) << "the mesh is gone from the frames completed last";
+}
+
+// Bones with frames in flight: each recorded frame skins the palette set before it. The box's top follows
+// joint 1, lifted a little more each frame; once the frames completed the tree holds the last pose, whose
+// top face lies on a voxel plane (y = 4 m), so voxel layers 7 and 8 hold it (hand calculation).
+TEST_F(HostFrames, bonesPoseTheMeshInEveryFrameInFlight) {
+    start(2);
+    Box box(1.0f);
+    std::vector<std::uint16_t> joints(4 * 8, 0);
+    std::vector<float> weights(4 * 8, 0.0f);
+    for (int v = 0; v < 8; ++v) {
+        joints[4 * v] = box.positions[3 * v + 1] > 0.0f ? 1 : 0;
+        weights[4 * v] = 1.0f;
+    }
+    const MeshSkin skin{2, joints.data(), weights.data()};
+    MeshDesc desc = box.desc(true);
+    desc.skin = &skin;
+    MeshId mesh = 0;
+    InstanceId instance = 0;
+    ASSERT_TRUE(system_->create_mesh(desc, mesh));
+    ASSERT_TRUE(system_->create_instance(mesh, translation(0.0f, 2.0f, 0.0f), false, instance));
+    for (int f = 1; f <= 4; ++f) {
+        const Mat4 palette[2] = {Mat4{}, translation(0.0f, 0.25f * float(f), 0.0f)};
+        ASSERT_TRUE(system_->set_bones(mesh, palette, 2));
+        frame();
+    }
+    ASSERT_TRUE(host_.finish_frames());
+    std::size_t count = 0;
+    ASSERT_TRUE(system_->debug_voxels({}, count));
+    std::vector<VoxelCoord> voxels(count);
+    ASSERT_TRUE(system_->debug_voxels(voxels, count));
+    ASSERT_FALSE(voxels.empty());
+    std::uint32_t lowest = ~0u, highest = 0;
+    for (const VoxelCoord& v : voxels) {
+        lowest = std::min(lowest, v.j);
+        highest = std::max(highest, v.j);
+    }
+    EXPECT_EQ(lowest, 1u) << "the bottom stays at y = 1 m";
+    EXPECT_EQ(highest, 8u) << "the top follows the last palette to y = 4 m";
 }
 
 } // namespace

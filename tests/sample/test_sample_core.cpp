@@ -161,6 +161,37 @@ TEST(SampleWorld, theWalkersNeverPassThroughABuildingOrATree) {
     }
 }
 
+// gust gets the characters as bones (a skin once, a palette each frame); the palette poses the skin's bind
+// positions where the renderer draws the CPU-posed vertices, up to float rounding.
+TEST(SampleWorld, theCharactersReachGustAsBonesThatPoseThemAsDrawn) {
+    WorldSettings settings;
+    settings.grass_blades = 100;
+    World world(GUST_SAMPLE_ASSETS, settings);
+    int characters = 0;
+    for (double t : {0.5, 3.25}) {
+        world.update(t);
+        for (const WorldObject& o : world.objects()) {
+            if (o.kind != ObjectKind::Skinned) continue;
+            ++characters;
+            const gust::AnimatedMesh::BoneSkin& skin = world.meshes()[o.mesh].bones;
+            const std::vector<glm::mat4>& palette = world.palette(o.mesh);
+            const std::vector<glm::vec3>& drawn = world.posed(o.mesh);
+            ASSERT_EQ(palette.size(), skin.joint_count) << o.name;
+            ASSERT_EQ(skin.bind.size(), drawn.size()) << o.name;
+            float far = 0.0f, size = 0.0f;
+            for (std::size_t v = 0; v < drawn.size(); ++v) {
+                glm::vec4 p(0.0f);
+                for (std::size_t i = 4 * v; i < 4 * v + 4; ++i)
+                    p += skin.weights[i] * (palette[skin.joints[i]] * glm::vec4(skin.bind[v], 1.0f));
+                far = std::max(far, glm::length(glm::vec3(p) - drawn[v]));
+                size = std::max(size, glm::length(drawn[v] - drawn[0]));
+            }
+            EXPECT_LT(far, 1e-5f * size) << o.name << " at t = " << t;
+        }
+    }
+    EXPECT_EQ(characters, 4) << "the fox and CesiumMan, twice";
+}
+
 TEST(SampleQuality, autoPicksThePresetFromTheDeviceType) {
     EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_CPU), Quality::Low);
     EXPECT_EQ(quality_for_device(VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU), Quality::Medium);

@@ -406,6 +406,68 @@ TEST_F(AnimatedMeshFile, animatesRigidNodesAndKeepsTheirRestPoseExact) {
     expect_near(posed[1], {10, 2, 4}, 1e-5f);
 }
 
+/// bone_skin's bind positions moved by `palette` as a GPU skinner does (linear blend of four influences).
+std::vector<glm::vec3> skin_on_bones(const gust::AnimatedMesh::BoneSkin& skin,
+                                     const std::vector<glm::mat4>& palette) {
+    std::vector<glm::vec3> out;
+    for (std::size_t v = 0; v < skin.bind.size(); ++v) {
+        glm::vec4 p(0.0f);
+        for (std::size_t i = 4 * v; i < 4 * v + 4; ++i)
+            p += skin.weights[i] * (palette[skin.joints[i]] * glm::vec4(skin.bind[v], 1.0f));
+        out.emplace_back(p);
+    }
+    return out;
+}
+
+// The bone palette poses the characters as pose() does, up to float rounding, through a walk cycle; every
+// vertex has four influences in range whose weights sum to 1.
+TEST(AnimatedMesh, bonePalettesPoseTheCharactersAsPoseDoes) {
+    for (const fs::path& path : {kFox, kCesiumMan}) {
+        SCOPED_TRACE(path.string());
+        const gust::AnimatedMesh mesh = load_ok(path);
+        const gust::Result<gust::AnimatedMesh::BoneSkin> skin = mesh.bone_skin();
+        ASSERT_TRUE(skin.ok()) << skin.message();
+        ASSERT_EQ(skin->bind.size(), mesh.rest_pose().positions.size());
+        ASSERT_EQ(skin->joints.size(), 4 * skin->bind.size());
+        ASSERT_EQ(skin->weights.size(), 4 * skin->bind.size());
+        for (std::size_t v = 0; v < skin->bind.size(); ++v) {
+            float sum = 0.0f;
+            for (std::size_t i = 4 * v; i < 4 * v + 4; ++i) {
+                ASSERT_LT(skin->joints[i], skin->joint_count);
+                sum += skin->weights[i];
+            }
+            ASSERT_NEAR(sum, 1.0f, 1e-5f) << "vertex " << v;
+        }
+        const float size = glm::length(bounds(mesh.rest_pose().positions).extent());
+        for (double t : {0.0, 0.37, 1.1, 2.5}) {
+            std::vector<glm::mat4> palette;
+            mesh.bone_palette(0, t, true, palette);
+            ASSERT_EQ(palette.size(), skin->joint_count);
+            EXPECT_LT(max_distance(skin_on_bones(*skin, palette), pose(mesh, 0, t)), 1e-5f * size) << t;
+        }
+    }
+}
+
+// A rigidly animated node and a fixed one get palette entries of their own: the file's every vertex follows.
+TEST_F(AnimatedMeshFile, bonePalettesPlaceRigidNodesToo) {
+    GltfWriter gltf;
+    const int mesh = gltf.add_mesh(gust::test::triangle_primitive(gltf.add_positions(kTriangle)));
+    const int node = gltf.add_node({{"mesh", mesh}, {"translation", {0.1, 0.2, 0.3}}});
+    gltf.add_root(node);
+    const int input = gltf.add_data(std::vector<float>{0, 1}, kFloat, "SCALAR");
+    const int output = gltf.add_data(std::vector<float>{0, 0, 0, 0, 0, 4}, kFloat, "VEC3");
+    gltf.doc()["animations"] = {
+        {{"samplers", {{{"input", input}, {"output", output}}}},
+         {"channels", {{{"sampler", 0}, {"target", {{"node", node}, {"path", "translation"}}}}}}}};
+    const gust::AnimatedMesh animated = load_ok(write("rigid_bones.gltf", gltf));
+    const gust::Result<gust::AnimatedMesh::BoneSkin> skin = animated.bone_skin();
+    ASSERT_TRUE(skin.ok()) << skin.message();
+    EXPECT_EQ(skin->joint_count, 2u) << "the node's entry and the identity";
+    std::vector<glm::mat4> palette;
+    animated.bone_palette(0, 0.5, true, palette);
+    EXPECT_LT(max_distance(skin_on_bones(*skin, palette), pose(animated, 0, 0.5)), 1e-6f);
+}
+
 TEST_F(AnimatedMeshFile, restPoseOfAStaticSceneIsItsBindPoseExactly) {
     const gust::AnimatedMesh palm = load_ok(kAssets / "foliage/PalmTree/PalmTree.gltf");
     EXPECT_FALSE(palm.skinned());

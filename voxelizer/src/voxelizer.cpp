@@ -1,3 +1,4 @@
+#include "voxelizer/skin_io.h"
 #include "voxelizer/voxelize_io.h"
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 namespace gust {
 
 namespace {
+#include "gust_shaders/skin_comp.h"
 #include "gust_shaders/voxelize_args_comp.h"
 #include "gust_shaders/voxelize_frag.h"
 #include "gust_shaders/voxelize_geom.h"
@@ -20,7 +22,10 @@ namespace {
 #include "gust_shaders/voxelize_vert.h"
 
 using shaderio::kMaxGroupsX;
+using shaderio::kSkinGroupSize;
+using shaderio::kSkinMaxGroupsX;
 using shaderio::kVoxelizeGroupSize;
+using shaderio::SkinPush;
 using shaderio::VoxelizeCounters;
 using shaderio::VoxelizeInstance;
 using shaderio::VoxelizePush;
@@ -200,9 +205,15 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
         gpu::Pipeline::compute(ctx, "gust voxelize_args", words(voxelize_args_comp), sizeof(VoxelizePush));
     if (!args) return args.status();
     v->compute_args_ = std::move(*args);
+    auto skin = gpu::Pipeline::compute(ctx, "gust skin", words(skin_comp), sizeof(SkinPush));
+    if (!skin) return skin.status();
+    v->skin_ = std::move(*skin);
     auto profiler = gpu::Profiler::create(ctx);
     if (!profiler) return profiler.status();
     v->profiler_ = std::move(*profiler);
+    auto skin_profiler = gpu::Profiler::create(ctx, 1);
+    if (!skin_profiler) return skin_profiler.status();
+    v->skin_profiler_ = std::move(*skin_profiler);
     auto counters = gpu::Buffer::create(ctx, sizeof(VoxelizeCounters), gpu::MemoryUse::Readback,
                                         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "gust voxelizer counters");
     if (!counters) return counters.status();
@@ -269,7 +280,10 @@ Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> pos
                                std::to_string(mesh.vertices_) + " vertices");
     if (mesh.triangles_ == 0) return {};
     if (!ctx_.deferred()) {
-        if (Status s = rotate_positions(mesh); !s) return s;
+        // A pose waiting for the skinning pass was made way for already: this one replaces it.
+        if (mesh.staged_palette_.empty())
+            if (Status s = rotate_positions(mesh); !s) return s;
+        mesh.staged_palette_.clear();
         return gpu::upload(ctx_, mesh.positions_, positions.data(), positions.size_bytes());
     }
     // A second pose before the next frame replaces the first: last frame's stay the previous ones.
@@ -277,6 +291,7 @@ Status Voxelizer::update_positions(GpuMesh& mesh, std::span<const glm::vec3> pos
         if (Status s = rotate_positions(mesh); !s) return s;
     mesh.staged_.assign(positions.begin(), positions.end());
     mesh.staged_source_ = VK_NULL_HANDLE;
+    mesh.staged_palette_.clear();
     return {};
 }
 
@@ -284,7 +299,9 @@ Status Voxelizer::copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize of
     if (source == VK_NULL_HANDLE) return Status::failure("the source buffer is null");
     if (mesh.triangles_ == 0) return {};
     if (!ctx_.deferred()) {
-        if (Status s = rotate_positions(mesh); !s) return s;
+        if (mesh.staged_palette_.empty())
+            if (Status s = rotate_positions(mesh); !s) return s;
+        mesh.staged_palette_.clear();
         return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
             const VkBufferCopy region{offset, 0, mesh.positions_.size()};
             ctx_.vk().vkCmdCopyBuffer(cmd, source, mesh.positions_.handle(), 1, &region);
@@ -295,7 +312,58 @@ Status Voxelizer::copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize of
     mesh.staged_.clear();
     mesh.staged_source_ = source;
     mesh.staged_offset_ = offset;
+    mesh.staged_palette_.clear();
     return {};
+}
+
+Status Voxelizer::pose_from_bones(GpuMesh& mesh, std::span<const glm::mat4> palette) {
+    if (mesh.joints_ == 0) return Status::failure("the mesh has no skin");
+    if (palette.size() != mesh.joints_)
+        return Status::failure("got " + std::to_string(palette.size()) + " bone matrices for a skin of " +
+                               std::to_string(mesh.joints_) + " joints");
+    if (mesh.triangles_ == 0) return {};
+    // Whether or not frames are in flight, the pose is written by the next recorded skinning pass; a
+    // second pose before it replaces the first, and last frame's positions stay the previous ones.
+    if (!mesh.staged())
+        if (Status s = rotate_positions(mesh); !s) return s;
+    mesh.staged_.clear();
+    mesh.staged_source_ = VK_NULL_HANDLE;
+    mesh.staged_palette_.assign(palette.begin(), palette.end());
+    return {};
+}
+
+void Voxelizer::record_skinning(VkCommandBuffer cmd, std::span<const GpuInstance> instances) {
+    bool any = false;
+    for (const GpuInstance& inst : instances) {
+        const GpuMesh& mesh = *inst.mesh;
+        if (mesh.staged_palette_.empty()) continue;
+        gpu::update(ctx_, cmd, mesh.palette_, mesh.staged_palette_.data(),
+                    mesh.staged_palette_.size() * sizeof(glm::mat4));
+        any = true;
+    }
+    if (!any) return;
+    gpu::barrier(ctx_, cmd);
+    skin_profiler_.reset(cmd);
+    skin_profiler_.begin(cmd, "skin");
+    for (const GpuInstance& inst : instances) {
+        const GpuMesh& mesh = *inst.mesh;
+        // A mesh placed by several instances is posed once.
+        if (mesh.staged_palette_.empty()) continue;
+        mesh.staged_palette_.clear();
+        SkinPush push{};
+        push.bind = mesh.bind_.address();
+        push.joints = mesh.joint_indices_.address();
+        push.weights = mesh.weights_.address();
+        push.palette = mesh.palette_.address();
+        push.positions = mesh.positions_.address();
+        push.vertex_count = mesh.vertices_;
+        const std::uint32_t groups = (mesh.vertices_ + kSkinGroupSize - 1) / kSkinGroupSize;
+        skin_.bind(cmd, &push, sizeof(push));
+        skin_.dispatch(cmd, std::min(groups, kSkinMaxGroupsX),
+                       (groups + kSkinMaxGroupsX - 1) / kSkinMaxGroupsX, 1);
+    }
+    skin_profiler_.end(cmd);
+    gpu::barrier(ctx_, cmd);
 }
 
 Status Voxelizer::ensure_large_list(std::uint64_t items) {
@@ -311,7 +379,67 @@ Status Voxelizer::ensure_large_list(std::uint64_t items) {
     return {};
 }
 
-Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
+namespace {
+/// Checks a skin for `vertices` vertices: joint_count in range, indices below it, weights finite, >= 0 and
+/// not all 0 a vertex (such a vertex would collapse to the mesh's origin).
+Status check_skin(const SkinView& skin, std::size_t vertices) {
+    if (skin.joint_count == 0 || skin.joint_count > kMaxSkinJoints)
+        return Status::failure("skin joint count " + std::to_string(skin.joint_count) + " is not in 1.." +
+                               std::to_string(kMaxSkinJoints));
+    if (vertices > 0 && (!skin.joints || !skin.weights))
+        return Status::failure("skin joints or weights is null");
+    for (std::size_t v = 0; v < vertices; ++v) {
+        float sum = 0.0f;
+        for (std::size_t i = 4 * v; i < 4 * v + 4; ++i) {
+            if (skin.joints[i] >= skin.joint_count)
+                return Status::failure("skin vertex " + std::to_string(v) + ": joint " +
+                                       std::to_string(skin.joints[i]) + " out of range (" +
+                                       std::to_string(skin.joint_count) + " joints)");
+            if (!std::isfinite(skin.weights[i]) || skin.weights[i] < 0.0f)
+                return Status::failure("skin vertex " + std::to_string(v) + ": weight " +
+                                       std::to_string(skin.weights[i]) + " is not finite and >= 0");
+            sum += skin.weights[i];
+        }
+        if (!(sum > 0.0f)) return Status::failure("skin vertex " + std::to_string(v) + ": all weights are 0");
+    }
+    return {};
+}
+} // namespace
+
+Status Voxelizer::upload_skin(GpuMesh& mesh, const MeshView& view, const SkinView& skin) {
+    const std::size_t vertices = view.vertex_count;
+    struct Part {
+        gpu::Buffer& buffer;
+        std::size_t bytes;
+        const void* data;
+        const char* name;
+    };
+    std::pmr::vector<float> bind(3 * vertices, ctx_.memory());
+    for (std::size_t v = 0; v < vertices; ++v) {
+        const glm::vec3 p = view.position(v);
+        std::memcpy(&bind[3 * v], &p, sizeof(p));
+    }
+    // Four uint16 a vertex are the two words (low half first) the shader reads on a little-endian host.
+    const Part parts[] = {
+        {mesh.bind_, bind.size() * sizeof(float), bind.data(), "gust voxelizer skin bind pose"},
+        {mesh.joint_indices_, vertices * 4 * sizeof(std::uint16_t), skin.joints,
+         "gust voxelizer skin joints"},
+        {mesh.weights_, vertices * 4 * sizeof(float), skin.weights, "gust voxelizer skin weights"},
+        {mesh.palette_, std::size_t(skin.joint_count) * sizeof(glm::mat4), nullptr,
+         "gust voxelizer skin palette"},
+    };
+    for (const Part& part : parts) {
+        auto buffer = gpu::Buffer::create(ctx_, part.bytes, gpu::MemoryUse::Device, 0, part.name);
+        if (!buffer) return buffer.status();
+        if (part.data)
+            if (Status s = gpu::upload(ctx_, *buffer, part.data, part.bytes); !s) return s;
+        part.buffer = std::move(*buffer);
+    }
+    mesh.joints_ = skin.joint_count;
+    return {};
+}
+
+Result<GpuMesh> Voxelizer::upload(const MeshView& mesh, const SkinView* skin) {
     if (mesh.index_count % 3 != 0)
         return Result<GpuMesh>::failure("index count " + std::to_string(mesh.index_count) +
                                         " is not a multiple of 3");
@@ -327,10 +455,15 @@ Result<GpuMesh> Voxelizer::upload(const MeshView& mesh) {
             return Result<GpuMesh>::failure("index " + std::to_string(mesh.indices[i]) + " at position " +
                                             std::to_string(i) + " is out of range (" +
                                             std::to_string(mesh.vertex_count) + " vertices)");
+    if (skin)
+        if (Status s = check_skin(*skin, mesh.vertex_count); !s) return s;
     GpuMesh out(ctx_.memory());
     out.triangles_ = std::uint32_t(mesh.index_count / 3);
     out.vertices_ = std::uint32_t(mesh.vertex_count);
+    if (skin) out.joints_ = skin->joint_count;
     if (out.triangles_ == 0) return out;
+    if (skin)
+        if (Status s = upload_skin(out, mesh, *skin); !s) return s;
     out.sizes_ = measure_mesh(mesh);
 
     std::pmr::vector<float> packed(3 * mesh.vertex_count, ctx_.memory());
@@ -416,7 +549,10 @@ void Voxelizer::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize 
 }
 
 gpu::Timings Voxelizer::timings(std::uint64_t frame) const {
-    return profiler_.read_frame(frame);
+    gpu::Timings out = skin_profiler_.read_frame(frame);
+    for (const auto& pass : profiler_.read_frame(frame))
+        out.push_back(pass);
+    return out;
 }
 
 Result<VoxelizeStats> Voxelizer::collect(const void* readback) {
@@ -472,12 +608,19 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
     for (;;) {
         if (Status s = ensure_pass(instances, grid); !s) return s;
         const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
-        Status recorded =
-            ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_pass(cmd, instances, methods, grid); });
+        bool skinned = false;
+        for (const GpuInstance& inst : instances)
+            skinned = skinned || !inst.mesh->staged_palette_.empty();
+        Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+            record_skinning(cmd, instances);
+            record_pass(cmd, instances, methods, grid);
+        });
         if (!recorded) return recorded;
         VoxelizeCounters counters{};
         if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
-        stats.ms = profiler_.read();
+        stats.ms = skinned ? skin_profiler_.read() : gpu::Timings(ctx_.memory());
+        for (const auto& pass : profiler_.read())
+            stats.ms.push_back(pass);
         if (Status s = take_counters(counters, capacity, large_capacity, stats); !s) return s;
         if (!stats.truncated) break;
         stats.truncated = false;

@@ -37,7 +37,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 6
+#define GUST_VERSION_MINOR 7
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -198,14 +198,24 @@ typedef struct gust_system_desc {
     bool snapshot;
 } gust_system_desc;
 
+/// Joints and weights of a skinned mesh, four influences a vertex as glTF's JOINTS_0 and WEIGHTS_0
+/// (gust::MeshSkin); the mesh's positions are its bind pose, which gust_system_set_bones' palette moves.
+typedef struct gust_mesh_skin {
+    uint32_t joint_count;   ///< joints of the palette, 1..65536
+    const uint16_t* joints; ///< 4 per vertex, each < joint_count
+    const float* weights;   ///< 4 per vertex: finite, >= 0, not all 0; used as given (not normalized)
+} gust_mesh_skin;
+
 /// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices; read during the call.
 typedef struct gust_mesh_desc {
-    const float* positions;  ///< vertex_count positions, x y z floats, `stride` bytes apart
-    uint32_t vertex_count;   ///< positions
-    uint32_t stride;         ///< bytes between consecutive positions
-    const uint32_t* indices; ///< index_count indices, each < vertex_count
-    uint32_t index_count;    ///< a multiple of 3
-    bool deforming;          ///< true: vertices may change every frame (gust_system_set_vertices)
+    const float* positions;     ///< vertex_count positions, x y z floats, `stride` bytes apart
+    uint32_t vertex_count;      ///< positions
+    uint32_t stride;            ///< bytes between consecutive positions
+    const uint32_t* indices;    ///< index_count indices, each < vertex_count
+    uint32_t index_count;       ///< a multiple of 3
+    bool deforming;             ///< true: vertices may change every frame (gust_system_set_vertices,
+                                ///< gust_system_set_bones)
+    const gust_mesh_skin* skin; ///< a deforming mesh's skin, or NULL (gust::MeshDesc::skin)
 } gust_mesh_desc;
 
 /// A wind source's profile (docs/solver.md "Emitters" draws each).
@@ -369,6 +379,13 @@ gust_result gust_system_set_vertices(gust_system system, gust_mesh mesh, const f
 /// the range [offset, offset + 12 vertex_count) must lie inside it.
 gust_result gust_system_set_vertices_buffer(gust_system system, gust_mesh mesh, VkBuffer buffer,
                                             VkDeviceSize offset, uint32_t vertex_count, bool teleport);
+
+/// A skinned mesh's pose from its bone palette (gust::System::set_bones): `count` (its joint_count)
+/// column-major 4x4 matrices, 16 floats each, read during the call: each joint's transform times its inverse
+/// bind matrix, bind-pose mesh space to posed mesh space. The next step skins the mesh on the GPU, with
+/// set_vertices' rules for the previous pose and `teleport`.
+gust_result gust_system_set_bones(gust_system system, gust_mesh mesh, const float* palette, uint32_t count,
+                                  bool teleport);
 
 /// Places `mesh` with a column-major mesh-to-world `transform` (16 finite floats); moving instances are
 /// voxelized every frame, static ones once. `*instance` receives its id.

@@ -34,7 +34,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 6;
+inline constexpr std::uint32_t kVersionMinor = 7;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -228,6 +228,16 @@ struct SystemDesc {
 using MeshId = std::uint64_t;
 using InstanceId = std::uint64_t;
 
+/// Joints and weights of a skinned mesh, four influences a vertex as glTF's JOINTS_0 and WEIGHTS_0 (pad
+/// unused ones with weight 0 and any joint in range). Copied to the device by create_mesh; the mesh's
+/// positions are then its bind pose, which set_bones' palette moves (docs/api.md "Skinning from bones").
+struct MeshSkin {
+    std::uint32_t joint_count = 0;         ///< joints of the palette, 1..65536
+    const std::uint16_t* joints = nullptr; ///< 4 per vertex, each < joint_count
+    const float* weights = nullptr;        ///< 4 per vertex: finite, >= 0, not all 0; used as given (no
+                                           ///< normalization: glTF makes them sum to 1)
+};
+
 /// A triangle mesh in mesh space: positions with a byte stride (>= 12), 32-bit indices.
 struct MeshDesc {
     const float* positions = nullptr;
@@ -235,8 +245,11 @@ struct MeshDesc {
     std::uint32_t stride = 12; ///< bytes between consecutive positions
     const std::uint32_t* indices = nullptr;
     std::uint32_t index_count = 0; ///< a multiple of 3
-    /// Dynamic meshes may change their vertices every frame (set_vertices); static ones never do.
+    /// Dynamic meshes may change their vertices every frame (set_vertices, set_bones); static ones never do.
     bool deforming = false;
+    /// A deforming mesh's skin (null: none), read during create_mesh: its poses may then come from bone
+    /// palettes (set_bones), skinned on the GPU, instead of posed vertices.
+    const MeshSkin* skin = nullptr;
 };
 
 /// A wind source (docs/solver.md "Emitters" draws each profile).
@@ -396,6 +409,13 @@ class System {
     /// buffer's size: the range [offset, offset + 12 vertex_count) must lie inside it.
     Outcome set_vertices(MeshId mesh, VkBuffer buffer, VkDeviceSize offset, std::uint32_t vertex_count,
                          bool teleport = false);
+    /// A skinned mesh's pose from its bone palette (MeshDesc::skin): `count` (its joint_count) matrices,
+    /// each the joint's transform times its inverse bind matrix, taking bind-pose mesh space to posed mesh
+    /// space (the engine folds the inverse bind matrices in, and the skinned node's own transform out, as
+    /// glTF engines do). Finite and affine. Copied now; the next step skins the mesh on the GPU into the
+    /// positions set_vertices would set, with the same previous-pose and `teleport` rules. The last of
+    /// set_vertices and set_bones before a step sets that step's pose.
+    Outcome set_bones(MeshId mesh, const Mat4* palette, std::uint32_t count, bool teleport = false);
 
     /// Places a mesh. Static instances are voxelized once (again only when the static set changes);
     /// moving ones every frame, with velocities from their last transform.

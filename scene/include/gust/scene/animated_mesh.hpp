@@ -5,6 +5,7 @@
 #include "gust/scene/mesh.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <glm/glm.hpp>
 #include <memory>
@@ -48,7 +49,28 @@ class AnimatedMesh {
     /// rest_pose()'s positions exactly. Non-finite t is taken as 0.
     void pose(std::size_t clip, double t, bool loop, std::vector<glm::vec3>& out) const;
 
+    /// The most matrices a bone palette holds (16-bit joint indices, as gust::MeshSkin takes them).
+    static constexpr std::size_t kMaxBones = 65536;
+    /// The mesh as a GPU skinner takes it: bind positions, four joints and weights a vertex, and the palette
+    /// size. The palette (bone_palette) holds every skin's joint matrices, one matrix per rigidly placed node
+    /// block and the identity, so that every vertex of the file follows it; bind posed by a palette is
+    /// pose() at the same time, up to float rounding (pose() blends in double).
+    struct BoneSkin {
+        std::vector<glm::vec3> bind;       ///< one per rest_pose() vertex, in the same order
+        std::vector<std::uint16_t> joints; ///< 4 per vertex, each < joint_count
+        std::vector<float> weights;        ///< 4 per vertex, summing to 1
+        std::uint32_t joint_count = 0;
+    };
+    /// The skin for bone_palette; fails when a vertex follows more than four joints (a file with JOINTS_1)
+    /// or the palette would pass kMaxBones.
+    Result<BoneSkin> bone_skin() const;
+    /// The palette at time `t` of `clip` (as pose() takes them), resized to bone_skin().joint_count: joint
+    /// world matrix times inverse bind, bind space to the space of rest_pose().
+    void bone_palette(std::size_t clip, double t, bool loop, std::vector<glm::mat4>& out) const;
+
   private:
+    /// Every node's local transform at time `t` of `clip` (the rest transforms for a clip out of range).
+    std::vector<glm::dmat4> locals_at(std::size_t clip, double t, bool loop) const;
     struct Data; ///< skeleton, skins, clips and per-vertex influences
     explicit AnimatedMesh(std::shared_ptr<const Data> data) : data_(std::move(data)) {}
     std::shared_ptr<const Data> data_;

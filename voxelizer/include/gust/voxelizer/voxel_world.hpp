@@ -45,8 +45,10 @@ class VoxelWorld : public gpu::HostObject {
   public:
     static Result<std::unique_ptr<VoxelWorld>> create(gpu::Context& ctx, const WorldDesc& desc);
 
-    /// Uploads a mesh for use in instances of this world.
-    Result<GpuMesh> upload(const MeshView& mesh) { return dynamic_->upload(mesh); }
+    /// Uploads a mesh (with a skin, see Voxelizer::upload) for use in instances of this world.
+    Result<GpuMesh> upload(const MeshView& mesh, const SkinView* skin = nullptr) {
+        return dynamic_->upload(mesh, skin);
+    }
     /// Replaces a deforming mesh's positions for this frame (see Voxelizer::update_positions).
     Status update_positions(GpuMesh& mesh, std::span<const glm::vec3> positions) {
         return dynamic_->update_positions(mesh, positions);
@@ -54,6 +56,15 @@ class VoxelWorld : public gpu::HostObject {
     /// The same from a device buffer (see Voxelizer::copy_positions).
     Status copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset) {
         return dynamic_->copy_positions(mesh, source, offset);
+    }
+    /// Poses a skinned mesh from a bone palette on the GPU (see Voxelizer::pose_from_bones).
+    Status pose_from_bones(GpuMesh& mesh, std::span<const glm::mat4> palette) {
+        return dynamic_->pose_from_bones(mesh, palette);
+    }
+    /// Frames in flight: records the skinning of the dynamic instances' meshes posed from bones, before
+    /// record() voxelizes them (see Voxelizer::record_skinning). step() does it itself.
+    void record_skinning(VkCommandBuffer cmd, std::span<const GpuInstance> dynamic) {
+        dynamic_->record_skinning(cmd, dynamic);
     }
 
     /// Sets the static instances; the next step voxelizes them again only if they differ from the last

@@ -34,31 +34,51 @@ const char* to_string(VoxelizeMethod method);
 /// Parses "raster", "compute" or "auto"; false for anything else.
 bool parse_method(const std::string& text, VoxelizeMethod& out);
 
+/// Joints and weights of a skinned mesh, four influences a vertex as glTF's JOINTS_0 and WEIGHTS_0, for
+/// Voxelizer::upload. The mesh's positions are its bind pose, which the palette's matrices move.
+struct SkinView {
+    const std::uint16_t* joints = nullptr; ///< 4 per vertex, each < joint_count
+    const float* weights = nullptr;        ///< 4 per vertex, finite, >= 0, not all 0; used as given
+    std::uint32_t joint_count = 0;         ///< palette size, 1..kMaxSkinJoints
+};
+/// The most joints a skin has (uint16 joint indices).
+inline constexpr std::uint32_t kMaxSkinJoints = 65536;
+
 /// A mesh uploaded to the device, validated once. Owned by the caller; outlives its use in calls.
 class GpuMesh {
   public:
     GpuMesh() = default;
     std::uint32_t triangle_count() const { return triangles_; }
     std::uint32_t vertex_count() const { return vertices_; }
+    /// Joints of its skin (Voxelizer::upload with a SkinView); 0 without one.
+    std::uint32_t joint_count() const { return joints_; }
     /// Triangle sizes measured at upload (the positions given then), for the cost model and list sizing.
     const MeshSizes& sizes() const { return sizes_; }
 
   private:
     friend class Voxelizer;
-    explicit GpuMesh(std::pmr::memory_resource* memory) : staged_(memory) {}
+    explicit GpuMesh(std::pmr::memory_resource* memory) : staged_(memory), staged_palette_(memory) {}
     gpu::Buffer positions_;      ///< float[3 * vertices], this frame
     gpu::Buffer prev_positions_; ///< float[3 * vertices], last frame (only once positions were updated)
     gpu::Buffer indices_;        ///< uint[3 * triangles]
     std::uint32_t triangles_ = 0;
     std::uint32_t vertices_ = 0;
     MeshSizes sizes_;
+    // A skin: the bind pose, joints (uvec2 of four uint16) and weights (vec4) per vertex, and the palette
+    // the skinning pass reads (mat4 per joint, written by the frame that poses the mesh).
+    gpu::Buffer bind_, joint_indices_, weights_, palette_;
+    std::uint32_t joints_ = 0;
     // Frames in flight: positions set since the last recorded frame, written into positions_ by the next
     // frame's commands (a write now could race the frames still running). Mutable: the positions are
     // already set; the staging only says when they reach the GPU.
     mutable std::pmr::vector<glm::vec3> staged_;
     mutable VkBuffer staged_source_ = VK_NULL_HANDLE; ///< or copied from this buffer at staged_offset_
     mutable VkDeviceSize staged_offset_ = 0;
-    bool staged() const { return !staged_.empty() || staged_source_ != VK_NULL_HANDLE; }
+    /// Or posed from this palette by the next recorded skinning pass (Voxelizer::pose_from_bones).
+    mutable std::pmr::vector<glm::mat4> staged_palette_;
+    bool staged() const {
+        return !staged_.empty() || staged_source_ != VK_NULL_HANDLE || !staged_palette_.empty();
+    }
 };
 
 /// One placement of an uploaded mesh.
@@ -100,7 +120,9 @@ class Voxelizer : public gpu::HostObject {
 
     /// Validates `mesh` (index count a multiple of 3, every index < vertex_count, stride >= 12) and
     /// copies it to the device. Non-finite positions are accepted: those triangles are counted as rejected.
-    Result<GpuMesh> upload(const MeshView& mesh);
+    /// With `skin` (joint indices in range, weights finite, non-negative and not all 0 a vertex) the mesh's
+    /// poses may come from bone palettes (pose_from_bones); its positions are the bind pose.
+    Result<GpuMesh> upload(const MeshView& mesh, const SkinView* skin = nullptr);
 
     /// Voxelizes every instance into the fragment list, blocking until done. The list holds each
     /// voxel once per triangle that touches it; it is never truncated: when it overflows it is grown
@@ -117,6 +139,15 @@ class Voxelizer : public gpu::HostObject {
     /// `offset` (the caller checked its size). Blocks until copied; with frames in flight the copy is
     /// recorded by the next pass, and the buffer must hold the positions when that pass runs.
     Status copy_positions(GpuMesh& mesh, VkBuffer source, VkDeviceSize offset);
+    /// Poses a skinned mesh from `palette` (joint_count() matrices, bind-pose mesh space -> posed mesh space)
+    /// on the GPU, as update_positions would with the positions a CPU skinned from it: the previous pose is
+    /// kept for velocities, and the next record_skinning() writes this one (copied now). The last of these
+    /// three calls before that pass sets the pose.
+    Status pose_from_bones(GpuMesh& mesh, std::span<const glm::mat4> palette);
+    /// Records the skinning pass of every instance's mesh posed from bones since the last one (palettes,
+    /// then one dispatch a mesh) into `cmd`, before the voxelize pass that reads them; voxelize() records it
+    /// itself. Records nothing when no mesh waits.
+    void record_skinning(VkCommandBuffer cmd, std::span<const GpuInstance> instances);
 
     /// Frames in flight: records one pass of voxelize() into `cmd` without waiting or growing the list
     /// within the frame. record_readback() copies the pass's counters out; collect() reads them once the
@@ -156,6 +187,8 @@ class Voxelizer : public gpu::HostObject {
     std::uint64_t fragment_limit() const;
     Status ensure_capacity(std::uint64_t fragments);
     Status rotate_positions(GpuMesh& mesh);
+    /// Uploads a checked skin's bind pose (the mesh's positions), joints and weights, and makes its palette.
+    Status upload_skin(GpuMesh& mesh, const MeshView& view, const SkinView& skin);
     Status ensure_large_list(std::uint64_t items);
     Status ensure_velocity_capacity();
     Status ensure_instances(std::size_t count);
@@ -179,6 +212,8 @@ class Voxelizer : public gpu::HostObject {
     gpu::Pipeline compute_small_[2];
     gpu::Pipeline compute_args_;
     gpu::Pipeline compute_large_[2];
+    gpu::Pipeline skin_;          ///< skin.comp
+    gpu::Profiler skin_profiler_; ///< the skinning pass ("skin"), recorded before the voxelize passes
     gpu::Profiler profiler_;
     gpu::Buffer fragments_;
     gpu::Buffer counters_;
