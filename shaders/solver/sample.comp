@@ -2,10 +2,11 @@
 #extension GL_GOOGLE_include_directive : require
 // Reading the field for engines. pc.mode kSamplePoints: per point, the velocity there: inside a solid (a
 // voxel that is not its cell's air, or a cell without air) the solid's own velocity, in the air trilinear on
-// the faces (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind, the ambient
-// wind outside the grid. kSampleTexels: per cell, a texel of the wind texture (store_texel; a step's
-// finish.comp writes the bound texels, so this serves the first fill and tests). kSampleCells: per cell,
-// the velocity at its centre (cell_output) as three floats into `samples`.
+// the faces (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind; outside the
+// grid the wind beyond it (the ambient wind, or the coarser cascades', blended in over the last cells).
+// kSampleTexels: per cell, a texel of the wind texture (store_texel; a step's finish.comp writes the bound
+// texels, so this serves the first fill and tests). kSampleCells: per cell, the velocity at its centre
+// (cell_output) as three floats into `samples`.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -20,15 +21,18 @@ void main() {
     if (pc.mode == kSamplePoints) {
         if (i >= int(sb().b.point_count)) return;
         vec3 p = (PointsRef(sb().b.points).v[i] - grid_origin()) / grid_h();
-        vec3 u;
-        if (!inside_grid(p)) {
-            u = grid_ambient();
-        } else {
+        vec3 x = grid_origin() + p * grid_h();
+        // Towards the border of a cascade with coarser ones beyond, the answer blends into theirs.
+        float own = !inside_grid(p) ? 0.0 : (pc.nest & kNestOuter) == 0u ? 1.0 : cascade_weight(p, n);
+        vec3 u = vec3(0.0);
+        if (own > 0.0) {
             int cell = cell_index(n, clamp(ivec3(floor(p)), ivec3(0), n - 1));
             uint flags = flags_at(cell);
-            u = in_solid(p, cell, flags) ? solid_velocity_at(p, cell, flags)
-                                         : sample_velocity(kFieldVelocity, p) + omni_velocity(p);
+            u = own * (in_solid(p, cell, flags) ? solid_velocity_at(p, cell, flags)
+                                                : sample_velocity(kFieldVelocity, p) + omni_velocity(p));
         }
+        if (own < 1.0)
+            u += (1.0 - own) * vec3(beyond_component(0u, x), beyond_component(1u, x), beyond_component(2u, x));
         SamplesRef(sb().b.samples).v[i] = u;
     } else {
         if (i >= n.x * n.y * n.z) return;

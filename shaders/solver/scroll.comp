@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Per face: the field moved by pc.shift cells (new face f is old face f + shift) into kFieldTmp; faces with
-// no old counterpart take the ambient wind. The first threads, one per cell, move φ the same way into
+// no old counterpart take the wind beyond the grid there (the ambient wind, or the next coarser cascade's). The first threads, one per cell, move φ the same way into
 // kCellScratch (new cells 0), so that the next solve's warm start still lines up with the field.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
@@ -21,5 +21,7 @@ void main() {
     ivec3 src = f + pc.shift;
     ivec3 m = n + axis_unit(axis);
     bool inside = all(greaterThanEqual(src, ivec3(0))) && all(lessThan(src, m));
-    store_face(kFieldTmp, i, inside ? load_face(kFieldVelocity, face_index(n, axis, src)) : grid_ambient()[axis]);
+    // The grid's origin moves by the shift once this pass is done: the new face's world position.
+    vec3 x = grid_origin() + (face_position(axis, f) + vec3(pc.shift)) * grid_h();
+    store_face(kFieldTmp, i, inside ? load_face(kFieldVelocity, face_index(n, axis, src)) : beyond_component(axis, x));
 }

@@ -90,12 +90,103 @@ void load_bindings() {
 ivec3 grid_dims() { return hot.dims; }
 float grid_h() { return hot.h; }
 vec3 grid_origin() { return hot.origin; }
-vec3 grid_ambient() { return hot.ambient; }
 uint grid_open_sides() { return hot.open_sides; }
 GridLevel load_level(uint l) { return sb().b.level[l]; }
 uint emitter_count() { return hot.emitter_count; }
 uint omni_count() { return hot.omni_count; }
 GpuEmitter load_emitter(uint i) { return EmittersRef(hot.emitters).v[i]; }
+
+// ---- Cascades (docs/solver.md "Cascades") ---------------------------------------------------------------
+// A cascade reads its neighbours' fields through their bindings (SolverBindings::outer, inner): their
+// `current` velocity buffer, dims, cell size and origin as of their last step or scroll.
+
+/// Component `axis` at world point x of the face field `faces` of a grid of `dims` cells of `h` m from
+/// `origin`: trilinear on the component's lattice, clamped to it (the caller keeps x inside the grid).
+float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint axis, vec3 x) {
+    ivec3 m = dims + axis_unit(axis);
+    vec3 q = clamp((x - origin) / h - vec3(0.5) + 0.5 * vec3(axis_unit(axis)), vec3(0.0), vec3(m - ivec3(1)));
+    ivec3 i0 = min(ivec3(floor(q)), max(m - ivec3(2), ivec3(0)));
+    ivec3 i1 = min(i0 + ivec3(1), m - ivec3(1));
+    vec3 t = q - vec3(i0);
+    FloatsRef u = FloatsRef(faces);
+    float c00 = mix(u.v[face_index(dims, axis, i0)], u.v[face_index(dims, axis, ivec3(i1.x, i0.y, i0.z))], t.x);
+    float c10 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i1.y, i0.z))],
+                    u.v[face_index(dims, axis, ivec3(i1.x, i1.y, i0.z))], t.x);
+    float c01 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i0.y, i1.z))],
+                    u.v[face_index(dims, axis, ivec3(i1.x, i0.y, i1.z))], t.x);
+    float c11 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i1.y, i1.z))], u.v[face_index(dims, axis, i1)], t.x);
+    return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+}
+
+/// How much a cascade's own answer counts at p (cell units of its grid of `dims` cells): 0 outside it,
+/// rising to 1 over its last kCascadeBlendCells cells, so that no seam shows where the next coarser
+/// cascade's answer takes over.
+float cascade_weight(vec3 p, ivec3 dims) {
+    vec3 inside = min(p, vec3(dims) - p);
+    return clamp(min(inside.x, min(inside.y, inside.z)) / kCascadeBlendCells, 0.0, 1.0);
+}
+
+/// Component `axis` of the wind beyond this grid at world point x: the coarser cascades' in turn, each
+/// blended into the next towards its border (the coarsest wholly inside its grid), then the ambient wind.
+float beyond_component(uint axis, vec3 x) {
+    if ((pc.nest & kNestOuter) == 0u) return hot.ambient[axis];
+    float sum = 0.0, left = 1.0;
+    uint64_t at = sb().b.outer;
+    for (uint k = 0u; k < kMaxCascades && at != 0ul && left > 0.0; ++k) {
+        BindingsRef r = BindingsRef(at);
+        ivec3 dims = r.b.dims;
+        float h = r.b.h;
+        vec3 origin = r.b.origin;
+        uint64_t next = r.b.outer;
+        vec3 p = (x - origin) / h;
+        bool inside = all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(dims)));
+        float w = !inside ? 0.0 : next == 0ul ? 1.0 : cascade_weight(p, dims);
+        if (w > 0.0) {
+            sum += left * w * cascade_component(r.b.current, dims, h, origin, axis, x);
+            left *= 1.0 - w;
+        }
+        at = next;
+    }
+    return sum + left * hot.ambient[axis];
+}
+
+/// Near the border of a cascade with a coarser one beyond, the share of the coarser wind face f takes each
+/// step: 1 on the border, falling to 0 kCascadeBlendCells in (a relaxation zone, as nested weather models
+/// have), so that the border agrees with the coarser cascade where the answer blends into it.
+float border_relaxation(uint axis, ivec3 f) {
+    if ((pc.nest & kNestOuter) == 0u) return 0.0;
+    vec3 p = vec3(f) + vec3(0.5) - 0.5 * vec3(axis_unit(axis));
+    vec3 inside = min(p, vec3(grid_dims()) - p);
+    return clamp(1.0 - min(inside.x, min(inside.y, inside.z)) / kCascadeBlendCells, 0.0, 1.0);
+}
+
+/// Whether the next finer cascade covers face f, at least one of this grid's cells inside its border; then
+/// `u`, its wind averaged over the face (ratio^2 points on it).
+bool inner_face(uint axis, ivec3 f, out float u) {
+    u = 0.0;
+    if ((pc.nest & kNestInner) == 0u) return false;
+    uint64_t at = sb().b.inner;
+    BindingsRef r = BindingsRef(at);
+    ivec3 dims = r.b.dims;
+    float h = r.b.h;
+    vec3 origin = r.b.origin;
+    vec3 x = grid_origin() + (vec3(f) + vec3(0.5) - 0.5 * vec3(axis_unit(axis))) * grid_h();
+    vec3 p = (x - origin) / h;
+    float ratio = grid_h() / h;
+    if (any(lessThan(p, vec3(ratio))) || any(greaterThan(p, vec3(dims) - vec3(ratio)))) return false;
+    uint64_t faces = r.b.current;
+    uint b = (axis + 1u) % 3u, d = (axis + 2u) % 3u;
+    int n = max(int(round(ratio)), 1);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            vec3 y = x;
+            y[b] += ((float(i) + 0.5) / float(n) - 0.5) * grid_h();
+            y[d] += ((float(j) + 0.5) / float(n) - 0.5) * grid_h();
+            u += cascade_component(faces, dims, h, origin, axis, y);
+        }
+    u /= float(n * n);
+    return true;
+}
 
 uint64_t face_field(uint field) {
     bool swapped = (pc.swap & 1u) != 0u;

@@ -32,6 +32,10 @@ GUST_CONST uint kBitsWords = kCellWords;
 #endif
 GUST_CONST uint kMaxVoxelsPerCell = 8;
 GUST_CONST uint kMaxEmitters = 64;
+/// Cascades a nest holds at most, and the cells over which a cascade's answer blends into the next coarser
+/// one's towards its border (docs/solver.md "Cascades").
+GUST_CONST uint kMaxCascades = 8;
+GUST_CONST float kCascadeBlendCells = 3.0f;
 /// Fragment velocities are summed per cell as fixed point with this many steps per m/s, clamped to
 /// ±kMaxFragmentSpeed, so 32-bit integer atomics suffice (no float-atomic feature needed).
 GUST_CONST float kVelocityScale = 256.0f;
@@ -166,34 +170,34 @@ GUST_CONST uint kCellFields = 11u;
 
 /// Addresses and parameters of one step, in a buffer of their own (push constants stay small).
 struct SolverBindings {
-    GUST_ADDRESS velocity;       ///< float[faces]: one of the two velocity buffers (SolverPush::swap), m/s
-    GUST_ADDRESS velocity_tmp;   ///< float[faces]: the other
-    GUST_ADDRESS velocity_back;  ///< float[faces]: MacCormack's backward pass (then kFieldLow, kFieldHigh)
-    GUST_ADDRESS weights;        ///< float[]: weights of levels 1 on, from index level0_faces
-    GUST_ADDRESS solid_velocity; ///< float[faces]: solid's normal velocity per face, m/s
-    GUST_ADDRESS pressure;       ///< float[]: kCellPressure, all levels
-    GUST_ADDRESS pressure_up;    ///< float[]: kCellPressureUp, all levels
-    GUST_ADDRESS rhs;            ///< float[]: right-hand side per cell, all levels (1/s)
-    GUST_ADDRESS scratch;        ///< float[cells]: kCellScratch
-    GUST_ADDRESS cell_solid;     ///< float[cells]: share of the cell's voxels that are not its air
-    GUST_ADDRESS cell_parts;     ///< uint[cells * kCellParts * cell_words]: cut cells' parts (cell_parts)
-    GUST_ADDRESS cell_static;    ///< uint[cells * cell_words]: kCellStatic cells' static solid voxels
-    GUST_ADDRESS cell_flags;     ///< uint[cells]: kCell* flags
-    GUST_ADDRESS cell_motion;    ///< ivec4[cells]: fixed-point fragment velocity sums and count
-    GUST_ADDRESS labels;         ///< uint[1 + kCellParts * cells]: union-find parents (part_node ids)
-    GUST_ADDRESS region_motion;  ///< ivec4[2 (1 + kCellParts * cells)]: per sealed region's root node r,
-                                 ///< [2r] the fixed-point velocities of the moving solid its parts touch,
-                                 ///< weighted in quarters, and the weights; [2r + 1].x 4 per part that
-                                 ///< touches solid (enclosing_motion)
-    GUST_ADDRESS vorticity;      ///< vec4[cells]: curl (1/s) and its length
-    GUST_ADDRESS confinement;    ///< vec4[cells]: the step's confinement force (m/s^2) and speed (m/s)
-    GUST_ADDRESS emitters;       ///< GpuEmitter[emitter_count]
-    GUST_ADDRESS state;          ///< SolverState
-    GUST_ADDRESS dispatch;       ///< LevelDispatch[2 * kDispatchSlots]: live, then full
-    GUST_ADDRESS tree_nodes;     ///< the sparse tree's node pool (uvec2 per node), 0 without solids
-    GUST_ADDRESS tree_masks;     ///< the sparse tree's leaf masks
-    GUST_ADDRESS fragments;      ///< packed voxel keys of moving surfaces, 0 without
-    GUST_ADDRESS fragment_count; ///< uint
+    GUST_ADDRESS velocity;        ///< float[faces]: one of the two velocity buffers (SolverPush::swap), m/s
+    GUST_ADDRESS velocity_tmp;    ///< float[faces]: the other
+    GUST_ADDRESS velocity_back;   ///< float[faces]: MacCormack's backward pass (then kFieldLow, kFieldHigh)
+    GUST_ADDRESS weights;         ///< float[]: weights of levels 1 on, from index level0_faces
+    GUST_ADDRESS solid_velocity;  ///< float[faces]: solid's normal velocity per face, m/s
+    GUST_ADDRESS pressure;        ///< float[]: kCellPressure, all levels
+    GUST_ADDRESS pressure_up;     ///< float[]: kCellPressureUp, all levels
+    GUST_ADDRESS rhs;             ///< float[]: right-hand side per cell, all levels (1/s)
+    GUST_ADDRESS scratch;         ///< float[cells]: kCellScratch
+    GUST_ADDRESS cell_solid;      ///< float[cells]: share of the cell's voxels that are not its air
+    GUST_ADDRESS cell_parts;      ///< uint[cells * kCellParts * cell_words]: cut cells' parts (cell_parts)
+    GUST_ADDRESS cell_static;     ///< uint[cells * cell_words]: kCellStatic cells' static solid voxels
+    GUST_ADDRESS cell_flags;      ///< uint[cells]: kCell* flags
+    GUST_ADDRESS cell_motion;     ///< ivec4[cells]: fixed-point fragment velocity sums and count
+    GUST_ADDRESS labels;          ///< uint[1 + kCellParts * cells]: union-find parents (part_node ids)
+    GUST_ADDRESS region_motion;   ///< ivec4[2 (1 + kCellParts * cells)]: per sealed region's root node r,
+                                  ///< [2r] the fixed-point velocities of the moving solid its parts touch,
+                                  ///< weighted in quarters, and the weights; [2r + 1].x 4 per part that
+                                  ///< touches solid (enclosing_motion)
+    GUST_ADDRESS vorticity;       ///< vec4[cells]: curl (1/s) and its length
+    GUST_ADDRESS confinement;     ///< vec4[cells]: the step's confinement force (m/s^2) and speed (m/s)
+    GUST_ADDRESS emitters;        ///< GpuEmitter[emitter_count]
+    GUST_ADDRESS state;           ///< SolverState
+    GUST_ADDRESS dispatch;        ///< LevelDispatch[2 * kDispatchSlots]: live, then full
+    GUST_ADDRESS tree_nodes;      ///< the sparse tree's node pool (uvec2 per node), 0 without solids
+    GUST_ADDRESS tree_masks;      ///< the sparse tree's leaf masks
+    GUST_ADDRESS fragments;       ///< packed voxel keys of moving surfaces, 0 without
+    GUST_ADDRESS fragment_count;  ///< uint
     GUST_ADDRESS fragment_motion; ///< uvec2 half-float velocities per fragment
     GUST_ADDRESS cg_cells;        ///< float[4 * cells]: conjugate gradients' x, p, b, old r
     GUST_ADDRESS partials;        ///< vec2[partial_count]: per-workgroup sums of a dot product
@@ -201,11 +205,18 @@ struct SolverBindings {
     GUST_ADDRESS samples;         ///< vec3[point_count]: their velocities, m/s
     GUST_ADDRESS texels;          ///< uvec2[cells]: half-float velocity xyz and open fraction per cell
     GUST_ADDRESS open_counts;     ///< uint[]: level 0's open voxel pairs, a byte per face
-    ivec3 dims;                   ///< wind cells per axis
-    float h;                      ///< cell size, m
-    vec3 origin;                  ///< world position of the grid's min corner, m
-    uint voxels_per_cell;         ///< tree voxels per cell per axis (1..8)
-    vec3 ambient;                 ///< m/s, world
+    /// Cascades (docs/solver.md "Cascades"). `current`: the velocity buffer that holds the field the last
+    /// step (or scroll) left, which the neighbouring cascades read. `outer`: the SolverBindings of the next
+    /// coarser cascade (0: none, and the ambient wind lies beyond the grid). `inner`: those of the next finer
+    /// (0: none).
+    GUST_ADDRESS current;
+    GUST_ADDRESS outer;
+    GUST_ADDRESS inner;
+    ivec3 dims;           ///< wind cells per axis
+    float h;              ///< cell size, m
+    vec3 origin;          ///< world position of the grid's min corner, m
+    uint voxels_per_cell; ///< tree voxels per cell per axis (1..8)
+    vec3 ambient;         ///< m/s, world
     uint emitter_count;
     ivec3 voxel_offset; ///< tree voxel of the grid's min corner
     uint fragment_capacity;
@@ -243,8 +254,13 @@ struct SolverPush {
     /// iteration's parity (x and p read from their B buffers).
     uint swap;
     ivec3 shift; ///< scroll: cells the field moves by
-    uint pad;
+    /// Cascades: kNestOuter when SolverBindings::outer is set, kNestInner when inner is (read from here, so
+    /// a solver on its own loads neither address).
+    uint nest;
 };
+
+GUST_CONST uint kNestOuter = 1u;
+GUST_CONST uint kNestInner = 2u;
 
 // ---- Pass modes (SolverPush::mode) ------------------------------------------------------------------
 // advect.comp and smooth.comp also take the mode as specialization constant 0 and get one pipeline per
@@ -253,10 +269,10 @@ struct SolverPush {
 
 /// advect.comp: the velocity's next field into kFieldTmp.
 GUST_CONST uint kAdvectSemiLagrangian = 0u; ///< semi-Lagrangian advection, then the forces (forced_face)
-GUST_CONST uint kAdvectForward = 1u;  ///< MacCormack's forward pass, and the range it blended
-GUST_CONST uint kAdvectBackward = 2u; ///< MacCormack's backward pass, kFieldTmp -> kFieldBack
-GUST_CONST uint kAdvectCorrect = 3u;  ///< MacCormack's clamped correction, then the forces, in place
-GUST_CONST uint kAdvectForces = 4u;   ///< no advection: the forces alone
+GUST_CONST uint kAdvectForward = 1u;        ///< MacCormack's forward pass, and the range it blended
+GUST_CONST uint kAdvectBackward = 2u;       ///< MacCormack's backward pass, kFieldTmp -> kFieldBack
+GUST_CONST uint kAdvectCorrect = 3u;        ///< MacCormack's clamped correction, then the forces, in place
+GUST_CONST uint kAdvectForces = 4u;         ///< no advection: the forces alone
 GUST_CONST uint kAdvectModes = 5u;
 
 /// smooth.comp: one level's smoothing in shared-memory tiles.

@@ -3,7 +3,7 @@
 // accessors below, as GLSL functions over device buffers or as C++ members over host arrays (the C++
 // side includes this inside a struct).
 //
-//   ivec3 grid_dims();  float grid_h();  vec3 grid_origin();  vec3 grid_ambient();  uint grid_open_sides();
+//   ivec3 grid_dims();  float grid_h();  vec3 grid_origin();  uint grid_open_sides();
 //   float load_face(uint field, int index);    kField* arrays, level-0 face indices
 //   float load_weight(int index);              weight array (level offsets included)
 //   float load_cell(uint field, int index);    kCell* arrays (level offsets included)
@@ -12,6 +12,12 @@
 //   float load_phi(int index);                 level-0 cells: the step's pressure solution φ
 //   GridLevel load_level(uint level);
 //   uint emitter_count();  GpuEmitter load_emitter(uint i);  uint omni_count();  (omni emitters first)
+//   float beyond_component(uint axis, vec3 x);  component `axis` of the wind beyond the grid at world
+//                                               point x: the coarser cascades' (cascades), else the ambient
+//   float border_relaxation(uint axis, ivec3 f); share of the wind beyond the grid face f takes each step
+//                                               (cascades: 1 at the border, 0 from kCascadeBlendCells in)
+//   bool inner_face(uint axis, ivec3 f, GUST_OUT(float) u);  whether a finer cascade covers face f, and
+//                                               its wind averaged over the face (cascades; else false)
 
 // ---- Sampling the staggered grid ------------------------------------------------------------------
 
@@ -68,15 +74,16 @@ GUST_INLINE ivec3 visible_corner(ivec3 corner, ivec3 c, uint b, uint d, bvec3 re
 }
 
 /// Component `axis` of face field `field` at p, trilinear, and the smallest and largest of the eight
-/// lattice values it blends (MacCormack's clamp); the ambient wind outside the grid. The stencil spans p's
+/// lattice values it blends (MacCormack's clamp); the wind beyond the grid outside it. The stencil spans p's
 /// cell c and up to three neighbours across the two other axes; a neighbour that no open face joins to c
 /// (a wall between them, thin or thick) is read as c's own value, so no sample mixes the air beyond a
 /// closed face into this side's (issue 31). Along `axis` the stencil reads c's own two faces: where one is
 /// closed it holds the wall's velocity or this side's extension (project_extend_face).
 GUST_INLINE float sample_component_range(uint field, uint axis, vec3 p, GUST_OUT(vec2) range) {
     if (!inside_grid(p)) {
-        range = vec2(grid_ambient()[axis]);
-        return grid_ambient()[axis];
+        float beyond = beyond_component(axis, grid_origin() + p * grid_h());
+        range = vec2(beyond);
+        return beyond;
     }
     ivec3 i0, i1;
     vec3 t;
@@ -319,20 +326,26 @@ GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon
     return step * 0.5f * (a[axis] + b[axis]);
 }
 
-/// Face f of the next field from advection's value `u` there: the emitters (`rate` of the gap each), the
-/// ambient wind on the domain's faces, then vorticity confinement (confinement_change).
+/// Face f of the next field from advection's value `u` there: the wind beyond the grid on the domain's
+/// faces (the ambient wind, or the next coarser cascade's); a finer cascade's wind where one covers f; else
+/// the emitters (`rate` of the gap each), then vorticity confinement (confinement_change), then, near the
+/// border of a cascade inside a coarser one, drawn towards the coarser wind (border_relaxation).
 GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
-    if (boundary_side(grid_dims(), axis, f) != 6u) return grid_ambient()[axis];
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
+    if (boundary_side(grid_dims(), axis, f) != 6u) return beyond_component(axis, x);
+    float finer;
+    if (inner_face(axis, f, finer)) return finer;
     // The omni emitters, first in the list, are added where the field is read, not driven into it
     // (omni_velocity).
     for (uint e = omni_count(); e < emitter_count(); ++e)
         u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
-    return u + confinement_change(axis, f, dt, epsilon);
+    u += confinement_change(axis, f, dt, epsilon);
+    float relax = border_relaxation(axis, f);
+    return relax > 0.0f ? mix(u, beyond_component(axis, x), relax) : u;
 }
 
 /// One Jacobi iteration of implicit viscosity (u − α∇²u·h² = u0 with α = ν dt / h^2): face f from the
-/// iterate in `field`; u0 is kFieldVelocity, the ambient wind beyond the domain.
+/// iterate in `field`; u0 is kFieldVelocity, the wind beyond the grid outside it.
 GUST_INLINE float diffuse_face(uint field, uint axis, ivec3 f, float alpha) {
     ivec3 n = grid_dims();
     ivec3 m = n + axis_unit(axis);
@@ -341,7 +354,8 @@ GUST_INLINE float diffuse_face(uint field, uint axis, ivec3 f, float alpha) {
         for (int s = -1; s <= 1; s += 2) {
             ivec3 g = f + s * axis_unit(a);
             bool inside = g.x >= 0 && g.y >= 0 && g.z >= 0 && g.x < m.x && g.y < m.y && g.z < m.z;
-            sum += inside ? load_face(field, face_index(n, axis, g)) : grid_ambient()[axis];
+            sum += inside ? load_face(field, face_index(n, axis, g))
+                          : beyond_component(axis, grid_origin() + face_position(axis, g) * grid_h());
         }
     // (u0 + α·sum) / (1 + 6α) as u0·(1 − 6w) + sum·w with w = 1 / (6 + 1/α), finite for every α: a huge
     // viscosity (α·sum past a float) gives the neighbours' mean, not inf / inf.

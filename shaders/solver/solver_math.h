@@ -78,6 +78,16 @@ GUST_INLINE uint open_sides_for(vec3 ambient) {
     return bits;
 }
 
+/// The open sides of a cascade nested in a coarser one: every side is held at the coarser wind (so the flux
+/// through each matches the coarser cascade's) but the one the ambient wind leaves through along its largest
+/// component, which stays open (φ = 0) to carry the difference; without an ambient wind every side is open.
+GUST_INLINE uint nested_open_sides(vec3 ambient) {
+    vec3 a = abs(ambient);
+    if (!(max(a.x, max(a.y, a.z)) > 0.0f)) return 63u;
+    uint axis = a.x >= a.y && a.x >= a.z ? 0u : a.y >= a.z ? 1u : 2u;
+    return 1u << (2u * axis + (ambient[axis] > 0.0f ? 1u : 0u));
+}
+
 // ---- Emitters ------------------------------------------------------------------------------------------
 
 /// (1 - d/r)^p inside the radius, 0 outside (p = 0: uniform).

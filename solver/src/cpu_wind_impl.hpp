@@ -29,7 +29,6 @@ struct HostKernels {
     ivec3 grid_dims() const { return dims; }
     float grid_h() const { return h; }
     vec3 grid_origin() const { return origin; }
-    vec3 grid_ambient() const { return ambient; }
     uint grid_open_sides() const { return open_sides; }
     float load_face(uint field, int index) const { return face[field][std::size_t(index)]; }
     float load_weight(int index) const { return weights[std::size_t(index)]; }
@@ -41,6 +40,13 @@ struct HostKernels {
     uint emitter_count() const { return uint(emitters.size()); }
     uint omni_count() const { return omni; }
     GpuEmitter load_emitter(uint i) const { return emitters[i]; }
+    /// CpuWind is one grid, not a nest of cascades: the ambient wind lies beyond it.
+    float beyond_component(uint axis, vec3) const { return ambient[int(axis)]; }
+    float border_relaxation(uint, ivec3) const { return 0.0f; }
+    bool inner_face(uint, ivec3, float& u) const {
+        u = 0.0f;
+        return false;
+    }
 
 #include "solver/solver_kernels.h"
 };

@@ -264,6 +264,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.tolerance = desc.tolerance;
     b.vorticity_strength = desc.vorticity;
     b.smoothing = desc.smoothing;
+    b.current = m.velocity.address();
     std::copy(m.levels.begin(), m.levels.end(), b.level);
     detail::face_masks(desc.voxels_per_cell, b.face_mask);
 
@@ -281,6 +282,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                                  std::bit_cast<std::uint32_t>(1.0f));
         const std::uint32_t all_open = desc.voxels_per_cell * desc.voxels_per_cell;
         ctx.vk().vkCmdFillBuffer(cmd, m.open_counts.handle(), 0, VK_WHOLE_SIZE, all_open * 0x01010101u);
+        // A nested cascade may read these bindings before this solver's first step (couple).
+        gpu::update(ctx, cmd, m.bindings, &b, sizeof(b));
     });
     if (!cleared) return cleared;
     return solver;
@@ -295,6 +298,11 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
     Impl& m = *impl_;
     return upload(ctx_, const_cast<gpu::Buffer&>(m.current_velocity()), faces.data(),
                   faces.size() * sizeof(float));
+}
+
+void WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
+    impl_->b.outer = outer ? outer->impl_->bindings.address() : 0;
+    impl_->b.inner = inner ? inner->impl_->bindings.address() : 0;
 }
 
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
@@ -442,6 +450,7 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     m.b.ambient = ambient_;
     m.put_bindings(ctx_, cmd);
     SolverPush push{};
+    push.nest = m.nest();
     push.bindings = m.bindings.address();
     push.shift = cells;
     push.swap = m.swap;
@@ -458,6 +467,8 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     gpu::barrier(ctx_, cmd);
     m.solids_stale = true;
     origin_ += glm::vec3(cells) * desc_.cell_size;
+    m.b.origin = origin_;
+    m.put_current(ctx_, cmd);
 }
 
 } // namespace gust

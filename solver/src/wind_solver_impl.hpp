@@ -52,6 +52,16 @@ struct WindSolver::Impl : gpu::HostObject {
         gpu::update(ctx, cmd, bindings, &b, sizeof(b));
         gpu::barrier(ctx, cmd);
     }
+    /// SolverPush::nest of this solver's passes.
+    std::uint32_t nest() const {
+        return (b.outer != 0 ? shaderio::kNestOuter : 0u) | (b.inner != 0 ? shaderio::kNestInner : 0u);
+    }
+    /// Records the bindings with `current` at the buffer that now holds the field, for the cascades nested
+    /// with this one (WindSolver::couple), at the end of a step or scroll.
+    void put_current(const gpu::Context& ctx, VkCommandBuffer cmd) {
+        b.current = current_velocity().address();
+        put_bindings(ctx, cmd);
+    }
     /// Records sample.comp in `mode` (shaderio::kSample*) over `count` threads, after the bindings `b` the
     /// caller set.
     void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
@@ -59,6 +69,7 @@ struct WindSolver::Impl : gpu::HostObject {
         put_bindings(ctx, cmd);
         shaderio::SolverPush push{};
         push.bindings = bindings.address();
+        push.nest = nest();
         push.mode = mode;
         push.swap = swap;
         const shaderio::LevelDispatch g = detail::groups_for(count);

@@ -60,7 +60,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     SolverBindings& b = m.b;
     b.origin = origin_;
     b.ambient = ambient_;
-    b.open_sides = shaderio::open_sides_for(ambient_);
+    b.open_sides = b.outer != 0 ? shaderio::nested_open_sides(ambient_) : shaderio::open_sides_for(ambient_);
     b.emitter_count = m.emitter_count;
     b.omni_count = m.omni_count;
     b.tree_nodes = b.tree_masks = b.fragments = b.fragment_count = b.fragment_motion = 0;
@@ -97,6 +97,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     const LevelDispatch face_groups = groups_for(face_count());
     const LevelDispatch cell_groups = groups_for(cell_count());
     SolverPush push{};
+    push.nest = m.nest();
     push.bindings = m.bindings.address();
     push.dt = dt;
     auto run = [&](const gpu::Pipeline& p, LevelDispatch g) {
@@ -249,6 +250,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.swap ^= 1u;
     run(m.finish, cell_groups);
     m.profiler.end(cmd);
+    m.put_current(ctx_, cmd);
     last_dt_ = dt;
     m.has_guess = true;
 }

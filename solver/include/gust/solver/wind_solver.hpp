@@ -150,6 +150,14 @@ class WindSolver : public gpu::HostObject {
     /// Before the first step it also sets the air everywhere: a level loads into wind already blowing,
     /// rather than into still air that the first projection must set moving (a large, slow solve).
     Status set_ambient(glm::vec3 velocity);
+    /// Nests this solver among cascades of one focus (docs/solver.md "Cascades"). From its next step, beyond
+    /// its grid it takes the wind of `outer` (the next coarser cascade, and those beyond it) in place of the
+    /// ambient wind: every side held at it but the one the ambient wind leaves through most, which stays open
+    /// (shaderio::nested_open_sides); where `inner` (the next finer cascade) covers a face with at least
+    /// one of this grid's cells inside inner's border, the face takes inner's wind averaged over it in place
+    /// of advection and forces. Either may be null (null, null: one grid again). Each reads the other's
+    /// field as its last step or scroll left it; both outlive the coupling.
+    void couple(const WindSolver* outer, const WindSolver* inner);
     /// Replaces the emitters (at most 64). Rejected whole when any is invalid.
     Status set_emitters(std::span<const Emitter> emitters);
     /// Moves the grid by whole cells (origin += cells · cell_size): overlapping faces keep their
