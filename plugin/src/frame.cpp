@@ -58,14 +58,60 @@ Outcome Frame::create_texture() {
     return {};
 }
 
-Outcome Frame::scroll_for(glm::vec3 focus, glm::ivec3& cells) const {
+Outcome Frame::scroll_for(const WindSolver& solver, glm::vec3 focus, glm::ivec3& cells) {
     // Follow the focus in whole cells: the wind scrolls, the voxel grid moves with it.
-    const SolverDesc& d = solver_->desc();
+    const SolverDesc& d = solver.desc();
     const glm::vec3 wanted = focus - 0.5f * glm::vec3(d.cells) * d.cell_size;
-    const glm::vec3 shift = glm::round((wanted - solver_->origin()) / d.cell_size);
+    const glm::vec3 shift = glm::round((wanted - solver.origin()) / d.cell_size);
     if (glm::any(glm::greaterThan(glm::abs(shift), glm::vec3(kMaxScrollCells + 1.0f))))
         return Outcome(ErrorCode::InvalidArgument, "the focus moved more than a million cells in one step");
     cells = glm::ivec3(shift);
+    return {};
+}
+
+Cascade* Frame::next_cascade(float dt) {
+    // Cascade k steps every ratio^k frames with that many frames' time, so every cascade runs at the same
+    // CFL number; when two are due in one frame, the most overdue goes first and the other waits a frame
+    // (docs/solver.md, "Cascades").
+    Cascade* due = nullptr;
+    for (Cascade& c : coarser_) {
+        ++c.waited;
+        c.seconds += dt;
+        if (c.waited >= c.period && (!due || c.waited * due->period > due->waited * c.period)) due = &c;
+    }
+    return due;
+}
+
+Outcome Frame::record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascade& c, FrameSlot& slot) {
+    glm::ivec3 shift;
+    if (Outcome o = scroll_for(*c.solver, in.focus, shift); !o) return o;
+    if (shift != glm::ivec3(0)) {
+        c.solver->record_scroll(cmd, shift);
+        if (Status s = c.world->move_grid(c.solver->origin()); !s) return device_failure(s);
+    }
+    if (c.static_stale) c.world->set_static(static_set_);
+    // A moving instance goes only into the cascades where it spans a voxel: a character is not voxelized
+    // into cells of 32 m.
+    moving_.clear();
+    for (const GpuInstance& instance : in.dynamic) {
+        const MeshSizes& sizes = instance.mesh->sizes();
+        const glm::vec3 extent = glm::max(sizes.hi - sizes.lo, glm::vec3(0.0f));
+        float span = 0.0f;
+        for (int a = 0; a < 3; ++a)
+            span = std::max(span, glm::length(glm::vec3(instance.model[a])) * extent[a]);
+        if (span >= c.voxel_size) moving_.push_back(instance);
+    }
+    // The instances' motion is over this frame's dt; the cascade's step spans the frames it waited.
+    if (Status s = c.world->record(cmd, moving_, in.dt); !s) return device_failure(s);
+    const SolidSource solid = solid_source(*c.world);
+    const float dt = std::min(c.seconds, kMaxStep);
+    if (Status s = c.solver->record_step(cmd, dt, &solid); !s) return device_failure(s);
+    c.world->record_readback(cmd, slot.readback.handle(), ReadbackLayout::cascade_world());
+    c.solver->record_readback(cmd, slot.readback.handle(), ReadbackLayout::cascade_wind());
+    c.static_stale = false;
+    c.waited = 0;
+    c.seconds = 0.0f;
+    slot.cascade = int(&c - coarser_.data());
     return {};
 }
 
@@ -95,6 +141,15 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     // comes before this frame's work; then the meshes posed from bones are skinned into their positions.
     gpu::barrier(*ctx_, cmd);
     world_->record_skinning(cmd, in.dynamic);
+    // The coarser cascade whose turn it is, before the finest, which then reads its newest wind.
+    slot.cascade = -1;
+    if (in.fixed && !coarser_.empty()) {
+        static_set_.assign(in.fixed->begin(), in.fixed->end());
+        for (Cascade& c : coarser_)
+            c.static_stale = true;
+    }
+    if (Cascade* c = next_cascade(in.dt))
+        if (Outcome o = record_cascade(cmd, in, *c, slot); !o) return o;
     // Scroll: the wind moves in whole cells and the voxel grid follows the solver's origin.
     if (in.shift != glm::ivec3(0)) {
         solver_->record_scroll(cmd, in.shift);
@@ -148,6 +203,17 @@ Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, Frame
     if (!world) return device_failure(world.status());
     WindStats wind = solver_->stats_from(bytes + ReadbackLayout::wind());
     wind.ms = solver_->timings(slot.frame);
+    if (slot.cascade >= 0) {
+        // A coarser cascade's pools grow as the finest one's do; its stats stay its own, but a diverged
+        // solve there is said.
+        const Cascade& c = coarser_[std::size_t(slot.cascade)];
+        if (auto coarse = c.world->collect(bytes + ReadbackLayout::cascade_world()); !coarse)
+            return device_failure(coarse.status());
+        if (c.solver->stats_from(bytes + ReadbackLayout::cascade_wind()).diverged)
+            log(LogLevel::Warning, "cascade " + std::to_string(slot.cascade + 1) +
+                                       ": the pressure solve diverged and was stopped, so its wind was not "
+                                       "projected (docs/solver.md, \"Stability\")");
+    }
     answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
     stats_from(*world, wind, work, stats);
     return {};

@@ -21,7 +21,10 @@ namespace gust::detail {
 struct ReadbackLayout {
     static constexpr std::size_t world = 0;
     static std::size_t wind() { return world + VoxelWorld::readback_bytes(); }
-    static std::size_t answers() { return (wind() + WindSolver::readback_bytes() + 15) / 16 * 16; }
+    /// The counters of the coarser cascade the frame stepped, if any (FrameSlot::cascade).
+    static std::size_t cascade_world() { return wind() + WindSolver::readback_bytes(); }
+    static std::size_t cascade_wind() { return cascade_world() + VoxelWorld::readback_bytes(); }
+    static std::size_t answers() { return (cascade_wind() + WindSolver::readback_bytes() + 15) / 16 * 16; }
     /// Bytes for a frame asking `points` points (at least one, so the buffer always exists).
     static std::size_t bytes(std::size_t points) {
         return answers() + (points > 0 ? points : 1) * 3 * sizeof(float);
@@ -31,6 +34,7 @@ struct ReadbackLayout {
 /// What the engine set for the frame, gathered by System without changing its own state.
 struct FrameInputs {
     float dt = 0.0f;                      ///< seconds, checked by System
+    glm::vec3 focus{0.0f};                ///< where the cascades centre (the coarser ones scroll to it)
     glm::ivec3 shift{0};                  ///< whole cells the domain moves (Frame::scroll_for)
     std::span<const GpuInstance> dynamic; ///< moving and deforming instances, with their last transforms
     const std::pmr::vector<GpuInstance>* fixed = nullptr; ///< the static set when it changed, else null
@@ -47,6 +51,8 @@ struct FrameSlot {
     bool used = false;               ///< a recorded frame's results wait here
     std::uint64_t frame = 0;         ///< the frame they belong to (gpu::Context::begin_frame)
     std::uint64_t dispatches = 0;    ///< dispatches and draws the frame recorded
+    /// The coarser cascade (index into Frame's, from 0 for cascade 1) the frame also stepped; -1: none.
+    int cascade = -1;
     /// SystemDesc::snapshot: the frame's wind texels (8 bytes a cell), and where the domain stood.
     gpu::Buffer snapshot;
     bool snapshot_recorded = false;
@@ -55,14 +61,30 @@ struct FrameSlot {
     std::uint64_t snapshot_frame = 0;
 };
 
+/// A coarser cascade of the nest (docs/solver.md "Cascades"): its voxel world and solver (owned by System),
+/// and when it steps: every `period` frames, with the time waited since its last step.
+struct Cascade {
+    VoxelWorld* world = nullptr;
+    WindSolver* solver = nullptr;
+    std::uint32_t period = 1; ///< frames between its steps: ratio^k for cascade k
+    std::uint32_t waited = 0; ///< frames since its last step
+    float seconds = 0.0f;     ///< their time
+    bool static_stale = true; ///< the static set changed since it last took it
+    float voxel_size = 0.0f;  ///< m: a moving instance smaller than this is not voxelized into it
+};
+
 /// Records frames and collects them. Owns the wind texture (its texels are written once a frame, by the
 /// solver's last pass) and the frame counter; the domain's position is the solver's, which the frame
 /// scrolls and the voxel grid follows.
 class Frame {
   public:
     /// `hooks` (for the log) and the modules outlive the Frame.
-    Frame(gpu::Context& ctx, VoxelWorld& world, WindSolver& solver, const Hooks& hooks)
-        : ctx_(&ctx), world_(&world), solver_(&solver), hooks_(&hooks) {}
+    /// `coarser`: the cascades beyond the finest (`world`, `solver`), next coarser first; the Frame steps at
+    /// most one of them a frame, the most overdue, before the finest.
+    Frame(gpu::Context& ctx, VoxelWorld& world, WindSolver& solver, std::pmr::vector<Cascade> coarser,
+          const Hooks& hooks)
+        : ctx_(&ctx), world_(&world), solver_(&solver), coarser_(std::move(coarser)), hooks_(&hooks),
+          static_set_(coarser_.get_allocator()), moving_(coarser_.get_allocator()) {}
     ~Frame();
     Frame(const Frame&) = delete;
     Frame& operator=(const Frame&) = delete;
@@ -74,8 +96,11 @@ class Frame {
     /// publishes them into `ring` (which outlives the Frame).
     void enable_snapshot(SnapshotRing& ring) { snapshot_ = &ring; }
 
-    /// Whole cells the domain must move to centre on `focus`; fails when that is too far for one step.
-    Outcome scroll_for(glm::vec3 focus, glm::ivec3& cells) const;
+    /// Whole cells the finest cascade must move to centre on `focus`; fails when that is too far for one
+    /// step.
+    Outcome scroll_for(glm::vec3 focus, glm::ivec3& cells) const {
+        return scroll_for(*solver_, focus, cells);
+    }
 
     /// Records a whole frame into `cmd`: inputs, scroll, voxelize, tree, solid, wind (its last pass writes
     /// the texels), outputs (texture copy, async queries), the counters' readback into `slot`. Nothing on
@@ -96,6 +121,11 @@ class Frame {
     std::uint64_t recorded() const { return recorded_; }
 
   private:
+    static Outcome scroll_for(const WindSolver& solver, glm::vec3 focus, glm::ivec3& cells);
+    /// The coarser cascade whose turn it is after a frame of `dt` seconds (null: none), its clock advanced.
+    Cascade* next_cascade(float dt);
+    /// Records the coarser cascade `c`'s scroll, voxels and step into `cmd`, its counters into `slot`.
+    Outcome record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascade& c, FrameSlot& slot);
     void record_texture_copy(VkCommandBuffer cmd);
     void publish_texture();
     void stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
@@ -105,7 +135,11 @@ class Frame {
     gpu::Context* ctx_;
     VoxelWorld* world_;
     WindSolver* solver_;
+    std::pmr::vector<Cascade> coarser_;
     const Hooks* hooks_;
+    /// The static set as last handed over, for the coarser cascades that take it at their next step, and
+    /// the moving instances large enough for the cascade a frame steps.
+    std::pmr::vector<GpuInstance> static_set_, moving_;
     gpu::Buffer texels_; ///< the solver's finish pass writes them; copied into image_
     gpu::Image image_;
     VkSampler sampler_ = VK_NULL_HANDLE;

@@ -294,23 +294,27 @@ inline gust::HostDevice to_cpp(const gust_host_device& c) {
 
 inline gust::WindDomain to_cpp(const gust_wind_domain& c) {
     gust::WindDomain out;
-    auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis] = out;
+    auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis, cascades, ratio] = out;
     std::copy_n(c.cells, 3, cells);
     cell_size = c.cell_size;
     voxels_per_cell = c.voxels_per_cell;
     branching = c.branching;
     focus = to_cpp(c.focus);
     hysteresis = c.hysteresis;
+    cascades = c.cascades;
+    ratio = c.ratio;
     return out;
 }
 inline gust_wind_domain to_c(const gust::WindDomain& d) {
-    const auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis] = d;
+    const auto& [cells, cell_size, voxels_per_cell, branching, focus, hysteresis, cascades, ratio] = d;
     return {.cells = {cells[0], cells[1], cells[2]},
             .cell_size = cell_size,
             .voxels_per_cell = voxels_per_cell,
             .branching = branching,
             .focus = to_c(focus),
-            .hysteresis = hysteresis};
+            .hysteresis = hysteresis,
+            .cascades = cascades,
+            .ratio = ratio};
 }
 
 // The advection and the pressure solver are passed on unchecked: System::create rejects unknown ones.

@@ -158,6 +158,18 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
     if (Outcome o = solver_desc_from(desc, solver_desc); !o) return o;
     const std::uint32_t b = desc.domain.branching;
     if (b != 2 && b != 4 && b != 8) return invalid("domain.branching must be 2, 4 or 8");
+    const std::uint32_t cascades = desc.domain.cascades, ratio = desc.domain.ratio;
+    if (cascades < 1 || cascades > kMaxCascades)
+        return invalid("domain.cascades must be 1.." + std::to_string(kMaxCascades) + ", got " +
+                       std::to_string(cascades));
+    if (ratio != 2 && ratio != 4) return invalid("domain.ratio must be 2 or 4, got " + std::to_string(ratio));
+    const float coarsest = solver_desc.cell_size * std::pow(float(ratio), float(cascades - 1));
+    if (cascades > 1 && !(coarsest <= kMaxCellSize))
+        return invalid("domain.cascades: the coarsest cascade's cells would be " + std::to_string(coarsest) +
+                       " m, more than 1000 m");
+    if (cascades > 1 && desc.snapshot)
+        return invalid("snapshot holds one cascade so far: with domain.cascades > 1 it would answer the "
+                       "ambient wind beyond the finest; leave one of them off");
 
     return guarded([&]() -> Outcome {
         // The System first, so that a failed allocation of either frees what came before.
@@ -197,7 +209,39 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         if (!solver) return device_failure(solver.status());
         m.solver = std::move(*solver);
 
-        m.frame.emplace(*m.ctx, *m.world, *m.solver, m.hooks);
+        // The coarser cascades: the same cells, ratio^k times larger, centred on the same focus, each solver
+        // coupled with its neighbours (docs/solver.md, "Cascades").
+        std::pmr::vector<Cascade> coarser(&m.memory);
+        std::uint32_t period = 1;
+        SolverDesc cascade_desc = solver_desc;
+        for (std::uint32_t k = 1; k < cascades; ++k) {
+            period *= ratio;
+            cascade_desc.cell_size *= float(ratio);
+            cascade_desc.origin = m.focus - 0.5f * glm::vec3(cascade_desc.cells) * cascade_desc.cell_size;
+            auto cascade_grid = voxel_grid(cascade_desc, b);
+            if (!cascade_grid) return invalid(cascade_grid.message());
+            world_desc.grid = *cascade_grid;
+            auto cascade_world = VoxelWorld::create(*m.ctx, world_desc);
+            if (!cascade_world) return device_failure(cascade_world.status());
+            auto cascade_solver = WindSolver::create(*m.ctx, cascade_desc);
+            if (!cascade_solver) return device_failure(cascade_solver.status());
+            m.coarse_worlds.push_back(std::move(*cascade_world));
+            m.coarse_solvers.push_back(std::move(*cascade_solver));
+            coarser.push_back({.world = m.coarse_worlds.back().get(),
+                               .solver = m.coarse_solvers.back().get(),
+                               .period = period,
+                               .voxel_size = cascade_desc.cell_size / float(cascade_desc.voxels_per_cell)});
+        }
+        for (std::uint32_t k = 0; k < cascades; ++k) {
+            WindSolver& s = k == 0 ? *m.solver : *m.coarse_solvers[k - 1];
+            const WindSolver* outer = k + 1 < cascades ? m.coarse_solvers[k].get() : nullptr;
+            const WindSolver* inner = k == 0   ? nullptr
+                                      : k == 1 ? m.solver.get()
+                                               : m.coarse_solvers[k - 2].get();
+            s.couple(outer, inner);
+        }
+
+        m.frame.emplace(*m.ctx, *m.world, *m.solver, std::move(coarser), m.hooks);
         if (Outcome o = m.frame->create_texture(); !o) return o;
         if (desc.snapshot) {
             m.snapshot.emplace(m.solver->cell_count(), &m.memory);
@@ -276,6 +320,7 @@ Outcome check_dt(float dt) {
 Outcome System::Impl::record(VkCommandBuffer commands, float dt, FrameSlot& slot) {
     FrameInputs in;
     in.dt = dt;
+    in.focus = focus;
     if (Outcome o = frame->scroll_for(focus, in.shift); !o) return o;
     // Meshes in use cannot be destroyed, so the static set only changes through the instance calls that
     // set static_dirty; VoxelWorld::set_static still compares, so a transform set to its old value

@@ -96,9 +96,9 @@ namespace gust {
 
 struct System::Impl {
     explicit Impl(const Hooks& h)
-        : hooks(h), memory(h), meshes(&memory), instances(&memory),
-          queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
-                                  .ms = FrameStats::Timings(&memory)},
+        : hooks(h), memory(h), coarse_worlds(&memory), coarse_solvers(&memory), meshes(&memory),
+          instances(&memory), queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
+                                                      .ms = FrameStats::Timings(&memory)},
           slots(&memory), blocking(&memory) {}
 
     Hooks hooks;
@@ -108,6 +108,9 @@ struct System::Impl {
     Submission submission = Submission::OwnQueue;
     std::unique_ptr<VoxelWorld> world;
     std::unique_ptr<WindSolver> solver;
+    /// WindDomain::cascades: the cascades beyond the finest (`world`, `solver`), next coarser first.
+    std::pmr::vector<std::unique_ptr<VoxelWorld>> coarse_worlds;
+    std::pmr::vector<std::unique_ptr<WindSolver>> coarse_solvers;
     std::optional<detail::Frame> frame; ///< in the System's own block: no allocation of its own
 
     struct Mesh {

@@ -205,7 +205,10 @@ Outcome System::set_emitters(std::span<const WindEmitter> emitters) {
             out.push_back(Emitter{EmitterType(type), to_glm(e.position), to_glm(e.direction), e.radius,
                                   e.strength, e.falloff, e.length});
         }
+        // Every cascade blows them: a finer one's wind replaces a coarser one's where it covers it.
         if (Status s = impl_->solver->set_emitters(out); !s) return invalid(s.message());
+        for (auto& coarser : impl_->coarse_solvers)
+            if (Status s = coarser->set_emitters(out); !s) return device_failure(s);
         return {};
     });
 }
@@ -214,6 +217,8 @@ Outcome System::set_ambient(const Vec3& velocity) {
     const WriterCall call(*impl_);
     if (!call) return WriterCall::busy("set_ambient");
     if (Status s = impl_->solver->set_ambient(to_glm(velocity)); !s) return invalid(s.message());
+    for (auto& coarser : impl_->coarse_solvers)
+        if (Status s = coarser->set_ambient(to_glm(velocity)); !s) return device_failure(s);
     return {};
 }
 

@@ -20,6 +20,8 @@ SystemDesc system_desc(const SceneDesc& scene) {
     desc.domain.voxels_per_cell = d.voxels_per_cell;
     desc.domain.branching = d.branching;
     desc.domain.hysteresis = d.hysteresis;
+    desc.domain.cascades = d.cascades;
+    desc.domain.ratio = d.ratio;
     // The System centres its domain on the focus: min corner center − cells·cell_size/2, as the scene's.
     desc.domain.focus = {d.center.x, d.center.y, d.center.z};
     const SolverSettings& s = scene.solver;

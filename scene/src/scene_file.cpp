@@ -324,7 +324,9 @@ Transform transform_keys(const json& value, const std::string& at) {
 
 DomainDesc read_domain(const json& value, const std::string& at) {
     object(value, at);
-    allow_keys(value, at, {"center", "cells", "cell_size", "voxels_per_cell", "branching", "hysteresis"});
+    allow_keys(
+        value, at,
+        {"center", "cells", "cell_size", "voxels_per_cell", "branching", "hysteresis", "cascades", "ratio"});
     DomainDesc domain;
     if (const json* v = member(value, "center")) domain.center = vec3(*v, key_path(at, "center"));
     if (const json* v = member(value, "cells")) {
@@ -354,6 +356,14 @@ DomainDesc read_domain(const json& value, const std::string& at) {
     if (const json* v = member(value, "hysteresis")) {
         domain.hysteresis =
             integer(*v, key_path(at, "hysteresis"), 0, std::numeric_limits<std::uint32_t>::max());
+    }
+    if (const json* v = member(value, "cascades"))
+        domain.cascades = integer(*v, key_path(at, "cascades"), 1, 8);
+    if (const json* v = member(value, "ratio")) {
+        const std::string ratio_at = key_path(at, "ratio");
+        const double ratio = number(*v, ratio_at);
+        if (ratio != 2.0 && ratio != 4.0) fail(ratio_at, "must be 2 or 4 (found " + format(ratio) + ")");
+        domain.ratio = static_cast<std::uint32_t>(ratio);
     }
     const float voxel = domain.cell_size / float(domain.voxels_per_cell);
     if (voxel < kMinVoxelSize) {

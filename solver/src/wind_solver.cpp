@@ -8,6 +8,8 @@
 
 namespace gust {
 
+static_assert(kMaxCascades == shaderio::kMaxCascades);
+
 namespace {
 #include "gust_shaders/advect_comp.h"
 #include "gust_shaders/cg_comp.h"

@@ -64,6 +64,8 @@ TEST_F(SceneFile, readsTheDesignExampleAsWritten) {
     EXPECT_EQ(scene.domain.voxels_per_cell, 4u);
     EXPECT_EQ(scene.domain.branching, 4u);
     EXPECT_EQ(scene.domain.hysteresis, 8u) << "default";
+    EXPECT_EQ(scene.domain.cascades, 1u) << "default";
+    EXPECT_EQ(scene.domain.ratio, 4u) << "default";
     expect_vec3(scene.ambient_velocity, {4, 0, 0});
 
     ASSERT_EQ(scene.objects.size(), 2u);
@@ -197,7 +199,7 @@ TEST_F(SceneFile, pressureSolverAndAdvectionNamesMapOntoTheSystemsSettings) {
 TEST_F(SceneFile, describesTheSystemThatRunsIt) {
     const gust::SceneDesc scene = load_ok(R"({
       "domain": {"center": [1, 2, 3], "cells": [16, 8, 24], "cell_size": 0.5, "voxels_per_cell": 2,
-                 "branching": 2, "hysteresis": 3},
+                 "branching": 2, "hysteresis": 3, "cascades": 3, "ratio": 2},
       "solver": {"tolerance": 0.001, "max_cycles": 5, "cycles_per_step": 4, "max_iterations": 100,
                  "vorticity": 0.5, "viscosity": 0.01}})");
     const gust::SystemDesc desc = gust::system_desc(scene);
@@ -208,6 +210,8 @@ TEST_F(SceneFile, describesTheSystemThatRunsIt) {
     EXPECT_EQ(desc.domain.voxels_per_cell, 2u);
     EXPECT_EQ(desc.domain.branching, 2u);
     EXPECT_EQ(desc.domain.hysteresis, 3u);
+    EXPECT_EQ(desc.domain.cascades, 3u);
+    EXPECT_EQ(desc.domain.ratio, 2u);
     EXPECT_EQ(desc.domain.focus.x, 1.0f);
     EXPECT_EQ(desc.domain.focus.y, 2.0f);
     EXPECT_EQ(desc.domain.focus.z, 3.0f);
@@ -501,6 +505,9 @@ INSTANTIATE_TEST_SUITE_P(Files, RejectsBadScene, testing::Values(
              "domain.voxels_per_cell: must be an integer from 1 to 8 (found 0.0)"},
     BadScene{"BranchingThree", R"({"domain": {"branching": 3}})", "domain.branching: must be 2, 4 or 8 (found 3.0)"},
     BadScene{"BranchingSixteen", R"({"domain": {"branching": 16}})", "domain.branching: must be 2, 4 or 8 (found 16.0)"},
+    BadScene{"NoCascades", R"({"domain": {"cascades": 0}})",
+             "domain.cascades: must be an integer from 1 to 8 (found 0.0)"},
+    BadScene{"RatioThree", R"({"domain": {"ratio": 3}})", "domain.ratio: must be 2 or 4 (found 3.0)"},
     BadScene{"NegativeHysteresis", R"({"domain": {"hysteresis": -1}})",
              "domain.hysteresis: must be an integer from 0 to 4294967295 (found -1.0)"},
     BadScene{"CenterTooShort", R"({"domain": {"center": [0, 1]}})",

@@ -37,7 +37,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 7
+#define GUST_VERSION_MINOR 8
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -135,6 +135,8 @@ typedef struct gust_wind_domain {
     uint32_t branching;       ///< the voxel tree's branching per axis: 2, 4 or 8
     gust_vec3 focus;          ///< first centre (player or camera), world m, within 2^19 cells of 0
     uint32_t hysteresis;      ///< steps a tree node stays refined after a moving surface left it (default 8)
+    uint32_t cascades;        ///< nested grids around the focus, 1..8 (default 1: one grid; gust::WindDomain)
+    uint32_t ratio;           ///< cell size from one cascade to the next coarser: 2 or 4 (default 4)
 } gust_wind_domain;
 
 /// How the wind carries itself along (gust::WindAdvection).

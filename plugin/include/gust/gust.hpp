@@ -34,7 +34,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 7;
+inline constexpr std::uint32_t kVersionMinor = 8;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -146,6 +146,13 @@ struct WindDomain {
     /// Steps a tree node stays refined after a moving or deforming surface last reached it (0: coarsened at
     /// the next step); longer keeps the tree steady under surfaces that come and go, at the cost of nodes.
     std::uint32_t hysteresis = 8;
+    /// Nested grids around the focus (docs/solver.md "Cascades"), 1..8: cascade k has `cells` cells of
+    /// cell_size · ratio^k, the finest first. 1: one grid with the ambient wind beyond it. Queries, wind_at
+    /// and query_async answer from the finest cascade that holds the point, blended into the next over its
+    /// last cells; the wind texture, the debug views and write_vdb hold the finest cascade; `snapshot` is
+    /// refused with more than one cascade (it would answer the ambient wind beyond the finest).
+    std::uint32_t cascades = 1;
+    std::uint32_t ratio = 4; ///< cell size from one cascade to the next coarser: 2 or 4
 };
 
 /// How the wind carries itself along (docs/solver.md, "Advection default" under "One step").

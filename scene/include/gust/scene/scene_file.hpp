@@ -89,6 +89,8 @@ struct DomainDesc {
     std::uint32_t voxels_per_cell = 4; ///< voxels per wind cell per axis, 1..8
     std::uint32_t branching = 4;       ///< sparse tree branching per axis: 2, 4 or 8
     std::uint32_t hysteresis = 8;      ///< frames a tree node stays refined after its last fragment
+    std::uint32_t cascades = 1;        ///< nested grids around the centre, 1..8 (gust::WindDomain::cascades)
+    std::uint32_t ratio = 4;           ///< cell size from one cascade to the next coarser: 2 or 4
 };
 
 /// A whole scene file.

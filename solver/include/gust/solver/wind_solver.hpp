@@ -42,6 +42,8 @@ inline constexpr float kMaxCellSize = 1000.0f;
 inline constexpr float kMaxStep = 10.0f;
 /// The fastest ambient wind a solver takes, m/s.
 inline constexpr float kMaxAmbientSpeed = 1e4f;
+/// The most cascades a nest holds (WindSolver::couple).
+inline constexpr std::uint32_t kMaxCascades = 8;
 /// The most emitters a solver takes.
 inline constexpr std::size_t kMaxEmitterCount = 64;
 /// An emitter's largest |strength|, m/s, and largest falloff exponent.
