@@ -10,6 +10,7 @@
 #include <cstring>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <shared_mutex>
@@ -19,6 +20,7 @@ namespace gust::godot {
 namespace {
 
 constexpr char kClass[] = "GustWind";
+const int kTypeTag = 0;                           // its address tags GustWind instances
 constexpr std::int64_t kImageFormatRgbaf = 11;    // Image.FORMAT_RGBAF
 constexpr std::int64_t kTextureFlagFilter = 4;    // Texture3D.FLAG_FILTER: linear, clamped to the edge
 constexpr std::int64_t kPrimitiveTriangles = 4;   // Mesh.PRIMITIVE_TRIANGLES
@@ -38,6 +40,16 @@ struct Skinned {
     bool seen = false;
 };
 
+// What the readers share with the node: the host, whose System answers sample() from any thread, and the
+// ambient wind answered before the first step. A GustSampler holds it too, so it outlives a freed node (whose
+// System is destroyed first: a sampler then answers the ambient wind).
+struct Shared {
+    // Readers hold it shared; recreating or destroying the System holds it exclusively.
+    std::shared_mutex mutex;
+    integration::WindHost host;
+    Vec3 ambient{};
+};
+
 struct Wind {
     godot_object* owner = nullptr;
     integration::WindHostConfig config;
@@ -45,9 +57,8 @@ struct Wind {
     std::string material_group = "gust_wind_materials";
     bool auto_step = true;
     bool dirty = true; // the System is (re)created at the next step
-    // Readers (wind_at, sample from any thread) hold it shared; recreating the System holds it exclusively.
-    mutable std::shared_mutex host_mutex;
-    integration::WindHost host;
+    std::shared_ptr<Shared> shared = std::make_shared<Shared>();
+    integration::WindHost& host = shared->host;
     std::set<std::uint64_t> reported;         // nodes and meshes already logged about, once each
     std::map<std::uint64_t, Skinned> skinned; // by MeshInstance
     // Skinned meshes are per node: their keys have the top bit set, apart from Godot's instance ids
@@ -87,7 +98,7 @@ template <class F> void set_config(Wind& w, F change) {
         error("GustWind." + message + " (the previous value is kept)", "GustWind");
         return;
     }
-    std::unique_lock lock(w.host_mutex);
+    std::unique_lock lock(w.shared->mutex);
     w.config = next;
     w.dirty = true;
 }
@@ -135,8 +146,9 @@ void set_ambient(godot_object*, void*, void* u, godot_variant* v) {
     }
     {
         // Readers answer the ambient wind before the first step: they read it under the lock.
-        std::unique_lock lock(w.host_mutex);
+        std::unique_lock lock(w.shared->mutex);
         w.config.ambient = next.ambient;
+        w.shared->ambient = next.ambient;
     }
     if (Outcome o = w.host.set_ambient(next.ambient); !o) {
         report(w, o.message());
@@ -578,7 +590,7 @@ bool tick(Wind& w, double dt) {
         float m[16];
         to_column_major(call(w.owner, "Spatial", "get_global_transform").as_transform(), m);
         w.config.focus = {m[12], m[13], m[14]};
-        std::unique_lock lock(w.host_mutex);
+        std::unique_lock lock(w.shared->mutex);
         Hooks hooks;
         hooks.log = [](void*, LogLevel level, const char* message) {
             if (level == LogLevel::Error) {
@@ -628,31 +640,31 @@ godot_variant m_step(godot_object*, void*, void* u, int argc, godot_variant** ar
 
 godot_variant m_exit_tree(godot_object*, void*, void* u, int, godot_variant**) {
     Wind& w = self(u);
-    std::unique_lock lock(w.host_mutex);
+    std::unique_lock lock(w.shared->mutex);
     w.host.destroy();
     w.dirty = true;
     return Var().release();
 }
 
-godot_variant m_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
-    Wind& w = self(u);
+// The wind at one Vector3 argument, from any thread.
+godot_variant wind_at(Shared& shared, const char* what, int argc, godot_variant** argv) {
     if (argc != 1 || core->godot_variant_get_type(argv[0]) != GODOT_VARIANT_TYPE_VECTOR3) {
-        error("GustWind.wind_at takes one Vector3", "GustWind");
+        error(std::string(what) + ".wind_at takes one Vector3", what);
         return Var(to_vector3(0, 0, 0)).release();
     }
     const Vec3 p = to_vec3(core->godot_variant_as_vector3(argv[0]));
     Vec3 v{};
-    std::shared_lock lock(w.host_mutex);
-    w.host.sample({&p, 1}, {&v, 1}, w.config.ambient);
+    std::shared_lock lock(shared.mutex);
+    shared.host.sample({&p, 1}, {&v, 1}, shared.ambient);
     return Var(to_vector3(v.x, v.y, v.z)).release();
 }
 
-godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
-    Wind& w = self(u);
+// The wind at each point of one PoolVector3Array argument, from any thread.
+godot_variant sample(Shared& shared, const char* what, int argc, godot_variant** argv) {
     godot_pool_vector3_array out;
     core->godot_pool_vector3_array_new(&out);
     if (argc != 1 || core->godot_variant_get_type(argv[0]) != GODOT_VARIANT_TYPE_POOL_VECTOR3_ARRAY) {
-        error("GustWind.sample takes one PoolVector3Array", "GustWind");
+        error(std::string(what) + ".sample takes one PoolVector3Array", what);
     } else {
         godot_pool_vector3_array in = core->godot_variant_as_pool_vector3_array(argv[0]);
         const godot_int n = core->godot_pool_vector3_array_size(&in);
@@ -666,8 +678,8 @@ godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** 
         core->godot_pool_vector3_array_read_access_destroy(r);
         core->godot_pool_vector3_array_destroy(&in);
         {
-            std::shared_lock lock(w.host_mutex);
-            w.host.sample(points, velocities, w.config.ambient);
+            std::shared_lock lock(shared.mutex);
+            shared.host.sample(points, velocities, shared.ambient);
         }
         core->godot_pool_vector3_array_resize(&out, n);
         godot_pool_vector3_array_write_access* wa = core->godot_pool_vector3_array_write(&out);
@@ -682,6 +694,14 @@ godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** 
     core->godot_variant_new_pool_vector3_array(&result, &out);
     core->godot_pool_vector3_array_destroy(&out);
     return result;
+}
+
+godot_variant m_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    return wind_at(*self(u).shared, kClass, argc, argv);
+}
+
+godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    return sample(*self(u).shared, kClass, argc, argv);
 }
 
 godot_variant m_get_steps(godot_object*, void*, void* u, int, godot_variant**) {
@@ -706,6 +726,51 @@ godot_variant m_get_world_to_texture(godot_object*, void*, void* u, int, godot_v
     return Var(self(u).world_to_texture).release();
 }
 
+// GustSampler (Reference): a reader of one GustWind for one thread. Godot 3.2 records the method a
+// NativeScript instance runs in the instance itself (in builds with DEBUG_ENABLED, such as Debian's), so two
+// threads calling the same instance at once race there and crash Godot; a thread other than the main one
+// samples through its own GustSampler (docs/godot.md "Threading").
+constexpr char kSamplerClass[] = "GustSampler";
+
+struct Sampler {
+    std::shared_ptr<Shared> shared;
+};
+
+Sampler& sampler(void* user) {
+    return *static_cast<Sampler*>(user);
+}
+
+godot_variant m_sampler_set_wind(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    void* wind = argc == 1 && core->godot_variant_get_type(argv[0]) == GODOT_VARIANT_TYPE_OBJECT
+                     ? userdata_if(core->godot_variant_as_object(argv[0]), &kTypeTag)
+                     : nullptr;
+    if (wind == nullptr) {
+        error("GustSampler.set_wind takes a GustWind", kSamplerClass);
+        return Var(false).release();
+    }
+    sampler(u).shared = self(wind).shared;
+    return Var(true).release();
+}
+
+godot_variant m_sampler_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    Sampler& s = sampler(u);
+    if (!s.shared) {
+        error("GustSampler has no GustWind (set_wind)", kSamplerClass);
+        return Var(to_vector3(0, 0, 0)).release();
+    }
+    return wind_at(*s.shared, kSamplerClass, argc, argv);
+}
+
+godot_variant m_sampler_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    Sampler& s = sampler(u);
+    if (!s.shared) {
+        error("GustSampler has no GustWind (set_wind)", kSamplerClass);
+        Shared none;
+        return sample(none, kSamplerClass, argc, argv);
+    }
+    return sample(*s.shared, kSamplerClass, argc, argv);
+}
+
 } // namespace
 
 void register_gust_wind(void* handle) {
@@ -716,8 +781,17 @@ void register_gust_wind(void* handle) {
         return w;
     };
     godot_instance_destroy_func destroy{};
-    destroy.destroy_func = [](godot_object*, void*, void* u) { delete static_cast<Wind*>(u); };
+    destroy.destroy_func = [](godot_object*, void*, void* u) {
+        auto* w = static_cast<Wind*>(u);
+        {
+            // A GustSampler may hold the shared state longer: the System goes with the node.
+            std::unique_lock lock(w->shared->mutex);
+            w->host.destroy();
+        }
+        delete w;
+    };
     nativescript->godot_nativescript_register_class(handle, kClass, "Spatial", create, destroy);
+    nativescript11->godot_nativescript_set_type_tag(handle, kClass, &kTypeTag);
 
     register_property(handle, kClass, "cells", Var(to_vector3(32, 16, 32)), GODOT_PROPERTY_HINT_NONE, "",
                       set_cells, get_cells);
@@ -748,6 +822,16 @@ void register_gust_wind(void* handle) {
     register_method(handle, kClass, "get_device_name", m_get_device_name);
     register_method(handle, kClass, "get_wind_texture", m_get_wind_texture);
     register_method(handle, kClass, "get_world_to_texture", m_get_world_to_texture);
+
+    godot_instance_create_func create_sampler{};
+    create_sampler.create_func = [](godot_object*, void*) -> void* { return new Sampler; };
+    godot_instance_destroy_func destroy_sampler{};
+    destroy_sampler.destroy_func = [](godot_object*, void*, void* u) { delete static_cast<Sampler*>(u); };
+    nativescript->godot_nativescript_register_class(handle, kSamplerClass, "Reference", create_sampler,
+                                                    destroy_sampler);
+    register_method(handle, kSamplerClass, "set_wind", m_sampler_set_wind);
+    register_method(handle, kSamplerClass, "wind_at", m_sampler_wind_at);
+    register_method(handle, kSamplerClass, "sample", m_sampler_sample);
 }
 
 } // namespace gust::godot
