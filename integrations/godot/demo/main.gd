@@ -1,5 +1,7 @@
-# gust's Godot demo, built in code: a ground, a box, a box that circles, a fan (a GustEmitter) and a meadow of
-# grass quads whose shader bends by GustWind's texture. Command-line options after "--":
+# gust's Godot demo, built in code: a ground, a box, a box that circles, a fan (a GustEmitter), a meadow of
+# grass quads and a few trees whose shaders bend by GustWind's texture, and a character walking through them: a
+# skinned mesh on a Skeleton whose legs and arms swing, an obstacle gust poses from its bones. The box circles and
+# the character walks while the wind is on. Command-line options after "--":
 #   --frames N        quit after N frames (0: run until closed)
 #   --wind on|off     start with the wind on (ambient breeze, fan, circling box) or off
 #   --screenshot P    write the last frame to P (PNG; needs a window: godot3-runner)
@@ -15,6 +17,8 @@ const GustEmitter = preload("res://addons/gust/gust_emitter.gdns")
 var wind
 var fan
 var mover
+var walker
+var walker_skeleton
 var frames = 0
 var max_frames = 0
 var wind_on = true
@@ -90,6 +94,19 @@ func build_scene():
 	grass.material_override = material
 	grass.add_to_group("gust_wind_materials")
 	add_child(grass)
+	var trunk_material = ShaderMaterial.new()
+	trunk_material.shader = load("res://tree.shader")
+	trunk_material.set_shader_param("colour", Color(0.4, 0.27, 0.15))
+	var crown_material = ShaderMaterial.new()
+	crown_material.shader = trunk_material.shader
+	var tree_mesh = tree(trunk_material, crown_material)
+	for position in [Vector3(-6, 0, -5), Vector3(-3.5, 0, -6.2), Vector3(4.5, 0, -5.5), Vector3(6.2, 0, -2.5), Vector3(-6.5, 0, 1), Vector3(6, 0, 3.5)]:
+		var node = MeshInstance.new()
+		node.mesh = tree_mesh
+		node.translation = position
+		node.add_to_group("gust_wind_materials")
+		add_child(node)
+	build_walker()
 	var camera = Camera.new()
 	camera.translation = Vector3(0, 7, 11)
 	camera.rotation_degrees = Vector3(-32, 0, 0)
@@ -97,6 +114,82 @@ func build_scene():
 	var sun = DirectionalLight.new()
 	sun.rotation_degrees = Vector3(-50, 30, 0)
 	add_child(sun)
+
+# A tree as one mesh with its base at the origin: a trunk (cylinder) and a crown (sphere), each a surface with
+# its material, both bent by tree.shader.
+func tree(trunk_material, crown_material):
+	var mesh = ArrayMesh.new()
+	var trunk = CylinderMesh.new()
+	trunk.top_radius = 0.1
+	trunk.bottom_radius = 0.16
+	trunk.height = 2.4
+	var crown = SphereMesh.new()
+	crown.radius = 1.0
+	crown.height = 1.8
+	for part in [[trunk, Vector3(0, 1.2, 0), trunk_material], [crown, Vector3(0, 3.0, 0), crown_material]]:
+		var arrays = part[0].get_mesh_arrays()
+		var vertices = arrays[Mesh.ARRAY_VERTEX]
+		for i in range(vertices.size()):
+			vertices[i] += part[1]
+		arrays[Mesh.ARRAY_VERTEX] = vertices
+		mesh.add_surface_from_arrays(Mesh.PRIMITIVE_TRIANGLES, arrays)
+		mesh.surface_set_material(mesh.get_surface_count() - 1, part[2])
+	return mesh
+
+# The walker's bones: name, parent, rest position (relative to the parent), and its boxes: bone, size, centre
+# (in the bind pose, the skeleton's space).
+const BONES = [["hips", -1, Vector3(0, 0.95, 0)], ["torso", 0, Vector3(0, 0.05, 0)], ["leg_l", 0, Vector3(-0.15, 0, 0)], ["leg_r", 0, Vector3(0.15, 0, 0)], ["arm_l", 1, Vector3(-0.36, 0.6, 0)], ["arm_r", 1, Vector3(0.36, 0.6, 0)]]
+const PARTS = [[1, Vector3(0.55, 0.65, 0.3), Vector3(0, 1.33, 0)], [1, Vector3(0.3, 0.3, 0.3), Vector3(0, 1.85, 0)], [2, Vector3(0.22, 0.95, 0.22), Vector3(-0.15, 0.475, 0)], [3, Vector3(0.22, 0.95, 0.22), Vector3(0.15, 0.475, 0)], [4, Vector3(0.16, 0.65, 0.16), Vector3(-0.36, 1.3, 0)], [5, Vector3(0.16, 0.65, 0.16), Vector3(0.36, 1.3, 0)]]
+
+# A character built in code: a Skeleton of six bones, a skinned mesh of boxes (each box's vertices on one bone,
+# weight 1) with a Skin binding bone i to the inverse of its rest, in the obstacle group.
+func build_walker():
+	walker_skeleton = Skeleton.new()
+	var skin = Skin.new()
+	var global_rests = []
+	for i in range(BONES.size()):
+		walker_skeleton.add_bone(BONES[i][0])
+		walker_skeleton.set_bone_parent(i, BONES[i][1])
+		walker_skeleton.set_bone_rest(i, Transform(Basis(), BONES[i][2]))
+		var origin = BONES[i][2] + (global_rests[BONES[i][1]] if BONES[i][1] >= 0 else Vector3())
+		global_rests.append(origin)
+		skin.add_bind(i, Transform(Basis(), -origin))
+	var st = SurfaceTool.new()
+	st.begin(Mesh.PRIMITIVE_TRIANGLES)
+	for part in PARTS:
+		var h = part[1] / 2
+		var corners = []
+		for c in range(8):
+			corners.append(part[2] + Vector3(h.x if c & 1 else -h.x, h.y if c & 2 else -h.y, h.z if c & 4 else -h.z))
+		for q in [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]:
+			for c in [0, 2, 1, 0, 3, 2]:
+				st.add_bones(PoolIntArray([part[0], 0, 0, 0]))
+				st.add_weights(PoolRealArray([1.0, 0.0, 0.0, 0.0]))
+				st.add_vertex(corners[q[c]])
+	st.generate_normals()
+	var material = SpatialMaterial.new()
+	material.albedo_color = Color(0.85, 0.45, 0.2)
+	st.set_material(material)
+	walker = MeshInstance.new()
+	walker.mesh = st.commit()
+	walker.skin = skin
+	walker.add_to_group("gust_obstacles")
+	walker_skeleton.add_child(walker)
+	add_child(walker_skeleton)
+	walk(0.0)
+
+# The walker at time t (s): along an ellipse through the meadow (about 1 m/s, from its front edge), legs
+# and arms swinging.
+func walk(t):
+	var angle = 0.5 * PI - 0.25 * t
+	var position = Vector3(4.5 * cos(angle), 0, 3.5 * sin(angle))
+	var ahead = Vector3(-4.5 * sin(angle), 0, 3.5 * cos(angle)) * -1.0
+	walker_skeleton.transform = Transform(Basis(Vector3.UP, atan2(ahead.x, ahead.z)), position)
+	var swing = 0.5 * sin(5.0 * t)
+	walker_skeleton.set_bone_pose(2, Transform(Basis(Vector3.RIGHT, swing), Vector3()))
+	walker_skeleton.set_bone_pose(3, Transform(Basis(Vector3.RIGHT, -swing), Vector3()))
+	walker_skeleton.set_bone_pose(4, Transform(Basis(Vector3.RIGHT, -0.8 * swing), Vector3()))
+	walker_skeleton.set_bone_pose(5, Transform(Basis(Vector3.RIGHT, 0.8 * swing), Vector3()))
 
 func set_wind(on):
 	wind_on = on
@@ -107,6 +200,7 @@ func _physics_process(delta):
 	if wind_on:
 		var t = frames / 60.0
 		mover.translation = Vector3(3 * cos(t), 0.5, 3 * sin(t))
+		walk(t)
 
 func _process(_delta):
 	frames += 1

@@ -4,9 +4,13 @@
 #include "nodes.hpp"
 #include "wind_host.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <iterator>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <shared_mutex>
@@ -16,11 +20,35 @@ namespace gust::godot {
 namespace {
 
 constexpr char kClass[] = "GustWind";
-constexpr std::int64_t kImageFormatRgbaf = 11;  // Image.FORMAT_RGBAF
-constexpr std::int64_t kTextureFlagFilter = 4;  // Texture3D.FLAG_FILTER: linear, clamped to the edge
-constexpr std::int64_t kPrimitiveTriangles = 4; // Mesh.PRIMITIVE_TRIANGLES
-constexpr std::int64_t kArrayVertex = 0;        // Mesh.ARRAY_VERTEX
-constexpr std::int64_t kArrayIndex = 8;         // Mesh.ARRAY_INDEX
+const int kTypeTag = 0;                           // its address tags GustWind instances
+constexpr std::int64_t kImageFormatRgbaf = 11;    // Image.FORMAT_RGBAF
+constexpr std::int64_t kTextureFlagFilter = 4;    // Texture3D.FLAG_FILTER: linear, clamped to the edge
+constexpr std::int64_t kPrimitiveTriangles = 4;   // Mesh.PRIMITIVE_TRIANGLES
+constexpr std::int64_t kArrayVertex = 0;          // Mesh.ARRAY_VERTEX
+constexpr std::int64_t kArrayBones = 6;           // Mesh.ARRAY_BONES: 4 bone (bind) indices a vertex
+constexpr std::int64_t kArrayWeights = 7;         // Mesh.ARRAY_WEIGHTS: 4 weights a vertex
+constexpr std::int64_t kArrayIndex = 8;           // Mesh.ARRAY_INDEX
+constexpr std::int64_t kArrayFormatBones = 64;    // Mesh.ARRAY_FORMAT_BONES
+constexpr std::int64_t kArrayFormatWeights = 128; // Mesh.ARRAY_FORMAT_WEIGHTS
+
+// A skinned obstacle's gust mesh and what it was made from (a change of any uploads it again).
+struct Skinned {
+    std::uint64_t mesh = 0, skin = 0, skeleton = 0; // instance ids; skin 0: Godot's default skin
+    std::size_t joints = 0;
+    std::uint64_t key = 0; // WindHost mesh key
+    bool refused = false;  // gust refused it: taken in its rest pose
+    bool seen = false;
+};
+
+// What the readers share with the node: the host, whose System answers sample() from any thread, and the
+// ambient wind answered before the first step. A GustSampler holds it too, so it outlives a freed node (whose
+// System is destroyed first: a sampler then answers the ambient wind).
+struct Shared {
+    // Readers hold it shared; recreating or destroying the System holds it exclusively.
+    std::shared_mutex mutex;
+    integration::WindHost host;
+    Vec3 ambient{};
+};
 
 struct Wind {
     godot_object* owner = nullptr;
@@ -29,10 +57,13 @@ struct Wind {
     std::string material_group = "gust_wind_materials";
     bool auto_step = true;
     bool dirty = true; // the System is (re)created at the next step
-    // Readers (wind_at, sample from any thread) hold it shared; recreating the System holds it exclusively.
-    mutable std::shared_mutex host_mutex;
-    integration::WindHost host;
-    std::set<std::uint64_t> reported; // nodes and meshes already logged about, once each
+    std::shared_ptr<Shared> shared = std::make_shared<Shared>();
+    integration::WindHost& host = shared->host;
+    std::set<std::uint64_t> reported;         // nodes and meshes already logged about, once each
+    std::map<std::uint64_t, Skinned> skinned; // by MeshInstance
+    // Skinned meshes are per node: their keys have the top bit set, apart from Godot's instance ids
+    // (Meshes').
+    std::uint64_t next_skinned_key = std::uint64_t(1) << 63;
     std::string last_error;
     Var texture;
     std::uint32_t texture_extent[3] = {};
@@ -67,7 +98,7 @@ template <class F> void set_config(Wind& w, F change) {
         error("GustWind." + message + " (the previous value is kept)", "GustWind");
         return;
     }
-    std::unique_lock lock(w.host_mutex);
+    std::unique_lock lock(w.shared->mutex);
     w.config = next;
     w.dirty = true;
 }
@@ -115,8 +146,9 @@ void set_ambient(godot_object*, void*, void* u, godot_variant* v) {
     }
     {
         // Readers answer the ambient wind before the first step: they read it under the lock.
-        std::unique_lock lock(w.host_mutex);
+        std::unique_lock lock(w.shared->mutex);
         w.config.ambient = next.ambient;
+        w.shared->ambient = next.ambient;
     }
     if (Outcome o = w.host.set_ambient(next.ambient); !o) {
         report(w, o.message());
@@ -164,8 +196,45 @@ godot_variant get_auto_step(godot_object*, void*, void* u) {
     return Var(self(u).auto_step).release();
 }
 
-// A MeshInstance's triangles in mesh space, every triangle surface of its Mesh in one list.
-bool mesh_triangles(godot_object* mesh, std::vector<float>& positions, std::vector<std::uint32_t>& indices) {
+// Appends a PoolIntArray's or PoolRealArray's numbers to `out`; false for any other Variant.
+template <class T> bool append_numbers(const Var& v, std::vector<T>& out) {
+    if (v.type() == GODOT_VARIANT_TYPE_POOL_INT_ARRAY) {
+        godot_pool_int_array a = core->godot_variant_as_pool_int_array(v.get());
+        const godot_int n = core->godot_pool_int_array_size(&a);
+        godot_pool_int_array_read_access* r = core->godot_pool_int_array_read(&a);
+        const godot_int* p = core->godot_pool_int_array_read_access_ptr(r);
+        out.insert(out.end(), p, p + n);
+        core->godot_pool_int_array_read_access_destroy(r);
+        core->godot_pool_int_array_destroy(&a);
+        return true;
+    }
+    if (v.type() == GODOT_VARIANT_TYPE_POOL_REAL_ARRAY) {
+        godot_pool_real_array a = core->godot_variant_as_pool_real_array(v.get());
+        const godot_int n = core->godot_pool_real_array_size(&a);
+        godot_pool_real_array_read_access* r = core->godot_pool_real_array_read(&a);
+        const godot_real* p = core->godot_pool_real_array_read_access_ptr(r);
+        for (godot_int i = 0; i < n; ++i) {
+            out.push_back(T(p[i]));
+        }
+        core->godot_pool_real_array_read_access_destroy(r);
+        core->godot_pool_real_array_destroy(&a);
+        return true;
+    }
+    return false;
+}
+
+// A Mesh's triangles in mesh space, every triangle surface in one list; with `skinned`, also each vertex's 4
+// bone indices and weights (Godot 3's ARRAY_BONES and ARRAY_WEIGHTS).
+struct MeshArrays {
+    std::vector<float> positions;
+    std::vector<std::uint32_t> indices;
+    std::vector<std::int32_t> joints;
+    std::vector<float> weights;
+};
+
+// Fills `out` from `mesh`; false with the reason in `why` when it has no triangles or (skinned) a triangle
+// surface lacks 4 bone indices and weights a vertex.
+bool read_mesh(godot_object* mesh, bool skinned, MeshArrays& out, std::string& why) {
     const std::int64_t surfaces = call(mesh, "Mesh", "get_surface_count").as_int();
     for (std::int64_t s = 0; s < surfaces; ++s) {
         Var index(s);
@@ -179,7 +248,7 @@ bool mesh_triangles(godot_object* mesh, std::vector<float>& positions, std::vect
             arrays[kArrayVertex].type() != GODOT_VARIANT_TYPE_POOL_VECTOR3_ARRAY) {
             continue;
         }
-        const auto base = std::uint32_t(positions.size() / 3);
+        const auto base = std::uint32_t(out.positions.size() / 3);
         godot_pool_vector3_array verts =
             core->godot_variant_as_pool_vector3_array(arrays[kArrayVertex].get());
         const godot_int nv = core->godot_pool_vector3_array_size(&verts);
@@ -187,40 +256,189 @@ bool mesh_triangles(godot_object* mesh, std::vector<float>& positions, std::vect
         const godot_vector3* vp = core->godot_pool_vector3_array_read_access_ptr(vr);
         for (godot_int i = 0; i < nv; ++i) {
             const Float3 p = to_float3(vp[i]);
-            positions.insert(positions.end(), {p.x, p.y, p.z});
+            out.positions.insert(out.positions.end(), {p.x, p.y, p.z});
         }
         core->godot_pool_vector3_array_read_access_destroy(vr);
         core->godot_pool_vector3_array_destroy(&verts);
-        if (arrays[kArrayIndex].type() == GODOT_VARIANT_TYPE_POOL_INT_ARRAY) {
-            godot_pool_int_array idx = core->godot_variant_as_pool_int_array(arrays[kArrayIndex].get());
-            const godot_int ni = core->godot_pool_int_array_size(&idx);
-            godot_pool_int_array_read_access* ir = core->godot_pool_int_array_read(&idx);
-            const godot_int* ip = core->godot_pool_int_array_read_access_ptr(ir);
-            for (godot_int i = 0; i + 2 < ni; i += 3) {
-                indices.insert(indices.end(), {base + std::uint32_t(ip[i]), base + std::uint32_t(ip[i + 1]),
-                                               base + std::uint32_t(ip[i + 2])});
+        if (skinned) {
+            const std::size_t joints = out.joints.size(), weights = out.weights.size();
+            if (!append_numbers(arrays[kArrayBones], out.joints) ||
+                !append_numbers(arrays[kArrayWeights], out.weights) ||
+                out.joints.size() - joints != 4 * std::size_t(nv) ||
+                out.weights.size() - weights != 4 * std::size_t(nv)) {
+                why = "surface " + std::to_string(s) + " lacks 4 bone indices and 4 weights a vertex";
+                return false;
             }
-            core->godot_pool_int_array_read_access_destroy(ir);
-            core->godot_pool_int_array_destroy(&idx);
-            if (ni > 0) {
-                continue;
+        }
+        std::vector<std::int32_t> idx;
+        if (append_numbers(arrays[kArrayIndex], idx) && !idx.empty()) {
+            for (std::size_t i = 0; i + 2 < idx.size(); i += 3) {
+                out.indices.insert(out.indices.end(),
+                                   {base + std::uint32_t(idx[i]), base + std::uint32_t(idx[i + 1]),
+                                    base + std::uint32_t(idx[i + 2])});
             }
+            continue;
         }
         for (godot_int i = 0; i + 2 < nv; i += 3) {
-            indices.insert(indices.end(), {base + std::uint32_t(i), base + std::uint32_t(i + 1),
-                                           base + std::uint32_t(i + 2)});
+            out.indices.insert(out.indices.end(), {base + std::uint32_t(i), base + std::uint32_t(i + 1),
+                                                   base + std::uint32_t(i + 2)});
         }
     }
-    return !indices.empty();
+    if (out.indices.empty()) {
+        why = "has no triangles";
+        return false;
+    }
+    return true;
 }
 
 std::string node_path(godot_object* node) {
     return call(node, "Node", "get_path").as_string();
 }
 
+Mat4 to_mat4(const Var& transform) {
+    Mat4 m;
+    to_column_major(transform.as_transform(), m.m);
+    return m;
+}
+
+// The Skeleton a MeshInstance's skeleton path leads to, or null.
+godot_object* skeleton_of(godot_object* node) {
+    Var path = call(node, "MeshInstance", "get_skeleton_path");
+    godot_object* target = call(node, "Node", "get_node_or_null", {&path}).object();
+    return is_class(target, "Skeleton") ? target : nullptr;
+}
+
+// True when some surface of an ArrayMesh carries bone indices and weights (PrimitiveMeshes carry none).
+bool has_bone_weights(godot_object* mesh) {
+    if (!is_class(mesh, "ArrayMesh")) {
+        return false;
+    }
+    const std::int64_t surfaces = call(mesh, "Mesh", "get_surface_count").as_int();
+    for (std::int64_t s = 0; s < surfaces; ++s) {
+        Var index(s);
+        const std::int64_t format = call(mesh, "ArrayMesh", "surface_get_format", {&index}).as_int();
+        if ((format & kArrayFormatBones) != 0 && (format & kArrayFormatWeights) != 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The binds of `skin` on `skeleton` (a bind names its bone, or gives its index), or Godot's default skin
+// from the skeleton's rests when the MeshInstance has no Skin. False with the reason in `why`.
+bool skin_binds(godot_object* skin, godot_object* skeleton, std::vector<integration::SkinBind>& binds,
+                std::string& why) {
+    const std::int64_t bones = call(skeleton, "Skeleton", "get_bone_count").as_int();
+    if (skin == nullptr) {
+        std::vector<Mat4> rests(std::size_t(std::max<std::int64_t>(bones, 0)));
+        std::vector<std::int32_t> parents(rests.size());
+        for (std::size_t i = 0; i < rests.size(); ++i) {
+            Var bone{std::int64_t(i)};
+            rests[i] = to_mat4(call(skeleton, "Skeleton", "get_bone_rest", {&bone}));
+            parents[i] = std::int32_t(call(skeleton, "Skeleton", "get_bone_parent", {&bone}).as_int());
+        }
+        if (Outcome o = integration::default_skin(rests, parents, binds); !o) {
+            why = "the skeleton's default skin: " + o.message();
+            return false;
+        }
+        return true;
+    }
+    const std::int64_t count = call(skin, "Skin", "get_bind_count").as_int();
+    binds.assign(std::size_t(std::max<std::int64_t>(count, 0)), {});
+    for (std::size_t i = 0; i < binds.size(); ++i) {
+        Var index{std::int64_t(i)};
+        Var name = call(skin, "Skin", "get_bind_name", {&index});
+        const std::string bone_name = name.as_string();
+        if (bone_name.empty()) {
+            binds[i].bone = std::int32_t(call(skin, "Skin", "get_bind_bone", {&index}).as_int());
+        } else {
+            binds[i].bone = std::int32_t(call(skeleton, "Skeleton", "find_bone", {&name}).as_int());
+            if (binds[i].bone < 0) {
+                why =
+                    "bind " + std::to_string(i) + " names bone '" + bone_name + "', which the skeleton lacks";
+                return false;
+            }
+        }
+        if (binds[i].bone < 0 || binds[i].bone >= bones) {
+            why = "bind " + std::to_string(i) + " follows bone " + std::to_string(binds[i].bone) +
+                  ", the skeleton has " + std::to_string(bones);
+            return false;
+        }
+        binds[i].pose = to_mat4(call(skin, "Skin", "get_bind_pose", {&index}));
+    }
+    return true;
+}
+
+// A skinned MeshInstance: its bind pose and skin uploaded once (again when its Mesh, Skin, Skeleton or bind
+// count changes), its palette from the skeleton's bone poses every frame. False when gust refuses it (the
+// reason is logged once): the caller then takes it in its rest pose.
+bool report_skinned(Wind& w, godot_object* node, std::uint64_t id, godot_object* mesh, godot_object* skeleton,
+                    godot_object* skin) {
+    auto refuse = [&](const std::string& why) {
+        report_once(w, id,
+                    "skinned MeshInstance " + node_path(node) + ": " + why + ": taken in its rest pose");
+        return false;
+    };
+    std::vector<integration::SkinBind> binds;
+    std::string why;
+    if (!skin_binds(skin, skeleton, binds, why)) {
+        return refuse(why);
+    }
+    Skinned now;
+    now.mesh = instance_id(mesh);
+    now.skin = skin != nullptr ? instance_id(skin) : 0;
+    now.skeleton = instance_id(skeleton);
+    now.joints = binds.size();
+    Skinned& s = w.skinned[id];
+    s.seen = true;
+    if (s.mesh != now.mesh || s.skin != now.skin || s.skeleton != now.skeleton || s.joints != now.joints) {
+        s = now;
+        s.seen = true;
+        MeshArrays arrays;
+        if (!read_mesh(mesh, true, arrays, why)) {
+            s.refused = true;
+            return refuse("its Mesh " + why);
+        }
+        integration::SkinnedMeshData data{arrays.positions, arrays.indices, arrays.joints, arrays.weights,
+                                          std::uint32_t(std::min<std::size_t>(binds.size(), 0xffffffffu))};
+        const std::uint64_t key = w.next_skinned_key++;
+        if (Outcome o = w.host.add_skinned_mesh(key, data); !o) {
+            s.refused = true;
+            return refuse(o.message());
+        }
+        s.key = key;
+    }
+    if (s.refused) {
+        return false;
+    }
+    const std::int64_t bones = call(skeleton, "Skeleton", "get_bone_count").as_int();
+    std::vector<Mat4> poses(std::size_t(std::max<std::int64_t>(bones, 0)));
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+        Var bone{std::int64_t(i)};
+        poses[i] = to_mat4(call(skeleton, "Skeleton", "get_bone_global_pose", {&bone}));
+    }
+    std::vector<Mat4> palette;
+    Outcome o = integration::skin_palette(poses, binds, palette);
+    if (o) {
+        o = w.host.set_bones(s.key, palette);
+    }
+    if (!o) {
+        s.refused = true;
+        return refuse(o.message());
+    }
+    if (Outcome r = w.host.report_obstacle(id, s.key, to_mat4(call(node, "Spatial", "get_global_transform")));
+        !r) {
+        report_once(w, id, "MeshInstance " + node_path(node) + ": " + r.message());
+    }
+    return true;
+}
+
 void report_obstacles(Wind& w, godot_object* tree) {
     Var group(w.obstacle_group.c_str());
     w.host.begin_obstacles();
+    for (auto& [id, s] : w.skinned) {
+        s.seen = false;
+    }
     for (const Var& item : array_items(call(tree, "SceneTree", "get_nodes_in_group", {&group}))) {
         godot_object* node = item.object();
         const std::uint64_t id = instance_id(node);
@@ -234,32 +452,45 @@ void report_obstacles(Wind& w, godot_object* tree) {
         if (mesh == nullptr) {
             continue;
         }
-        if (call(node, "MeshInstance", "get_skin").object() != nullptr) {
-            report_once(
-                w, id,
-                "MeshInstance " + node_path(node) +
-                    " is skinned: gust takes it in its rest pose, moved by its node's transform only");
+        godot_object* skin = call(node, "MeshInstance", "get_skin").object();
+        godot_object* skeleton = skeleton_of(node);
+        if (skeleton != nullptr && has_bone_weights(mesh)) {
+            if (report_skinned(w, node, id, mesh, skeleton, skin)) {
+                continue;
+            }
+        } else if (skin != nullptr) {
+            report_once(w, id,
+                        "MeshInstance " + node_path(node) + " has a Skin but " +
+                            (skeleton == nullptr
+                                 ? "its skeleton path '" +
+                                       call(node, "MeshInstance", "get_skeleton_path").as_string() +
+                                       "' leads to no Skeleton"
+                                 : std::string("its Mesh has no bone weights")) +
+                            ": taken in its rest pose");
         }
         const std::uint64_t mesh_key = instance_id(mesh);
         if (!w.host.has_mesh(mesh_key)) {
-            std::vector<float> positions;
-            std::vector<std::uint32_t> indices;
-            if (!mesh_triangles(mesh, positions, indices)) {
-                report_once(w, id, "MeshInstance " + node_path(node) + " has no triangles: ignored");
+            MeshArrays arrays;
+            std::string why;
+            if (!read_mesh(mesh, false, arrays, why)) {
+                report_once(w, id, "MeshInstance " + node_path(node) + " " + why + ": ignored");
                 continue;
             }
-            if (Outcome o = w.host.add_mesh(mesh_key, positions, indices); !o) {
+            if (Outcome o = w.host.add_mesh(mesh_key, arrays.positions, arrays.indices); !o) {
                 report_once(w, id, "MeshInstance " + node_path(node) + ": " + o.message());
                 continue;
             }
         }
-        Mat4 m;
-        to_column_major(call(node, "Spatial", "get_global_transform").as_transform(), m.m);
-        if (Outcome o = w.host.report_obstacle(id, mesh_key, m); !o) {
+        if (Outcome o =
+                w.host.report_obstacle(id, mesh_key, to_mat4(call(node, "Spatial", "get_global_transform")));
+            !o) {
             report_once(w, id, "MeshInstance " + node_path(node) + ": " + o.message());
         }
     }
     w.host.end_obstacles();
+    for (auto it = w.skinned.begin(); it != w.skinned.end();) {
+        it = it->second.seen ? std::next(it) : w.skinned.erase(it);
+    }
 }
 
 void report_emitters(Wind& w) {
@@ -359,7 +590,7 @@ bool tick(Wind& w, double dt) {
         float m[16];
         to_column_major(call(w.owner, "Spatial", "get_global_transform").as_transform(), m);
         w.config.focus = {m[12], m[13], m[14]};
-        std::unique_lock lock(w.host_mutex);
+        std::unique_lock lock(w.shared->mutex);
         Hooks hooks;
         hooks.log = [](void*, LogLevel level, const char* message) {
             if (level == LogLevel::Error) {
@@ -373,6 +604,7 @@ bool tick(Wind& w, double dt) {
             return false;
         }
         w.reported.clear();
+        w.skinned.clear();
     }
     if (!w.host.alive()) {
         return false;
@@ -408,31 +640,31 @@ godot_variant m_step(godot_object*, void*, void* u, int argc, godot_variant** ar
 
 godot_variant m_exit_tree(godot_object*, void*, void* u, int, godot_variant**) {
     Wind& w = self(u);
-    std::unique_lock lock(w.host_mutex);
+    std::unique_lock lock(w.shared->mutex);
     w.host.destroy();
     w.dirty = true;
     return Var().release();
 }
 
-godot_variant m_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
-    Wind& w = self(u);
+// The wind at one Vector3 argument, from any thread.
+godot_variant wind_at(Shared& shared, const char* what, int argc, godot_variant** argv) {
     if (argc != 1 || core->godot_variant_get_type(argv[0]) != GODOT_VARIANT_TYPE_VECTOR3) {
-        error("GustWind.wind_at takes one Vector3", "GustWind");
+        error(std::string(what) + ".wind_at takes one Vector3", what);
         return Var(to_vector3(0, 0, 0)).release();
     }
     const Vec3 p = to_vec3(core->godot_variant_as_vector3(argv[0]));
     Vec3 v{};
-    std::shared_lock lock(w.host_mutex);
-    w.host.sample({&p, 1}, {&v, 1}, w.config.ambient);
+    std::shared_lock lock(shared.mutex);
+    shared.host.sample({&p, 1}, {&v, 1}, shared.ambient);
     return Var(to_vector3(v.x, v.y, v.z)).release();
 }
 
-godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
-    Wind& w = self(u);
+// The wind at each point of one PoolVector3Array argument, from any thread.
+godot_variant sample(Shared& shared, const char* what, int argc, godot_variant** argv) {
     godot_pool_vector3_array out;
     core->godot_pool_vector3_array_new(&out);
     if (argc != 1 || core->godot_variant_get_type(argv[0]) != GODOT_VARIANT_TYPE_POOL_VECTOR3_ARRAY) {
-        error("GustWind.sample takes one PoolVector3Array", "GustWind");
+        error(std::string(what) + ".sample takes one PoolVector3Array", what);
     } else {
         godot_pool_vector3_array in = core->godot_variant_as_pool_vector3_array(argv[0]);
         const godot_int n = core->godot_pool_vector3_array_size(&in);
@@ -446,8 +678,8 @@ godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** 
         core->godot_pool_vector3_array_read_access_destroy(r);
         core->godot_pool_vector3_array_destroy(&in);
         {
-            std::shared_lock lock(w.host_mutex);
-            w.host.sample(points, velocities, w.config.ambient);
+            std::shared_lock lock(shared.mutex);
+            shared.host.sample(points, velocities, shared.ambient);
         }
         core->godot_pool_vector3_array_resize(&out, n);
         godot_pool_vector3_array_write_access* wa = core->godot_pool_vector3_array_write(&out);
@@ -462,6 +694,14 @@ godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** 
     core->godot_variant_new_pool_vector3_array(&result, &out);
     core->godot_pool_vector3_array_destroy(&out);
     return result;
+}
+
+godot_variant m_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    return wind_at(*self(u).shared, kClass, argc, argv);
+}
+
+godot_variant m_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    return sample(*self(u).shared, kClass, argc, argv);
 }
 
 godot_variant m_get_steps(godot_object*, void*, void* u, int, godot_variant**) {
@@ -486,6 +726,51 @@ godot_variant m_get_world_to_texture(godot_object*, void*, void* u, int, godot_v
     return Var(self(u).world_to_texture).release();
 }
 
+// GustSampler (Reference): a reader of one GustWind for one thread. Godot 3.2 records the method a
+// NativeScript instance runs in the instance itself (in builds with DEBUG_ENABLED, such as Debian's), so two
+// threads calling the same instance at once race there and crash Godot; a thread other than the main one
+// samples through its own GustSampler (docs/godot.md "Threading").
+constexpr char kSamplerClass[] = "GustSampler";
+
+struct Sampler {
+    std::shared_ptr<Shared> shared;
+};
+
+Sampler& sampler(void* user) {
+    return *static_cast<Sampler*>(user);
+}
+
+godot_variant m_sampler_set_wind(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    void* wind = argc == 1 && core->godot_variant_get_type(argv[0]) == GODOT_VARIANT_TYPE_OBJECT
+                     ? userdata_if(core->godot_variant_as_object(argv[0]), &kTypeTag)
+                     : nullptr;
+    if (wind == nullptr) {
+        error("GustSampler.set_wind takes a GustWind", kSamplerClass);
+        return Var(false).release();
+    }
+    sampler(u).shared = self(wind).shared;
+    return Var(true).release();
+}
+
+godot_variant m_sampler_wind_at(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    Sampler& s = sampler(u);
+    if (!s.shared) {
+        error("GustSampler has no GustWind (set_wind)", kSamplerClass);
+        return Var(to_vector3(0, 0, 0)).release();
+    }
+    return wind_at(*s.shared, kSamplerClass, argc, argv);
+}
+
+godot_variant m_sampler_sample(godot_object*, void*, void* u, int argc, godot_variant** argv) {
+    Sampler& s = sampler(u);
+    if (!s.shared) {
+        error("GustSampler has no GustWind (set_wind)", kSamplerClass);
+        Shared none;
+        return sample(none, kSamplerClass, argc, argv);
+    }
+    return sample(*s.shared, kSamplerClass, argc, argv);
+}
+
 } // namespace
 
 void register_gust_wind(void* handle) {
@@ -496,8 +781,17 @@ void register_gust_wind(void* handle) {
         return w;
     };
     godot_instance_destroy_func destroy{};
-    destroy.destroy_func = [](godot_object*, void*, void* u) { delete static_cast<Wind*>(u); };
+    destroy.destroy_func = [](godot_object*, void*, void* u) {
+        auto* w = static_cast<Wind*>(u);
+        {
+            // A GustSampler may hold the shared state longer: the System goes with the node.
+            std::unique_lock lock(w->shared->mutex);
+            w->host.destroy();
+        }
+        delete w;
+    };
     nativescript->godot_nativescript_register_class(handle, kClass, "Spatial", create, destroy);
+    nativescript11->godot_nativescript_set_type_tag(handle, kClass, &kTypeTag);
 
     register_property(handle, kClass, "cells", Var(to_vector3(32, 16, 32)), GODOT_PROPERTY_HINT_NONE, "",
                       set_cells, get_cells);
@@ -528,6 +822,16 @@ void register_gust_wind(void* handle) {
     register_method(handle, kClass, "get_device_name", m_get_device_name);
     register_method(handle, kClass, "get_wind_texture", m_get_wind_texture);
     register_method(handle, kClass, "get_world_to_texture", m_get_world_to_texture);
+
+    godot_instance_create_func create_sampler{};
+    create_sampler.create_func = [](godot_object*, void*) -> void* { return new Sampler; };
+    godot_instance_destroy_func destroy_sampler{};
+    destroy_sampler.destroy_func = [](godot_object*, void*, void* u) { delete static_cast<Sampler*>(u); };
+    nativescript->godot_nativescript_register_class(handle, kSamplerClass, "Reference", create_sampler,
+                                                    destroy_sampler);
+    register_method(handle, kSamplerClass, "set_wind", m_sampler_set_wind);
+    register_method(handle, kSamplerClass, "wind_at", m_sampler_wind_at);
+    register_method(handle, kSamplerClass, "sample", m_sampler_sample);
 }
 
 } // namespace gust::godot

@@ -7,7 +7,8 @@
 
 namespace gust::godot {
 
-/// Registers GustWind (Spatial) and GustEmitter (Spatial) with NativeScript.
+/// Registers GustWind (Spatial) with its GustSampler (Reference), and GustEmitter (Spatial), with
+/// NativeScript.
 void register_gust_wind(void* handle);
 void register_gust_emitter(void* handle);
 

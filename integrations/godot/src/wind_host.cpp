@@ -16,7 +16,104 @@ std::string str(float v) {
     return std::to_string(v);
 }
 
+// The inverse of an affine matrix (last row 0, 0, 0, 1); false when its 3x3 part is singular.
+bool affine_inverse(const Mat4& a, Mat4& out) {
+    const float* m = a.m;
+    // Cofactors of the 3x3 part (column-major: element (row r, column c) is m[4c + r]).
+    const float c00 = m[5] * m[10] - m[9] * m[6], c01 = m[9] * m[2] - m[1] * m[10],
+                c02 = m[1] * m[6] - m[5] * m[2];
+    const float c10 = m[8] * m[6] - m[4] * m[10], c11 = m[0] * m[10] - m[8] * m[2],
+                c12 = m[4] * m[2] - m[0] * m[6];
+    const float c20 = m[4] * m[9] - m[8] * m[5], c21 = m[8] * m[1] - m[0] * m[9],
+                c22 = m[0] * m[5] - m[4] * m[1];
+    const float det = m[0] * c00 + m[4] * c01 + m[8] * c02;
+    if (!std::isfinite(det) || std::fabs(det) < 1e-12f) {
+        return false;
+    }
+    const float inv = 1.0f / det;
+    float* o = out.m;
+    o[0] = c00 * inv, o[1] = c01 * inv, o[2] = c02 * inv, o[3] = 0.0f;
+    o[4] = c10 * inv, o[5] = c11 * inv, o[6] = c12 * inv, o[7] = 0.0f;
+    o[8] = c20 * inv, o[9] = c21 * inv, o[10] = c22 * inv, o[11] = 0.0f;
+    for (int r = 0; r < 3; ++r) {
+        o[12 + r] = -(o[r] * m[12] + o[4 + r] * m[13] + o[8 + r] * m[14]);
+    }
+    o[15] = 1.0f;
+    return true;
+}
+
 } // namespace
+
+Mat4 multiply(const Mat4& a, const Mat4& b) {
+    Mat4 out;
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 4; ++r) {
+            float sum = 0.0f;
+            for (int k = 0; k < 4; ++k) {
+                sum += a.m[4 * k + r] * b.m[4 * c + k];
+            }
+            out.m[4 * c + r] = sum;
+        }
+    }
+    return out;
+}
+
+Outcome default_skin(std::span<const Mat4> rests, std::span<const std::int32_t> parents,
+                     std::vector<SkinBind>& binds) {
+    const std::size_t n = rests.size();
+    if (parents.size() != n) {
+        return {ErrorCode::InvalidArgument, "a parent for every bone is needed"};
+    }
+    std::vector<Mat4> global(n);
+    std::vector<char> done(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        // Walk up to the first bone already composed (or a root), then compose down again.
+        std::vector<std::size_t> chain;
+        for (std::size_t b = i; !done[b];) {
+            if (chain.size() > n) {
+                return {ErrorCode::InvalidArgument, "bone " + std::to_string(i) + "'s parents form a cycle"};
+            }
+            chain.push_back(b);
+            const std::int32_t p = parents[b];
+            if (p < 0) {
+                break;
+            }
+            if (std::size_t(p) >= n) {
+                return {ErrorCode::InvalidArgument,
+                        "bone " + std::to_string(b) + "'s parent " + std::to_string(p) + " is no bone"};
+            }
+            b = std::size_t(p);
+        }
+        for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+            const std::int32_t p = parents[*it];
+            global[*it] = p < 0 ? rests[*it] : multiply(global[std::size_t(p)], rests[*it]);
+            done[*it] = 1;
+        }
+    }
+    binds.assign(n, {});
+    for (std::size_t i = 0; i < n; ++i) {
+        binds[i].bone = std::int32_t(i);
+        if (!affine_inverse(global[i], binds[i].pose)) {
+            return {ErrorCode::InvalidArgument, "bone " + std::to_string(i) + "'s rest cannot be inverted"};
+        }
+    }
+    return {};
+}
+
+Outcome skin_palette(std::span<const Mat4> bone_poses, std::span<const SkinBind> binds,
+                     std::vector<Mat4>& palette) {
+    palette.resize(binds.size());
+    for (std::size_t i = 0; i < binds.size(); ++i) {
+        const std::int32_t bone = binds[i].bone;
+        if (bone < 0 || std::size_t(bone) >= bone_poses.size()) {
+            return {ErrorCode::InvalidArgument, "bind " + std::to_string(i) + " follows bone " +
+                                                    std::to_string(bone) + ", not one of the skeleton's " +
+                                                    std::to_string(bone_poses.size())};
+        }
+        palette[i] = multiply(bone_poses[std::size_t(bone)], binds[i].pose);
+    }
+    return {};
+}
 
 std::string validate(const WindHostConfig& config) {
     for (int a = 0; a < 3; ++a) {
@@ -107,7 +204,70 @@ Outcome WindHost::add_mesh(std::uint64_t mesh_key, std::span<const float> positi
     if (Outcome o = system_->create_mesh(desc, id); !o) {
         return o;
     }
-    meshes_[mesh_key] = id;
+    meshes_[mesh_key] = {id, false, false};
+    return {};
+}
+
+Outcome WindHost::add_skinned_mesh(std::uint64_t mesh_key, const SkinnedMeshData& data) {
+    if (!system_) {
+        return {ErrorCode::InvalidHandle, "no wind System (invalid properties)"};
+    }
+    if (data.joint_count < 1 || data.joint_count > kMaxJoints) {
+        return {ErrorCode::InvalidArgument, "a skin of " + std::to_string(data.joint_count) +
+                                                " joints: gust takes 1 to " + std::to_string(kMaxJoints)};
+    }
+    const std::size_t vertices = data.positions.size() / 3;
+    if (data.joints.size() != 4 * vertices || data.weights.size() != 4 * vertices) {
+        return {ErrorCode::InvalidArgument, "4 bone indices and 4 weights a vertex are needed (" +
+                                                std::to_string(vertices) + " vertices, " +
+                                                std::to_string(data.joints.size()) + " indices, " +
+                                                std::to_string(data.weights.size()) + " weights)"};
+    }
+    std::vector<std::uint16_t> joints(data.joints.size());
+    for (std::size_t i = 0; i < joints.size(); ++i) {
+        const std::int32_t j = data.joints[i];
+        // An unused influence may name any joint: Godot pads with bone 0 at weight 0.
+        if (j < 0 || std::uint32_t(j) >= data.joint_count) {
+            if (data.weights[i] != 0.0f) {
+                return {ErrorCode::InvalidArgument, "vertex " + std::to_string(i / 4) + " has bone index " +
+                                                        std::to_string(j) + ", the skin has " +
+                                                        std::to_string(data.joint_count) + " binds"};
+            }
+            joints[i] = 0;
+            continue;
+        }
+        joints[i] = std::uint16_t(j);
+    }
+    MeshSkin skin;
+    skin.joint_count = data.joint_count;
+    skin.joints = joints.data();
+    skin.weights = data.weights.data();
+    MeshDesc desc;
+    desc.positions = data.positions.data();
+    desc.vertex_count = std::uint32_t(vertices);
+    desc.indices = data.indices.data();
+    desc.index_count = std::uint32_t(data.indices.size());
+    desc.deforming = true;
+    desc.skin = &skin;
+    MeshId id = 0;
+    if (Outcome o = system_->create_mesh(desc, id); !o) {
+        return o;
+    }
+    meshes_[mesh_key] = {id, true, false};
+    return {};
+}
+
+Outcome WindHost::set_bones(std::uint64_t mesh_key, std::span<const Mat4> palette) {
+    auto mesh = meshes_.find(mesh_key);
+    if (!system_ || mesh == meshes_.end() || !mesh->second.skinned) {
+        return {ErrorCode::InvalidHandle, "bones set before the skinned mesh was added"};
+    }
+    const bool first = !mesh->second.posed;
+    if (Outcome o = system_->set_bones(mesh->second.id, palette.data(), std::uint32_t(palette.size()), first);
+        !o) {
+        return o;
+    }
+    mesh->second.posed = true;
     return {};
 }
 
@@ -127,7 +287,7 @@ Outcome WindHost::report_obstacle(std::uint64_t key, std::uint64_t mesh_key, con
         o.mesh_key = mesh_key;
         o.transform = transform;
         o.seen = true;
-        if (Outcome r = system_->create_instance(mesh->second, transform, false, o.instance); !r) {
+        if (Outcome r = system_->create_instance(mesh->second.id, transform, false, o.instance); !r) {
             return r;
         }
         obstacles_[key] = o;
@@ -138,11 +298,12 @@ Outcome WindHost::report_obstacle(std::uint64_t key, std::uint64_t mesh_key, con
     if (std::memcmp(o.transform.m, transform.m, sizeof(transform.m)) == 0) {
         return {};
     }
-    if (!o.moving) {
+    if (!o.moving && !mesh->second.skinned) {
         // A static instance that moves would re-voxelize the whole static set every frame and push no air:
         // from its first move on it is a moving instance, already in motion from its last transform.
         InstanceId moving = 0;
-        if (Outcome r = system_->create_moving_instance(mesh->second, transform, o.transform, moving); !r) {
+        if (Outcome r = system_->create_moving_instance(mesh->second.id, transform, o.transform, moving);
+            !r) {
             return r;
         }
         system_->destroy_instance(o.instance);
@@ -151,6 +312,7 @@ Outcome WindHost::report_obstacle(std::uint64_t key, std::uint64_t mesh_key, con
     } else if (Outcome r = system_->set_transform(o.instance, transform); !r) {
         return r;
     }
+    o.moving = true;
     o.transform = transform;
     return {};
 }
@@ -176,7 +338,7 @@ void WindHost::end_obstacles() {
             ++it;
             continue;
         }
-        system_->destroy_mesh(it->second);
+        system_->destroy_mesh(it->second.id);
         it = meshes_.erase(it);
     }
 }

@@ -38,6 +38,40 @@ struct WindField {
     std::uint64_t frame = 0; ///< the snapshot's step (SnapshotInfo::frame)
 };
 
+/// Joints a skin may have: gust's limit for MeshSkin::joint_count.
+constexpr std::uint32_t kMaxJoints = 65536;
+
+/// A skinned mesh as an engine holds it, four influences a vertex (Godot 3's ARRAY_BONES and ARRAY_WEIGHTS,
+/// glTF's JOINTS_0 and WEIGHTS_0): the bind pose, the triangles, and per vertex 4 joints (indices into the
+/// skin's binds, the palette) and 4 weights.
+struct SkinnedMeshData {
+    std::span<const float> positions;       ///< bind pose, float3 a vertex
+    std::span<const std::uint32_t> indices; ///< triangles
+    std::span<const std::int32_t> joints;   ///< 4 a vertex, each < joint_count
+    std::span<const float> weights;         ///< 4 a vertex
+    std::uint32_t joint_count = 0;          ///< the skin's binds: the palette's size, 1..kMaxJoints
+};
+
+/// One bind of a skin: the skeleton's bone it follows and its bind pose (the inverse of the bone's rest in
+/// skeleton space, glTF's inverse bind matrix).
+struct SkinBind {
+    std::int32_t bone = -1;
+    Mat4 pose;
+};
+
+/// The skin Godot makes for a skinned mesh without a Skin resource: bind i follows bone i, its pose the
+/// inverse of bone i's global rest (its rest composed with its parents'). `parents[i]` < 0 marks a root.
+/// Fails (naming the bone) on a parent out of range, a cycle or a rest that cannot be inverted.
+Outcome default_skin(std::span<const Mat4> rests, std::span<const std::int32_t> parents,
+                     std::vector<SkinBind>& binds);
+/// The palette of a skin posed by its skeleton: palette[i] = bone_poses[binds[i].bone] · binds[i].pose,
+/// bind-pose mesh space to the posed mesh in skeleton space (as Godot 3's renderer skins; the skinned
+/// node's own transform then places it in the world). Fails on a bind whose bone is out of range.
+Outcome skin_palette(std::span<const Mat4> bone_poses, std::span<const SkinBind> binds,
+                     std::vector<Mat4>& palette);
+/// a · b (column-major affine or projective 4x4).
+Mat4 multiply(const Mat4& a, const Mat4& b);
+
 /// One gust System plus the bookkeeping a scene graph needs: meshes shared by key, obstacles that turn from
 /// static to moving when their transform changes, obstacles that vanish when the host stops reporting them.
 /// Writer calls (everything but sample and read_field) from one thread; sample and read_field from any.
@@ -56,9 +90,16 @@ class WindHost {
     /// Uploads a static triangle mesh (float3 positions, 32-bit indices) under the host's key.
     Outcome add_mesh(std::uint64_t mesh_key, std::span<const float> positions,
                      std::span<const std::uint32_t> indices);
+    /// Uploads a skinned mesh (MeshDesc::skin, deforming) under the host's key; its pose is the bind pose
+    /// until set_bones. Names the first bad joint index or count.
+    Outcome add_skinned_mesh(std::uint64_t mesh_key, const SkinnedMeshData& data);
+    /// The pose of skinned mesh `mesh_key` for the next step (System::set_bones): one matrix a joint. The
+    /// first after add_skinned_mesh is a jump from the bind pose, pushing no air; later ones are motion.
+    Outcome set_bones(std::uint64_t mesh_key, std::span<const Mat4> palette);
     /// Reports obstacle `key` (a node) with mesh `mesh_key` at `transform` this frame. New obstacles are
     /// static; one whose transform changed since the last report becomes moving from then on, its motion
-    /// since that report pushing air in the next step.
+    /// since that report pushing air in the next step. A skinned mesh's instance moves with its bones and
+    /// its transform from the start (gust voxelizes deforming meshes every step).
     Outcome report_obstacle(std::uint64_t key, std::uint64_t mesh_key, const Mat4& transform);
     /// Removes obstacles not reported since begin_obstacles(), and meshes no obstacle uses any more.
     void end_obstacles();
@@ -82,6 +123,11 @@ class WindHost {
     std::string device_name() const;
 
   private:
+    struct Mesh {
+        MeshId id = 0;
+        bool skinned = false;
+        bool posed = false; ///< set_bones was called since add_skinned_mesh
+    };
     struct Obstacle {
         std::uint64_t mesh_key = 0;
         InstanceId instance = 0;
@@ -91,7 +137,7 @@ class WindHost {
     };
     std::unique_ptr<System> system_;
     WindHostConfig config_;
-    std::map<std::uint64_t, MeshId> meshes_;
+    std::map<std::uint64_t, Mesh> meshes_;
     std::map<std::uint64_t, Obstacle> obstacles_;
     std::uint64_t steps_ = 0;
     double last_step_ms_ = 0.0;

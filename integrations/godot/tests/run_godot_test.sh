@@ -9,7 +9,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 rm -rf "$work" && mkdir -p "$work/project/addons" "$work/home/config" "$work/home/data" "$work/home/cache"
 cp -r "$here/../addons/gust" "$work/project/addons/"
 mkdir -p "$work/project/addons/gust/bin" && cp "$lib" "$work/project/addons/gust/bin/"
-cp "$here/project.godot" "$here"/test_*.gd "$work/project/"
+cp "$here/project.godot" "$here"/*.gd "$work/project/"
 # godot3-server writes its settings and logs under HOME and the XDG folders.
 export HOME="$work/home" XDG_CONFIG_HOME="$work/home/config" XDG_DATA_HOME="$work/home/data" \
   XDG_CACHE_HOME="$work/home/cache" GUST_TEST_OUT="$work/wind.txt" LANG=en_US.UTF-8
@@ -27,7 +27,8 @@ if ! grep -q "^GUST_TEST PASS" "$work/log.txt" || grep -q "^GUST_TEST FAIL" "$wo
 fi
 if [ "$name" = errors ]; then
   # The errors must be in Godot's own log, named clearly.
-  for expected in "GustWind.cell_size = -1" "is a Spatial, not a MeshInstance" "GustWind.cells.x = 4"; do
+  for expected in "GustWind.cell_size = -1" "is a Spatial, not a MeshInstance" "GustWind.cells.x = 4" \
+    "has a Skin but its skeleton path 'nowhere' leads to no Skeleton" "bind 1 follows bone 5"; do
     if ! grep -q "ERROR:.*$expected" "$work/log.txt"; then
       echo "Godot's log lacks an error with \"$expected\"" >&2
       exit 1

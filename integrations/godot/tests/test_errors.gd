@@ -1,6 +1,9 @@
 # Bad values give errors in Godot's log (run_godot_test.sh checks their text) and leave the node working:
-# a negative cell size and too few cells are refused, a Spatial in the obstacle group is skipped.
+# a negative cell size and too few cells are refused, a Spatial in the obstacle group is skipped, and skins gust
+# cannot pose (no Skeleton at the skeleton path, a bind to a bone the skeleton lacks) are taken in their rest pose.
 extends SceneTree
+
+const Figure = preload("res://skinned_figure.gd")
 
 func _initialize():
 	var wind = load("res://addons/gust/gust_wind.gdns").new()
@@ -19,6 +22,15 @@ func _initialize():
 	box.mesh = CubeMesh.new()
 	box.add_to_group("gust_obstacles")
 	root.add_child(box)
+	var lone = MeshInstance.new()
+	lone.mesh = Figure.mesh()
+	lone.skin = Skin.new()
+	lone.skeleton = NodePath("nowhere")
+	lone.add_to_group("gust_obstacles")
+	root.add_child(lone)
+	var bad = Figure.make("gust_obstacles")
+	bad.get_node("Body").skin.set_bind_bone(1, 5)
+	root.add_child(bad)
 	var emitter = load("res://addons/gust/gust_emitter.gdns").new()
 	emitter.radius = -2.0
 	wind.add_child(emitter)
@@ -31,7 +43,7 @@ func _initialize():
 		print("GUST_TEST FAIL: the node stopped working after the bad values")
 	else:
 		print("GUST_TEST PASS")
-	for node in [wind, box]:
+	for node in [wind, box, lone, bad]:
 		root.remove_child(node)
 		node.free()
 	quit()
