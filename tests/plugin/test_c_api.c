@@ -231,7 +231,7 @@ static void fills_the_documented_defaults(void) {
     CHECK(desc.domain.cells[0] == 32 && desc.domain.cells[1] == 16 && desc.domain.cells[2] == 32);
     CHECK(desc.domain.cell_size == 1.0f && desc.domain.voxels_per_cell == 4 && desc.domain.branching == 4);
     CHECK(desc.domain.focus.x == 0.0f && desc.domain.focus.y == 0.0f && desc.domain.focus.z == 0.0f);
-    CHECK(desc.domain.hysteresis == 8);
+    CHECK(desc.domain.hysteresis == 8 && desc.domain.cascades == 1 && desc.domain.ratio == 4);
     CHECK(desc.wind.tolerance == 1e-5f && desc.wind.max_cycles == 32);
     CHECK(desc.wind.pressure == GUST_PRESSURE_MULTIGRID_PCG && desc.wind.max_iterations == 4000);
     CHECK(desc.pipeline_cache == NULL && !desc.snapshot);
