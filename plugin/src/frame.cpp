@@ -141,6 +141,12 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     // comes before this frame's work; then the meshes posed from bones are skinned into their positions.
     gpu::barrier(*ctx_, cmd);
     world_->record_skinning(cmd, in.dynamic);
+    if (rebind_) {
+        solver_->record_bindings(cmd);
+        for (Cascade& c : coarser_)
+            c.solver->record_bindings(cmd);
+        rebind_ = false;
+    }
     // The coarser cascade whose turn it is, before the finest, which then reads its newest wind.
     slot.cascade = -1;
     if (in.fixed && !coarser_.empty()) {

@@ -92,6 +92,10 @@ class Frame {
     /// Creates the wind texture, fills it from the solver's field and binds its texels to every step.
     Outcome create_texture();
 
+    /// The world's origin moved (System::shift_origin): the next frame first records every cascade's
+    /// bindings, so that none reads a neighbour's old origin.
+    void origin_shifted() { rebind_ = true; }
+
     /// SystemDesc::snapshot: from now on every frame copies its texels into its slot, and collect
     /// publishes them into `ring` (which outlives the Frame).
     void enable_snapshot(SnapshotRing& ring) { snapshot_ = &ring; }
@@ -140,6 +144,7 @@ class Frame {
     /// The static set as last handed over, for the coarser cascades that take it at their next step, and
     /// the moving instances large enough for the cascade a frame steps.
     std::pmr::vector<GpuInstance> static_set_, moving_;
+    bool rebind_ = false;
     gpu::Buffer texels_; ///< the solver's finish pass writes them; copied into image_
     gpu::Image image_;
     VkSampler sampler_ = VK_NULL_HANDLE;

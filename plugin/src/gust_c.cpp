@@ -284,6 +284,11 @@ gust_result gust_system_set_focus(gust_system system, gust_vec3 position) {
                      [&](gust::System& s) { return s.set_focus(to_cpp(position)); });
 }
 
+gust_result gust_system_shift_origin(gust_system system, gust_vec3 offset) {
+    return on_system(system, "gust_system_shift_origin",
+                     [&](gust::System& s) { return s.shift_origin(to_cpp(offset)); });
+}
+
 gust_result gust_system_step(gust_system system, float dt) {
     return on_system(system, "gust_system_step", [&](gust::System& s) { return s.step(dt); });
 }

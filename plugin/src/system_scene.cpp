@@ -1,6 +1,7 @@
 // System's scene calls: meshes, instances, emitters, the ambient wind and the focus (include/gust/gust.hpp).
 #include "system_impl.hpp"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <optional>
 #include <string>
 
@@ -236,6 +237,37 @@ Outcome System::set_focus(const Vec3& position) {
                        "steps or create the System at the new place");
     impl_->focus = to_glm(position);
     return {};
+}
+
+Outcome System::shift_origin(const Vec3& offset) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("shift_origin");
+    if (!finite(offset)) return invalid("offset must be finite");
+    Impl& m = *impl_;
+    const glm::vec3 by = to_glm(offset);
+    if (too_far_out(m.focus + by, m.solver_desc.cell_size))
+        return invalid(std::string("the shifted focus ") + kTooFarOut);
+    return guarded([&]() -> Outcome {
+        const glm::mat4 move = glm::translate(glm::mat4(1.0f), by);
+        m.focus += by;
+        for (std::size_t k = 0; k <= m.coarse_solvers.size(); ++k) {
+            WindSolver& solver = k == 0 ? *m.solver : *m.coarse_solvers[k - 1];
+            VoxelWorld& world = k == 0 ? *m.world : *m.coarse_worlds[k - 1];
+            if (Status s = solver.shift_origin(by); !s) return invalid(s.message());
+            if (Status s = world.move_grid(solver.origin()); !s) return device_failure(s);
+        }
+        for (auto& [id, instance] : m.instances) {
+            instance.model = move * instance.model;
+            if (instance.prev) instance.prev = move * *instance.prev;
+        }
+        m.static_dirty = true;
+        m.frame->origin_shifted();
+        for (auto& [id, pending] : m.queries)
+            if (!pending.asked)
+                for (glm::vec3& p : pending.points)
+                    p += by;
+        return {};
+    });
 }
 
 } // namespace gust

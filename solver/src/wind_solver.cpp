@@ -307,6 +307,22 @@ void WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
     impl_->b.inner = inner ? inner->impl_->bindings.address() : 0;
 }
 
+Status WindSolver::shift_origin(glm::vec3 offset) {
+    const glm::vec3 moved = origin_ + offset;
+    if (!std::isfinite(moved.x) || !std::isfinite(moved.y) || !std::isfinite(moved.z))
+        return Status::failure("the shifted origin must be finite");
+    origin_ = moved;
+    for (std::uint32_t e = 0; e < impl_->emitter_count; ++e)
+        impl_->emitter_data[e].position += offset;
+    impl_->solids_stale = true;
+    return Status{};
+}
+
+void WindSolver::record_bindings(VkCommandBuffer cmd) {
+    impl_->b.origin = origin_;
+    impl_->put_current(ctx_, cmd);
+}
+
 Status WindSolver::set_emitters(std::span<const Emitter> emitters) {
     if (Status s = validate(emitters); !s) return s;
     impl_->omni_count = detail::omni_first(emitters, impl_->emitter_data);

@@ -84,6 +84,67 @@ TEST(Cascades, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
     EXPECT_EQ(watch.errors, 0) << watch.last;
 }
 
+TEST(Cascades, shiftingTheOriginMovesTheWindTheSolidsAndThePendingQueries) {
+    // Two Systems of one scene; the second's world is rebased half-way by an offset of no whole cells.
+    const Vec3 offset{37.3f, -2.5f, -12.9f};
+    // Off the voxel planes, so that no face of it lies where rounding the shifted coordinates could flip a voxel.
+    const Slab block({-1.8f, 0.1f, -0.9f}, {1.2f, 2.9f, 1.7f});
+    std::unique_ptr<System> systems[2];
+    Watch watch[2];
+    for (int i = 0; i < 2; ++i) {
+        SystemDesc desc = small_desc(watch[i]);
+        desc.domain.cascades = 2;
+        desc.domain.ratio = 2;
+        ASSERT_TRUE(System::create(desc, systems[i]));
+        MeshId mesh = 0;
+        InstanceId id = 0;
+        ASSERT_TRUE(systems[i]->create_mesh(block.desc(), mesh));
+        ASSERT_TRUE(systems[i]->create_instance(mesh, Mat4{}, false, id));
+        ASSERT_TRUE(systems[i]->set_ambient({4.0f, 0.0f, 1.0f}));
+        const WindEmitter fan{.type = WindEmitterType::Directional,
+                              .position = {-5.0f, 2.0f, 3.0f},
+                              .direction = {0.0f, 1.0f, 0.0f},
+                              .radius = 2.0f,
+                              .strength = 5.0f};
+        ASSERT_TRUE(systems[i]->set_emitters({&fan, 1}));
+        for (int f = 0; f < 10; ++f)
+            ASSERT_TRUE(systems[i]->step(0.1f));
+    }
+    const Vec3 points[] = {{3.0f, 1.5f, 0.5f}, {-5.0f, 2.0f, 3.0f}, {0.0f, 4.0f, -3.0f}, {14.0f, 4.0f, 0.0f}};
+    QueryId asked[2] = {0, 0};
+    for (int i = 0; i < 2; ++i)
+        ASSERT_TRUE(systems[i]->query_async(points, asked[i]));
+    ASSERT_TRUE(systems[1]->shift_origin(offset));
+    for (int f = 0; f < 10; ++f)
+        for (auto& system : systems)
+            ASSERT_TRUE(system->step(0.1f));
+    std::array<Vec3, 4> before[2], after[2];
+    std::vector<Vec3> moved;
+    for (const Vec3& p : points)
+        moved.push_back({p.x + offset.x, p.y + offset.y, p.z + offset.z});
+    for (int i = 0; i < 2; ++i) {
+        ASSERT_TRUE(systems[i]->fetch(asked[i], before[i]));
+        ASSERT_TRUE(systems[i]->query(i == 0 ? std::span<const Vec3>(points) : std::span<const Vec3>(moved),
+                                      after[i]));
+    }
+    const auto distance = [](const Vec3& a, const Vec3& b) {
+        return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+    };
+    for (std::size_t k = 0; k < 4; ++k) {
+        EXPECT_LT(distance(before[0][k], before[1][k]), 0.02f) << "the pending query, point " << k;
+        EXPECT_LT(distance(after[0][k], after[1][k]), 0.05f) << "point " << k;
+    }
+    // The fan still blows where it stood.
+    EXPECT_GT(after[1][1].y, 1.0f);
+    const Vec3 origin = systems[1]->domain_origin();
+    EXPECT_NEAR(origin.x, systems[0]->domain_origin().x + offset.x, 1e-3f);
+    EXPECT_NEAR(origin.z, systems[0]->domain_origin().z + offset.z, 1e-3f);
+    Vec3 far = {1e30f, 0.0f, 0.0f};
+    EXPECT_EQ(systems[1]->shift_origin(far).code(), ErrorCode::InvalidArgument);
+    for (const Watch& w : watch)
+        EXPECT_EQ(w.errors, 0) << w.last;
+}
+
 /// The mean wind along x over a 16x16 m patch 8 m above the ground around the player, after `frames` frames
 /// of an 8 m/s wind over the ground, with a 32 m ridge 100 m upwind when `ridge` is set.
 float wind_at_player(const WindDomain& domain, bool ridge, int frames) {

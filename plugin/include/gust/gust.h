@@ -420,6 +420,11 @@ gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
 /// from the world's origin (where floats cannot place voxels; the domain's first focus likewise).
 gust_result gust_system_set_focus(gust_system system, gust_vec3 position);
 
+/// For an engine that rebases its world: every world position is now `offset` away
+/// (gust::System::shift_origin). The focus, the grids and wind, emitters, instances and unanswered query
+/// points move with it.
+gust_result gust_system_shift_origin(gust_system system, gust_vec3 offset);
+
 /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh the wind
 /// texture and answer pending queries. Blocks until the GPU is done (GUST_SUBMISSION_OWN_QUEUE).
 gust_result gust_system_step(gust_system system, float dt);

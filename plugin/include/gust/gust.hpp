@@ -446,6 +446,13 @@ class System {
     /// focus kept) for a point more than a million cells from the domain's centre, or more than 2^19 cells
     /// from the world's origin (where floats cannot place voxels; WindDomain::focus likewise).
     Outcome set_focus(const Vec3& position);
+    /// For an engine that rebases its world (a floating origin): every world position is now `offset` (m,
+    /// finite) away from where it was. gust moves with it: the focus, every cascade's grid and wind, the
+    /// emitters, the instances' transforms and the points of queries not yet answered. The next step
+    /// voxelizes the static set again in the moved grids; the engine's own later set_transform calls give
+    /// positions in the new frame. InvalidArgument (nothing moved) when the new focus would lie more than
+    /// 2^19 cells from the world's origin.
+    Outcome shift_origin(const Vec3& offset);
 
     /// Advances the wind by dt seconds (finite, in (0, 10]): voxelize, update the tree, solve, refresh
     /// the wind texture and answer pending queries. Blocks until the GPU is done (Submission::OwnQueue).

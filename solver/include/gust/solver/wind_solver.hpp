@@ -160,6 +160,9 @@ class WindSolver : public gpu::HostObject {
     /// of advection and forces. Either may be null (null, null: one grid again). Each reads the other's
     /// field as its last step or scroll left it; both outlive the coupling.
     void couple(const WindSolver* outer, const WindSolver* inner);
+    /// Moves the grid, its field and its emitters by `offset` (world m, finite), for a world whose origin
+    /// moved: the field keeps its values, now `offset` away. The next step redoes its solids.
+    Status shift_origin(glm::vec3 offset);
     /// Replaces the emitters (at most 64). Rejected whole when any is invalid.
     Status set_emitters(std::span<const Emitter> emitters);
     /// Moves the grid by whole cells (origin += cells · cell_size): overlapping faces keep their
@@ -223,6 +226,9 @@ class WindSolver : public gpu::HostObject {
     /// GPU milliseconds per pass of the step recorded while gpu::Context::begin_frame(`frame`) was
     /// current, once that frame completed; empty if none was recorded then.
     gpu::Timings timings(std::uint64_t frame) const;
+    /// Records this solver's bindings as they stand (its origin, its field's buffer), for the cascades nested
+    /// with it that read them before its next step does (after shift_origin).
+    void record_bindings(VkCommandBuffer cmd);
     /// scroll() recorded (the origin moves now).
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
     /// Fails when `texels` is too small for write_texels() or record_texels().
