@@ -467,6 +467,9 @@ static void rejects_bad_frame_inputs(gust_system system) {
     CHECK_RESULT(system, gust_system_set_ambient(system, vec3(NAN, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_set_focus(system, vec3(0.0f, INFINITY, 0.0f)),
                  GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(NAN, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(1e30f, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(0.0f, 0.0f, 0.0f)), GUST_OK);
 
     gust_wind_emitter emitters[GUST_MAX_EMITTERS + 1];
     for (int i = 0; i < GUST_MAX_EMITTERS + 1; ++i)
