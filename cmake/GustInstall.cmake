@@ -40,6 +40,7 @@ install(TARGETS ${gust_internal_targets}
 install(FILES
     ${PROJECT_SOURCE_DIR}/plugin/include/gust/gust.hpp
     ${PROJECT_SOURCE_DIR}/plugin/include/gust/gust.h
+    ${PROJECT_SOURCE_DIR}/plugin/include/gust/gust_wind.glsl
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/gust)
 install(EXPORT gustTargets NAMESPACE gust:: DESTINATION ${GUST_INSTALL_CMAKEDIR})
 

@@ -1,13 +1,14 @@
-# gust_embed_shaders(TARGET <name> SOURCES <files...> [DEPENDS <files...>]
+# gust_embed_shaders(TARGET <name> SOURCES <files...> [DEPENDS <files...>] [INCLUDES <dirs...>] [TEST_ONLY]
 #                    [VARIANT <suffix> <DEFINE> VARIANT_SOURCES <files...>])
 # Compiles each GLSL file to SPIR-V with glslangValidator at build time and emits a header
 # <binary>/gust_shaders/<stem>_<stage>.h holding `const uint32_t <stem>_<stage>[]`, so the library
 # ships no loose shader files. Each of VARIANT_SOURCES (also listed in SOURCES) is compiled a second time
 # with -D<DEFINE> into <stem>_<suffix>_<stage>.h. The target becomes an INTERFACE library carrying the include path (build
 # tree only); it is listed in the global property GUST_SHADER_TARGETS so that cmake/GustInstall.cmake can
-# export it beside the static libraries that name it as a private dependency.
+# export it beside the static libraries that name it as a private dependency (unless TEST_ONLY: a test's
+# shaders). INCLUDES adds directories #include searches after the source's own.
 function(gust_embed_shaders)
-  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;DEPENDS;VARIANT;VARIANT_SOURCES" ${ARGN})
+  cmake_parse_arguments(ARG "TEST_ONLY" "TARGET" "SOURCES;DEPENDS;VARIANT;VARIANT_SOURCES;INCLUDES" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/gust_shaders)
   file(MAKE_DIRECTORY ${out_dir})
   set(jobs)
@@ -21,6 +22,10 @@ function(gust_embed_shaders)
       list(APPEND jobs "${src}|_${suffix}|-D${define}")
     endforeach()
   endif()
+  set(include_flags)
+  foreach(dir IN LISTS ARG_INCLUDES)
+    list(APPEND include_flags -I${dir})
+  endforeach()
   set(headers)
   foreach(job IN LISTS jobs)
     string(REPLACE "|" ";" parts "${job}")
@@ -34,7 +39,7 @@ function(gust_embed_shaders)
     set(header ${out_dir}/${var}.h)
     add_custom_command(
       OUTPUT ${header}
-      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 ${define} -I${CMAKE_CURRENT_SOURCE_DIR}
+      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 ${define} -I${CMAKE_CURRENT_SOURCE_DIR} ${include_flags}
               --vn ${var} -o ${header} ${CMAKE_CURRENT_SOURCE_DIR}/${src}
       DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${src} ${ARG_DEPENDS}
       COMMENT "glslang ${src} ${define}"
@@ -46,5 +51,7 @@ function(gust_embed_shaders)
   add_dependencies(${ARG_TARGET} ${ARG_TARGET}_spirv)
   target_include_directories(${ARG_TARGET} INTERFACE
     $<BUILD_INTERFACE:${CMAKE_CURRENT_BINARY_DIR}> $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}>)
-  set_property(GLOBAL APPEND PROPERTY GUST_SHADER_TARGETS ${ARG_TARGET})
+  if(NOT ARG_TEST_ONLY)
+    set_property(GLOBAL APPEND PROPERTY GUST_SHADER_TARGETS ${ARG_TARGET})
+  endif()
 endfunction()

@@ -2,6 +2,7 @@
 #include "frame.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -19,23 +20,7 @@ Frame::~Frame() {
     if (sampler_) ctx_->vk().vkDestroySampler(ctx_->device(), sampler_, ctx_->allocator());
 }
 
-Outcome Frame::create_texture() {
-    const glm::uvec3 cells = solver_->desc().cells;
-    auto texels =
-        gpu::Buffer::create(*ctx_, solver_->cell_count() * 8, gpu::MemoryUse::Device, 0, "gust wind texels");
-    if (!texels) return device_failure(texels.status());
-    texels_ = std::move(*texels);
-    gpu::ImageDesc image;
-    image.extent = {cells.x, cells.y, cells.z};
-    image.format = VK_FORMAT_R16G16B16A16_SFLOAT;
-    // Sampled by the engine, written by gust's copy, and copied out by an engine that exports or captures it.
-    image.usage =
-        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    image.volume = true;
-    image.name = "gust wind texture";
-    auto created = gpu::Image::create(*ctx_, image);
-    if (!created) return device_failure(created.status());
-    image_ = std::move(*created);
+Outcome Frame::create_textures() {
     VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
     sampler.magFilter = sampler.minFilter = VK_FILTER_LINEAR;
     sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
@@ -44,18 +29,54 @@ Outcome Frame::create_texture() {
     if (ctx_->vk().vkCreateSampler(ctx_->device(), &sampler, ctx_->allocator(), &sampler_) != VK_SUCCESS)
         return Outcome(ErrorCode::DeviceFailure, "vkCreateSampler failed");
     ctx_->name(VK_OBJECT_TYPE_SAMPLER, std::uint64_t(sampler_), "gust wind sampler");
-    texture_.image = image_.handle();
-    texture_.view = image_.view();
-    texture_.sampler = sampler_;
-    texture_.format = image_.format();
-    for (int a = 0; a < 3; ++a)
-        texture_.extent[a] = cells[a];
-    // The first fill (blocking, at creation); from then on the solver's last pass of each step writes them.
-    Status s = solver_->write_texels(texels_, [&](VkCommandBuffer cmd) { record_texture_copy(cmd); });
-    if (!s) return device_failure(s);
-    solver_->bind_texels(texels_);
-    publish_texture();
+    const glm::uvec3 cells = solver_->desc().cells;
+    for (std::size_t k = 0; k <= coarser_.size(); ++k) {
+        // Names for capture tools, in a fixed buffer: host memory comes from the hooks only.
+        char name[48], texels_name[64];
+        if (k == 0)
+            std::snprintf(name, sizeof(name), "gust wind texture");
+        else
+            std::snprintf(name, sizeof(name), "gust wind texture, cascade %zu", k);
+        std::snprintf(texels_name, sizeof(texels_name), "%s texels", name);
+        auto texels =
+            gpu::Buffer::create(*ctx_, solver(k).cell_count() * 8, gpu::MemoryUse::Device, 0, texels_name);
+        if (!texels) return device_failure(texels.status());
+        gpu::ImageDesc image;
+        image.extent = {cells.x, cells.y, cells.z};
+        image.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+        // Sampled by the engine, written by gust's copy, and copied out by an engine that exports or captures
+        // it.
+        image.usage =
+            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        image.volume = true;
+        image.name = name;
+        auto created = gpu::Image::create(*ctx_, image);
+        if (!created) return device_failure(created.status());
+        CascadeTexture& texture = textures_.emplace_back();
+        texture.texels = std::move(*texels);
+        texture.image = std::move(*created);
+        WindTexture& t = published_.emplace_back();
+        t.image = textures_[k].image.handle();
+        t.view = textures_[k].image.view();
+        t.sampler = sampler_;
+        t.format = textures_[k].image.format();
+        for (int a = 0; a < 3; ++a)
+            t.extent[a] = cells[a];
+        // The first fill (blocking, at creation); from then on each step's last pass writes them.
+        Status s = solver(k).write_texels(textures_[k].texels,
+                                          [&](VkCommandBuffer cmd) { record_texture_copy(cmd, k); });
+        if (!s) return device_failure(s);
+        solver(k).bind_texels(textures_[k].texels);
+        publish_texture(k, true);
+    }
     return {};
+}
+
+std::size_t Frame::snapshot_cells() const {
+    std::size_t cells = 0;
+    for (std::size_t k = 0; k <= coarser_.size(); ++k)
+        cells += solver(k).cell_count();
+    return cells;
 }
 
 Outcome Frame::scroll_for(const WindSolver& solver, glm::vec3 focus, glm::ivec3& cells) {
@@ -112,6 +133,7 @@ Outcome Frame::record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascad
     c.waited = 0;
     c.seconds = 0.0f;
     slot.cascade = int(&c - coarser_.data());
+    record_texture_copy(cmd, std::size_t(slot.cascade) + 1);
     return {};
 }
 
@@ -131,7 +153,7 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     }
     if (snapshot_ && !slot.snapshot) {
         auto created =
-            gpu::Buffer::create(*ctx_, texels_.size(), gpu::MemoryUse::Readback, 0, "gust snapshot");
+            gpu::Buffer::create(*ctx_, snapshot_cells() * 8, gpu::MemoryUse::Readback, 0, "gust snapshot");
         if (!created) return device_failure(created.status());
         slot.snapshot = std::move(*created);
     }
@@ -168,8 +190,11 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     const SolidSource solid = solid_source(*world_);
     if (Status s = solver_->record_step(cmd, in.dt, &solid); !s) return device_failure(s);
     // Outputs: the texture, and the async queries asked since the last frame.
-    record_texture_copy(cmd);
-    if (snapshot_) gpu::record_readback(*ctx_, cmd, texels_, texels_.size(), slot.snapshot.handle(), 0);
+    record_texture_copy(cmd, 0);
+    if (snapshot_)
+        for (std::size_t k = 0, at = 0; k < textures_.size(); at += textures_[k].texels.size(), ++k)
+            gpu::record_readback(*ctx_, cmd, textures_[k].texels, textures_[k].texels.size(),
+                                 slot.snapshot.handle(), at);
     if (point_bytes > 0) {
         std::memcpy(slot.points.mapped(), in.points.data(), point_bytes);
         solver_->record_sample(cmd, slot.points.address(),
@@ -195,10 +220,13 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     slot.dispatches = ctx_->work().dispatches - dispatched;
     ++recorded_;
     slot.snapshot_recorded = snapshot_ != nullptr;
-    slot.snapshot_origin = solver_->origin();
+    for (std::size_t k = 0; k < textures_.size(); ++k)
+        slot.snapshot_origins[k] = solver(k).origin();
     slot.snapshot_ambient = solver_->ambient();
     slot.snapshot_frame = recorded_;
-    publish_texture();
+    // The finest cascade's texels are new every frame, a coarser one's when it stepped.
+    for (std::size_t k = 0; k < textures_.size(); ++k)
+        publish_texture(k, k == 0 || int(k) == slot.cascade + 1);
     return {};
 }
 
@@ -231,14 +259,18 @@ void Frame::publish_snapshot(const FrameSlot& slot) {
     // skipped and readers keep the previous one.
     SnapshotData* d = snapshot_->begin_write();
     if (!d) return;
-    const SolverDesc& desc = solver_->desc();
     const auto* half = static_cast<const std::uint16_t*>(slot.snapshot.mapped());
     for (std::size_t i = 0; i < d->cells.size(); ++i, half += 4)
         d->cells[i] = {half_to_float(half[0]), half_to_float(half[1]), half_to_float(half[2]),
                        half_to_float(half[3])};
-    d->origin = slot.snapshot_origin;
-    d->cell_size = desc.cell_size;
-    d->extent = glm::ivec3(desc.cells);
+    d->levels.clear();
+    for (std::size_t k = 0, first = 0; k < textures_.size(); first += solver(k).cell_count(), ++k) {
+        const SolverDesc& desc = solver(k).desc();
+        d->levels.push_back({.origin = slot.snapshot_origins[k],
+                             .cell_size = desc.cell_size,
+                             .extent = glm::ivec3(desc.cells),
+                             .first = first});
+    }
     d->ambient = slot.snapshot_ambient;
     d->frame = slot.snapshot_frame;
     snapshot_->publish(d);
@@ -298,23 +330,27 @@ void Frame::log(LogLevel level, const std::string& message) const {
     if (hooks_->log) hooks_->log(hooks_->user, level, message.c_str());
 }
 
-void Frame::record_texture_copy(VkCommandBuffer cmd) {
-    image_.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-    image_.copy_from(cmd, texels_);
-    image_.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+void Frame::record_texture_copy(VkCommandBuffer cmd, std::size_t k) {
+    gpu::Image& image = textures_[k].image;
+    image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    image.copy_from(cmd, textures_[k].texels);
+    image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
 }
 
-void Frame::publish_texture() {
-    // World position -> [0, 1]^3 over the domain as it stands after this frame's scroll.
-    const SolverDesc& d = solver_->desc();
-    const glm::vec3 size = glm::vec3(d.cells) * d.cell_size, origin = solver_->origin();
+void Frame::publish_texture(std::size_t k, bool stepped) {
+    // World position -> [0, 1]^3 over the cascade's grid as it stands after this frame's scroll (or
+    // after a shift of the world's origin, which moves a grid without a step).
+    const WindSolver& s = solver(k);
+    const SolverDesc& d = s.desc();
+    const glm::vec3 size = glm::vec3(d.cells) * d.cell_size, origin = s.origin();
     glm::mat4 m(1.0f);
     for (int a = 0; a < 3; ++a) {
         m[a][a] = 1.0f / size[a];
         m[3][a] = -origin[a] / size[a];
     }
-    std::memcpy(texture_.world_to_texture.m, glm::value_ptr(m), sizeof(texture_.world_to_texture.m));
-    texture_.frame = recorded_;
+    WindTexture& t = published_[k];
+    std::memcpy(t.world_to_texture.m, glm::value_ptr(m), sizeof(t.world_to_texture.m));
+    if (stepped) t.frame = recorded_;
 }
 
 } // namespace gust::detail

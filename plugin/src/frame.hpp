@@ -4,6 +4,7 @@
 
 #include "snapshot.hpp"
 
+#include <array>
 #include <cstdint>
 #include <gust/gpu/context.hpp>
 #include <gust/gpu/image.hpp>
@@ -53,10 +54,11 @@ struct FrameSlot {
     std::uint64_t dispatches = 0;    ///< dispatches and draws the frame recorded
     /// The coarser cascade (index into Frame's, from 0 for cascade 1) the frame also stepped; -1: none.
     int cascade = -1;
-    /// SystemDesc::snapshot: the frame's wind texels (8 bytes a cell), and where the domain stood.
+    /// SystemDesc::snapshot: every cascade's wind texels (8 bytes a cell, finest first), and where each
+    /// cascade stood.
     gpu::Buffer snapshot;
     bool snapshot_recorded = false;
-    glm::vec3 snapshot_origin{0.0f};
+    std::array<glm::vec3, kMaxCascades> snapshot_origins{};
     glm::vec3 snapshot_ambient{0.0f};
     std::uint64_t snapshot_frame = 0;
 };
@@ -73,8 +75,14 @@ struct Cascade {
     float voxel_size = 0.0f;  ///< m: a moving instance smaller than this is not voxelized into it
 };
 
-/// Records frames and collects them. Owns the wind texture (its texels are written once a frame, by the
-/// solver's last pass) and the frame counter; the domain's position is the solver's, which the frame
+/// One cascade's wind texture: its solver's last pass writes the texels, a copy puts them into the image.
+struct CascadeTexture {
+    gpu::Buffer texels;
+    gpu::Image image;
+};
+
+/// Records frames and collects them. Owns a wind texture per cascade (the texels are written by each
+/// step's last pass) and the frame counter; the domain's position is the solver's, which the frame
 /// scrolls and the voxel grid follows.
 class Frame {
   public:
@@ -84,21 +92,25 @@ class Frame {
     Frame(gpu::Context& ctx, VoxelWorld& world, WindSolver& solver, std::pmr::vector<Cascade> coarser,
           const Hooks& hooks)
         : ctx_(&ctx), world_(&world), solver_(&solver), coarser_(std::move(coarser)), hooks_(&hooks),
-          static_set_(coarser_.get_allocator()), moving_(coarser_.get_allocator()) {}
+          static_set_(coarser_.get_allocator()), moving_(coarser_.get_allocator()),
+          textures_(coarser_.get_allocator()), published_(coarser_.get_allocator()) {}
     ~Frame();
     Frame(const Frame&) = delete;
     Frame& operator=(const Frame&) = delete;
 
-    /// Creates the wind texture, fills it from the solver's field and binds its texels to every step.
-    Outcome create_texture();
+    /// Creates every cascade's wind texture, fills it from its solver's field and binds its texels to every
+    /// step of that solver.
+    Outcome create_textures();
 
     /// The world's origin moved (System::shift_origin): the next frame first records every cascade's
     /// bindings, so that none reads a neighbour's old origin.
     void origin_shifted() { rebind_ = true; }
 
-    /// SystemDesc::snapshot: from now on every frame copies its texels into its slot, and collect
-    /// publishes them into `ring` (which outlives the Frame).
+    /// SystemDesc::snapshot: from now on every frame copies every cascade's texels into its slot, and
+    /// collect publishes them into `ring` (which outlives the Frame).
     void enable_snapshot(SnapshotRing& ring) { snapshot_ = &ring; }
+    /// Cells of every cascade together: what a snapshot holds.
+    std::size_t snapshot_cells() const;
 
     /// Whole cells the finest cascade must move to centre on `focus`; fails when that is too far for one
     /// step.
@@ -120,7 +132,8 @@ class Frame {
     /// SystemDesc::snapshot: publishes a completed frame's texels (after collect) for System::sample.
     void publish_snapshot(const FrameSlot& slot);
 
-    const WindTexture& texture() const { return texture_; }
+    /// Every cascade's wind texture, finest first.
+    std::span<const WindTexture> textures() const { return published_; }
     /// Frames recorded so far.
     std::uint64_t recorded() const { return recorded_; }
 
@@ -130,8 +143,11 @@ class Frame {
     Cascade* next_cascade(float dt);
     /// Records the coarser cascade `c`'s scroll, voxels and step into `cmd`, its counters into `slot`.
     Outcome record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascade& c, FrameSlot& slot);
-    void record_texture_copy(VkCommandBuffer cmd);
-    void publish_texture();
+    /// Cascade k's solver (0: the finest).
+    WindSolver& solver(std::size_t k) const { return k == 0 ? *solver_ : *coarser_[k - 1].solver; }
+    void record_texture_copy(VkCommandBuffer cmd, std::size_t k);
+    /// Cascade k's texture as its grid stands now; `stepped`: its texels were written by this frame.
+    void publish_texture(std::size_t k, bool stepped);
     void stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
                     FrameStats& stats) const;
     void log(LogLevel level, const std::string& message) const;
@@ -145,10 +161,9 @@ class Frame {
     /// the moving instances large enough for the cascade a frame steps.
     std::pmr::vector<GpuInstance> static_set_, moving_;
     bool rebind_ = false;
-    gpu::Buffer texels_; ///< the solver's finish pass writes them; copied into image_
-    gpu::Image image_;
+    std::pmr::vector<CascadeTexture> textures_; ///< finest first
+    std::pmr::vector<WindTexture> published_;   ///< what the host reads, finest first
     VkSampler sampler_ = VK_NULL_HANDLE;
-    WindTexture texture_;
     std::uint64_t recorded_ = 0;
     SnapshotRing* snapshot_ = nullptr;
 };

@@ -67,6 +67,18 @@ gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* text
     });
 }
 
+gust_result gust_system_cascade_texture(gust_system system, uint32_t cascade, gust_wind_texture* texture) {
+    return on_system(system, "gust_system_cascade_texture", [&](gust::System& s) -> gust::Outcome {
+        if (!texture) return invalid("texture (the output) is NULL");
+        const std::span<const gust::WindTexture> textures = s.wind_textures();
+        if (cascade >= textures.size())
+            return invalid("cascade " + std::to_string(cascade) + " is beyond the last, " +
+                           std::to_string(textures.size() - 1));
+        *texture = to_c(textures[cascade]);
+        return {};
+    });
+}
+
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats) {
     return on_system(system, "gust_system_stats", [&](gust::System& s) -> gust::Outcome {
         if (!stats) return invalid("stats (the output) is NULL");

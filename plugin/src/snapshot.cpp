@@ -4,14 +4,17 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <gust/solver/wind_solver.hpp>
 
 namespace gust::detail {
 
-SnapshotRing::SnapshotRing(std::size_t cells, std::pmr::memory_resource* memory)
+SnapshotRing::SnapshotRing(std::size_t cells, std::size_t levels, std::pmr::memory_resource* memory)
     : copies_{SnapshotData(memory), SnapshotData(memory), SnapshotData(memory)} {
     static_assert(kCopies == 3, "the initializer above names each copy");
-    for (SnapshotData& copy : copies_)
+    for (SnapshotData& copy : copies_) {
         copy.cells.resize(cells);
+        copy.levels.reserve(levels);
+    }
 }
 
 SnapshotData* SnapshotRing::begin_write() {
@@ -63,38 +66,59 @@ float half_to_float(std::uint16_t h) {
     return std::bit_cast<float>(sign | ((exponent + 112) << 23) | (mantissa << 13));
 }
 
-void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::span<Vec3> velocities) {
-    const glm::ivec3 n = d.extent;
-    const glm::vec3 size = glm::vec3(n), inv_h = glm::vec3(1.0f / d.cell_size);
+namespace {
+
+/// The velocity at `point` in one cascade's grid, and that cascade's share there (`weight`): 0 outside the
+/// grid (edges included inside), 1 for the coarsest, else rising from 0 at its border to 1
+/// kCascadeBlendCells cells in.
+glm::vec3 sample_level(const SnapshotLevel& level, const glm::vec4* cells, bool coarsest, glm::vec3 point,
+                       float& weight) {
+    const glm::ivec3 n = level.extent;
+    const glm::vec3 size = glm::vec3(n);
+    // Cell units, as sample.comp.
+    const glm::vec3 p = (point - level.origin) / level.cell_size;
+    weight = 0.0f;
+    if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= size.x && p.y <= size.y && p.z <= size.z))
+        return glm::vec3(0.0f);
+    const glm::vec3 inside = glm::min(p, size - p);
+    weight = coarsest ? 1.0f
+                      : std::clamp(std::min({inside.x, inside.y, inside.z}) / kCascadeBlendCells, 0.0f, 1.0f);
     const glm::ivec3 last = n - 1, low = glm::max(n - 2, glm::ivec3(0));
-    const glm::vec4* cells = d.cells.data();
     const int row = n.x, slice = n.x * n.y;
+    // p >= 0 here, so truncation is floor.
+    const glm::ivec3 c = glm::min(glm::ivec3(p), last);
+    const glm::vec4& own = cells[c.x + row * c.y + slice * c.z];
+    // A cell without air: the solid's own velocity (query answers it there, not a blend).
+    if (own.w == 0.0f) return glm::vec3(own);
+    // The sampler: texel centres at c + 0.5, clamped to the edge.
     const auto lerp = [](const glm::vec4& a, const glm::vec4& b, float t) { return a + (b - a) * t; };
+    const glm::vec3 q = glm::clamp(p - 0.5f, glm::vec3(0.0f), glm::vec3(last));
+    const glm::ivec3 i0 = glm::min(glm::ivec3(q), low);
+    const glm::vec3 t = q - glm::vec3(i0);
+    const int dx = i0.x < last.x ? 1 : 0, dy = i0.y < last.y ? row : 0, dz = i0.z < last.z ? slice : 0;
+    const glm::vec4* c000 = cells + i0.x + row * i0.y + slice * i0.z;
+    const glm::vec4 x00 = lerp(c000[0], c000[dx], t.x), x10 = lerp(c000[dy], c000[dy + dx], t.x);
+    const glm::vec4 x01 = lerp(c000[dz], c000[dz + dx], t.x);
+    const glm::vec4 x11 = lerp(c000[dz + dy], c000[dz + dy + dx], t.x);
+    return glm::vec3(lerp(lerp(x00, x10, t.y), lerp(x01, x11, t.y), t.z));
+}
+
+} // namespace
+
+void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::span<Vec3> velocities) {
     for (std::size_t i = 0; i < points.size(); ++i) {
-        // Cell units, as sample.comp: outside [0, n] (edges included) the ambient wind.
-        const glm::vec3 p = (glm::vec3(points[i].x, points[i].y, points[i].z) - d.origin) * inv_h;
-        if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= size.x && p.y <= size.y && p.z <= size.z)) {
-            velocities[i] = {d.ambient.x, d.ambient.y, d.ambient.z};
-            continue;
+        const glm::vec3 point(points[i].x, points[i].y, points[i].z);
+        // Finest first: each cascade takes its share of what the finer ones left.
+        glm::vec3 sum(0.0f);
+        float left = 1.0f;
+        for (std::size_t k = 0; k < d.levels.size() && left > 0.0f; ++k) {
+            float weight;
+            const glm::vec3 u = sample_level(d.levels[k], d.cells.data() + d.levels[k].first,
+                                             k + 1 == d.levels.size(), point, weight);
+            sum += left * weight * u;
+            left *= 1.0f - weight;
         }
-        // p >= 0 here, so truncation is floor.
-        const glm::ivec3 c = glm::min(glm::ivec3(p), last);
-        const glm::vec4& own = cells[c.x + row * c.y + slice * c.z];
-        if (own.w == 0.0f) {
-            // A cell without air: the solid's own velocity (query answers it there, not a blend).
-            velocities[i] = {own.x, own.y, own.z};
-            continue;
-        }
-        // The sampler: texel centres at c + 0.5, clamped to the edge.
-        const glm::vec3 q = glm::clamp(p - 0.5f, glm::vec3(0.0f), glm::vec3(last));
-        const glm::ivec3 i0 = glm::min(glm::ivec3(q), low);
-        const glm::vec3 t = q - glm::vec3(i0);
-        const int dx = i0.x < last.x ? 1 : 0, dy = i0.y < last.y ? row : 0, dz = i0.z < last.z ? slice : 0;
-        const glm::vec4* c000 = cells + i0.x + row * i0.y + slice * i0.z;
-        const glm::vec4 x00 = lerp(c000[0], c000[dx], t.x), x10 = lerp(c000[dy], c000[dy + dx], t.x);
-        const glm::vec4 x01 = lerp(c000[dz], c000[dz + dx], t.x);
-        const glm::vec4 x11 = lerp(c000[dz + dy], c000[dz + dy + dx], t.x);
-        const glm::vec4 u = lerp(lerp(x00, x10, t.y), lerp(x01, x11, t.y), t.z);
+        const glm::vec3 u = sum + left * d.ambient;
         velocities[i] = {u.x, u.y, u.z};
     }
 }

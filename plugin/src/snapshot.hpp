@@ -14,15 +14,22 @@
 
 namespace gust::detail {
 
+/// One cascade's grid in a snapshot.
+struct SnapshotLevel {
+    glm::vec3 origin{0.0f}; ///< the grid's min corner, m
+    float cell_size = 1.0f; ///< m
+    glm::ivec3 extent{0};   ///< cells per axis
+    std::size_t first = 0;  ///< its first cell in SnapshotData::cells
+};
+
 /// One published field: what System::sample answers from.
 struct SnapshotData {
-    explicit SnapshotData(std::pmr::memory_resource* memory) : cells(memory) {}
-    std::pmr::vector<glm::vec4> cells; ///< per cell (x fastest): velocity (m/s), w = 1 − solid fraction
-    glm::vec3 origin{0.0f};            ///< the domain's min corner, m
-    float cell_size = 1.0f;            ///< m
-    glm::ivec3 extent{0};              ///< cells per axis
-    glm::vec3 ambient{0.0f};           ///< the ambient wind of that frame (outside the domain)
-    std::uint64_t frame = 0;           ///< WindTexture::frame of the step it was written by
+    explicit SnapshotData(std::pmr::memory_resource* memory) : cells(memory), levels(memory) {}
+    /// Per cell of every cascade, finest first (x fastest): velocity (m/s), w = 1 − solid fraction.
+    std::pmr::vector<glm::vec4> cells;
+    std::pmr::vector<SnapshotLevel> levels; ///< the cascades, finest first
+    glm::vec3 ambient{0.0f};                ///< the ambient wind of that frame (beyond every cascade)
+    std::uint64_t frame = 0;                ///< WindTexture::frame of the step it was written by
 };
 
 /// The copies readers sample and the writer fills. The writer (one thread) takes a copy that is neither
@@ -32,8 +39,8 @@ struct SnapshotData {
 class SnapshotRing {
   public:
     static constexpr int kCopies = 3;
-    /// Allocates the copies for `cells` cells (on the creating thread).
-    SnapshotRing(std::size_t cells, std::pmr::memory_resource* memory);
+    /// Allocates the copies for `cells` cells and `levels` cascades (on the creating thread).
+    SnapshotRing(std::size_t cells, std::size_t levels, std::pmr::memory_resource* memory);
 
     /// Writer: a copy to fill, or null when every unpublished copy is held by a reader.
     SnapshotData* begin_write();
@@ -54,8 +61,10 @@ class SnapshotRing {
 };
 
 /// The velocity at each point from `data`, as the wind texture's sampler would read it (trilinear on cell
-/// centres, clamped to the edge), with query's rules: outside the domain the ambient wind, and in a cell
-/// without air the cell's own (its solid's) velocity. Points are finite; both spans the same size.
+/// centres, clamped to the edge), with query's rules: in a cell without air the cell's own (its solid's)
+/// velocity; the finest cascade that holds the point, blended into the next coarser one over its last
+/// kCascadeBlendCells cells (as gust_wind.glsl does); beyond every cascade the ambient wind. Points are
+/// finite; both spans the same size.
 void sample_snapshot(const SnapshotData& data, std::span<const Vec3> points, std::span<Vec3> velocities);
 
 /// Half floats (IEEE binary16) to float.

@@ -167,9 +167,6 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
     if (cascades > 1 && !(coarsest <= kMaxCellSize))
         return invalid("domain.cascades: the coarsest cascade's cells would be " + std::to_string(coarsest) +
                        " m, more than 1000 m");
-    if (cascades > 1 && desc.snapshot)
-        return invalid("snapshot holds one cascade so far: with domain.cascades > 1 it would answer the "
-                       "ambient wind beyond the finest; leave one of them off");
 
     return guarded([&]() -> Outcome {
         // The System first, so that a failed allocation of either frees what came before.
@@ -242,9 +239,9 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         }
 
         m.frame.emplace(*m.ctx, *m.world, *m.solver, std::move(coarser), m.hooks);
-        if (Outcome o = m.frame->create_texture(); !o) return o;
+        if (Outcome o = m.frame->create_textures(); !o) return o;
         if (desc.snapshot) {
-            m.snapshot.emplace(m.solver->cell_count(), &m.memory);
+            m.snapshot.emplace(m.frame->snapshot_cells(), cascades, &m.memory);
             m.frame->enable_snapshot(*m.snapshot);
         }
         if (desc.submission == Submission::HostCommands)

@@ -105,7 +105,11 @@ Outcome System::wind_at(const Vec3& point, WindSample& sample) {
 }
 
 const WindTexture& System::wind_texture() const {
-    return impl_->frame->texture();
+    return impl_->frame->textures().front();
+}
+
+std::span<const WindTexture> System::wind_textures() const {
+    return impl_->frame->textures();
 }
 const FrameStats& System::stats() const {
     return impl_->stats;
@@ -139,10 +143,11 @@ Outcome System::sample(std::span<const Vec3> points, std::span<Vec3> velocities,
     if (!data) return Outcome(ErrorCode::NotReady, "no step has published a snapshot yet");
     sample_snapshot(*data, points, velocities);
     info.frame = data->frame;
-    info.origin = to_vec3(data->origin);
-    info.cell_size = data->cell_size;
+    const SnapshotLevel& finest = data->levels.front();
+    info.origin = to_vec3(finest.origin);
+    info.cell_size = finest.cell_size;
     for (int a = 0; a < 3; ++a)
-        info.extent[a] = std::uint32_t(data->extent[a]);
+        info.extent[a] = std::uint32_t(finest.extent[a]);
     impl_->snapshot->release(held);
     return {};
 }
@@ -161,13 +166,25 @@ Outcome System::export_vdb(const char* path) {
     return guarded([&]() -> Outcome {
         Impl& m = *impl_;
         auto voxels = m.world->tree().leaf_voxels();
-        auto velocity = m.solver->read_cell_velocity();
-        auto solid = m.solver->read_solid_fraction();
-        auto pressure = m.solver->read_pressure();
-        for (const Status* s : {&voxels.status(), &velocity.status(), &solid.status(), &pressure.status()})
-            if (!*s) return device_failure(*s);
-        const vdb::WindGrids grids{
-            m.solver_desc.cells, m.solver_desc.cell_size, m.solver->origin(), *solid, *velocity, *pressure};
+        if (!voxels) return device_failure(voxels.status());
+        // Every cascade's wind, the finest first; what they read back lives until the file is written.
+        struct Read {
+            std::vector<glm::vec3> velocity;
+            std::vector<float> solid, pressure;
+        };
+        std::vector<Read> read(m.coarse_solvers.size() + 1);
+        std::vector<vdb::WindGrids> grids;
+        for (std::size_t k = 0; k < read.size(); ++k) {
+            WindSolver& solver = k == 0 ? *m.solver : *m.coarse_solvers[k - 1];
+            auto velocity = solver.read_cell_velocity();
+            auto solid = solver.read_solid_fraction();
+            auto pressure = solver.read_pressure();
+            for (const Status* s : {&velocity.status(), &solid.status(), &pressure.status()})
+                if (!*s) return device_failure(*s);
+            read[k] = {std::move(*velocity), std::move(*solid), std::move(*pressure)};
+            grids.push_back({solver.desc().cells, solver.desc().cell_size, solver.origin(), read[k].solid,
+                             read[k].velocity, read[k].pressure});
+        }
         if (Status s = vdb::write_frame_vdb(path, *voxels, m.world->grid(), grids); !s)
             return Outcome(ErrorCode::IoError, s.message());
         return {};

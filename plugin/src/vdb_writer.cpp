@@ -7,6 +7,7 @@
 #include <openvdb/io/Archive.h>
 #include <openvdb/openvdb.h>
 #include <sstream>
+#include <string>
 
 namespace gust::vdb {
 
@@ -33,17 +34,16 @@ openvdb::BoolGrid::Ptr occupancy_grid(std::span<const std::uint32_t> voxels, con
     return occupancy;
 }
 
-/// The four grids of a simulated frame.
-openvdb::GridPtrVec frame_grids(std::span<const std::uint32_t> voxels, const GridDesc& grid,
-                                const WindGrids& wind) {
+/// One cascade's wind grids, their names ending in `suffix`, appended to `out`.
+void wind_grids(const WindGrids& wind, const std::string& suffix, openvdb::GridPtrVec& out) {
     const auto transform = centred_transform(wind.origin, wind.cell_size);
     auto solid = openvdb::FloatGrid::create(0.0f);
-    solid->setName("solid");
+    solid->setName("solid" + suffix);
     auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
-    velocity->setName("velocity");
+    velocity->setName("velocity" + suffix);
     velocity->setVectorType(openvdb::VEC_INVARIANT);
     auto pressure = openvdb::FloatGrid::create(0.0f);
-    pressure->setName("pressure");
+    pressure->setName("pressure" + suffix);
     for (openvdb::GridBase* g :
          {static_cast<openvdb::GridBase*>(solid.get()), static_cast<openvdb::GridBase*>(velocity.get()),
           static_cast<openvdb::GridBase*>(pressure.get())})
@@ -60,7 +60,16 @@ openvdb::GridPtrVec frame_grids(std::span<const std::uint32_t> voxels, const Gri
                 v.setValueOn(c, openvdb::Vec3s(wind.velocity[i].x, wind.velocity[i].y, wind.velocity[i].z));
                 p.setValueOn(c, wind.pressure[i]);
             }
-    return {occupancy_grid(voxels, grid), solid, velocity, pressure};
+    out.insert(out.end(), {solid, velocity, pressure});
+}
+
+/// The grids of a simulated frame: occupancy, then each cascade's wind.
+openvdb::GridPtrVec frame_grids(std::span<const std::uint32_t> voxels, const GridDesc& grid,
+                                std::span<const WindGrids> cascades) {
+    openvdb::GridPtrVec grids{occupancy_grid(voxels, grid)};
+    for (std::size_t k = 0; k < cascades.size(); ++k)
+        wind_grids(cascades[k], k == 0 ? std::string() : "_cascade" + std::to_string(k), grids);
+    return grids;
 }
 
 /// io::File's own write ignores the stream's state, so a full disk gave a truncated file and success.
@@ -117,12 +126,16 @@ Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const st
 }
 
 Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
-                       const GridDesc& grid, const WindGrids& wind) {
-    const std::size_t cells = std::size_t(wind.cells.x) * wind.cells.y * wind.cells.z;
-    if (wind.solid.size() != cells || wind.velocity.size() != cells || wind.pressure.size() != cells)
-        return Status::failure(path.string() + ": wind grids do not match the domain's cells");
-    return write_grids(path, std::min<double>(grid.voxel_size, wind.cell_size),
-                       [&] { return frame_grids(voxels, grid, wind); });
+                       const GridDesc& grid, std::span<const WindGrids> cascades) {
+    if (cascades.empty()) return Status::failure(path.string() + ": no wind grids to write");
+    for (const WindGrids& wind : cascades) {
+        const std::size_t cells = std::size_t(wind.cells.x) * wind.cells.y * wind.cells.z;
+        if (wind.solid.size() != cells || wind.velocity.size() != cells || wind.pressure.size() != cells)
+            return Status::failure(path.string() + ": wind grids do not match the domain's cells");
+    }
+    // The finest cascade has the smallest cells.
+    return write_grids(path, std::min<double>(grid.voxel_size, cascades.front().cell_size),
+                       [&] { return frame_grids(voxels, grid, cascades); });
 }
 
 } // namespace gust::vdb

@@ -1,6 +1,7 @@
 // OpenVDB output in the layout docs/design.md fixes: a BoolGrid "occupancy" whose index (i,j,k) maps to
 // the voxel centre origin + (i + 0.5) h, and for simulated frames the wind grids "solid", "velocity"
-// and "pressure" whose index (i,j,k) maps to the wind cell's centre.
+// and "pressure" whose index (i,j,k) maps to the wind cell's centre; each coarser cascade k adds its own
+// "solid_cascadeK", "velocity_cascadeK" and "pressure_cascadeK", each with its own transform.
 #pragma once
 
 #include <cstdint>
@@ -34,8 +35,9 @@ Status write_occupancy_vdb(const std::filesystem::path& path, std::span<const st
                            const GridDesc& grid);
 
 /// Writes "occupancy" and the wind grids "solid" (FloatGrid, cells with solid voxels active),
-/// "velocity" (Vec3SGrid) and "pressure" (FloatGrid), every cell active in the last two.
+/// "velocity" (Vec3SGrid) and "pressure" (FloatGrid), every cell active in the last two, of `cascades`
+/// (at least one, the finest first; the coarser ones' names end in "_cascadeK").
 Status write_frame_vdb(const std::filesystem::path& path, std::span<const std::uint32_t> voxels,
-                       const GridDesc& grid, const WindGrids& wind);
+                       const GridDesc& grid, std::span<const WindGrids> cascades);
 
 } // namespace gust::vdb

@@ -9,6 +9,7 @@
 namespace gust {
 
 static_assert(kMaxCascades == shaderio::kMaxCascades);
+static_assert(kCascadeBlendCells == shaderio::kCascadeBlendCells);
 
 namespace {
 #include "gust_shaders/advect_comp.h"

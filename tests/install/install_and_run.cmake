@@ -27,8 +27,9 @@ run_step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${pr
 
 file(GLOB_RECURSE headers RELATIVE ${prefix}/include ${prefix}/include/*)
 list(SORT headers)
-if(NOT headers STREQUAL "gust/gust.h;gust/gust.hpp")
-  message(FATAL_ERROR "the install's include/ should hold gust/gust.h and gust/gust.hpp only, holds: ${headers}")
+if(NOT headers STREQUAL "gust/gust.h;gust/gust.hpp;gust/gust_wind.glsl")
+  message(FATAL_ERROR "the install's include/ should hold gust/gust.h, gust/gust.hpp and gust/gust_wind.glsl "
+                      "only, holds: ${headers}")
 endif()
 
 set(configure_args -S ${EXAMPLES_DIR} -B ${consumer} -G ${GENERATOR}

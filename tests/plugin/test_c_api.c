@@ -508,6 +508,9 @@ static void rejects_bad_queries(gust_system system) {
     CHECK_RESULT(system, gust_system_wind_at(system, points[1], &sample), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_wind_at(system, points[0], NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_wind_texture(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    gust_wind_texture cascade;
+    CHECK_RESULT(system, gust_system_cascade_texture(system, 0, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_cascade_texture(system, 1, &cascade), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_stats(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_stats_pass_count(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_domain_origin(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
@@ -721,6 +724,10 @@ static void simulates_a_small_world(void) {
     CHECK(near3(transform_point(texture.world_to_texture, origin), vec3(0.0f, 0.0f, 0.0f), 1e-6f));
     CHECK(near3(transform_point(texture.world_to_texture, vec3(8.0f, 8.0f, 8.0f)), vec3(1.0f, 1.0f, 1.0f),
                 1e-6f));
+    /* One cascade: its texture is the wind texture. */
+    gust_wind_texture finest;
+    CHECK_RESULT(system, gust_system_cascade_texture(system, 0, &finest), GUST_OK);
+    CHECK(finest.image == texture.image && finest.frame == texture.frame);
 
     gust_frame_stats stats;
     CHECK_RESULT(system, gust_system_stats(system, &stats), GUST_OK);
@@ -1135,11 +1142,14 @@ static void takes_the_pressure_solver_advection_hysteresis_and_pipeline_cache(vo
     remove(cache);
 }
 
-/* gust_system_sample answers from the CPU snapshot; a reader's failure message is kept per thread. */
+/* gust_system_sample answers from the CPU snapshot, of two cascades here, each with its texture; a reader's
+ * failure message is kept per thread. */
 static void samples_the_snapshot(void) {
     hook_counts counts = {0};
     gust_system_desc desc = small_world_desc(&counts);
     desc.snapshot = true;
+    desc.domain.cascades = 2;
+    desc.domain.ratio = 2;
     gust_system system = NULL;
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
     const gust_vec3 points[2] = {{0.0f, 4.0f, 0.0f}, {500.0f, 4.0f, 0.0f}};
@@ -1152,6 +1162,15 @@ static void samples_the_snapshot(void) {
     CHECK_FREE_RESULT(gust_system_sample(system, points, 2, out, &frame), GUST_OK);
     CHECK(frame == 1);
     CHECK(out[1].x == 2.0f && out[1].y == 0.0f && out[1].z == 0.0f);
+    /* The coarser cascade: 16x8x16 cells of 2 m around the same centre, (0, 4, 0). */
+    gust_wind_texture coarse;
+    CHECK_RESULT(system, gust_system_cascade_texture(system, 1, &coarse), GUST_OK);
+    CHECK(coarse.extent[0] == 16 && coarse.extent[1] == 8 && coarse.extent[2] == 16);
+    CHECK(near3(transform_point(coarse.world_to_texture, vec3(-16.0f, -4.0f, -16.0f)), vec3(0.0f, 0.0f, 0.0f),
+                1e-6f));
+    CHECK(near3(transform_point(coarse.world_to_texture, vec3(16.0f, 12.0f, 16.0f)), vec3(1.0f, 1.0f, 1.0f),
+                1e-6f));
+    CHECK_RESULT(system, gust_system_cascade_texture(system, 2, &coarse), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_FREE_RESULT(gust_system_sample(system, NULL, 2, out, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_FREE_RESULT(gust_system_sample(system, points, 2, NULL, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_FREE_RESULT(gust_system_sample(NULL, points, 2, out, NULL), GUST_ERROR_INVALID_HANDLE);

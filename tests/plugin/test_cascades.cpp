@@ -1,13 +1,24 @@
 // A System of nested cascades (WindDomain::cascades, docs/solver.md "Cascades"): bad nests are refused, a
-// query outside the finest cascade answers from a coarser one, and a ridge beyond the finest cascade shelters
-// the player as one fine grid covering both does.
+// query outside the finest cascade answers from a coarser one, the snapshot, the textures and the OpenVDB
+// file hold every cascade, and a ridge beyond the finest cascade shelters the player as one fine grid
+// covering both does.
+#include "host_vulkan.hpp"
 #include "system_test_support.hpp"
 
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <gust/gpu/buffer.hpp>
+#include <gust/gpu/context.hpp>
+#if GUST_WITH_OPENVDB
+#include <openvdb/openvdb.h>
+#endif
 
 namespace gust::test {
 namespace {
+
+#include "gust_shaders/cascade_wind_comp.h"
 
 /// A closed box from lo to hi (world, m), as a mesh placed by the identity.
 struct Slab {
@@ -36,20 +47,16 @@ TEST(Cascades, badNestsAreRefusedWithTheirReason) {
     struct Case {
         std::uint32_t cascades, ratio;
         float cell_size;
-        bool snapshot;
         const char* says;
     };
     for (const Case& c :
-         {Case{0, 4, 1.0f, false, "domain.cascades must be 1..8"},
-          Case{9, 4, 1.0f, false, "domain.cascades must be 1..8"},
-          Case{2, 3, 1.0f, false, "domain.ratio must be 2 or 4"}, Case{6, 4, 1.0f, false, "more than 1000 m"},
-          Case{2, 2, 1.0f, true, "snapshot holds one cascade"}}) {
+         {Case{0, 4, 1.0f, "domain.cascades must be 1..8"}, Case{9, 4, 1.0f, "domain.cascades must be 1..8"},
+          Case{2, 3, 1.0f, "domain.ratio must be 2 or 4"}, Case{6, 4, 1.0f, "more than 1000 m"}}) {
         Watch watch;
         SystemDesc desc = small_desc(watch);
         desc.domain.cascades = c.cascades;
         desc.domain.ratio = c.ratio;
         desc.domain.cell_size = c.cell_size;
-        desc.snapshot = c.snapshot;
         std::unique_ptr<System> system;
         const Outcome created = System::create(desc, system);
         EXPECT_EQ(created.code(), ErrorCode::InvalidArgument) << c.says;
@@ -58,22 +65,42 @@ TEST(Cascades, badNestsAreRefusedWithTheirReason) {
     }
 }
 
-TEST(Cascades, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
-    // A fan 20 m out, beyond the finest cascade (16 m wide) but inside the next (64 m).
-    Watch watch;
+/// Three cascades of 16x8x16 cells (1 m, 4 m, 16 m) around (0, 4, 0), with the snapshot on, an ambient wind
+/// of `ambient` and a fan 20 m out, beyond the finest cascade (16 m wide) but inside the next (64 m), stepped
+/// 32 times.
+/// On the host's device when `host` is given.
+std::unique_ptr<System> fan_nest(Watch& watch, Vec3 ambient, const HostDevice* host = nullptr) {
     SystemDesc desc = small_desc(watch);
+    desc.host = host;
     desc.domain.cascades = 3;
     desc.domain.ratio = 4;
+    desc.snapshot = true;
     std::unique_ptr<System> system;
-    ASSERT_TRUE(System::create(desc, system));
+    const Outcome created = System::create(desc, system);
+    EXPECT_TRUE(created) << created.message();
+    if (!created) return nullptr;
     const WindEmitter fan{.type = WindEmitterType::Directional,
                           .position = {20.0f, 4.0f, 0.0f},
                           .direction = {0.0f, 0.0f, 1.0f},
                           .radius = 6.0f,
                           .strength = 6.0f};
-    ASSERT_TRUE(system->set_emitters({&fan, 1}));
+    EXPECT_TRUE(system->set_emitters({&fan, 1}));
+    EXPECT_TRUE(system->set_ambient(ambient));
     for (int f = 0; f < 32; ++f)
-        ASSERT_TRUE(system->step(0.1f));
+        if (!system->step(0.1f)) return nullptr;
+    return system;
+}
+
+/// The min corner of cascade k of fan_nest.
+Vec3 fan_nest_origin(int k) {
+    const float h = std::pow(4.0f, float(k));
+    return {-8.0f * h, 4.0f - 4.0f * h, -8.0f * h};
+}
+
+TEST(Cascades, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
+    Watch watch;
+    const std::unique_ptr<System> system = fan_nest(watch, {0.0f, 0.0f, 0.0f});
+    ASSERT_TRUE(system);
     const Vec3 points[] = {{20.0f, 4.0f, 0.0f}, {0.0f, 4.0f, 0.0f}, {120.0f, 4.0f, 0.0f}};
     std::array<Vec3, 3> wind{};
     ASSERT_TRUE(system->query(points, wind));
@@ -84,10 +111,301 @@ TEST(Cascades, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
     EXPECT_EQ(watch.errors, 0) << watch.last;
 }
 
+TEST(Cascades, theSnapshotAnswersFromEveryCascadeAsQueriesDo) {
+    Watch watch;
+    const Vec3 ambient{1.0f, 0.0f, 0.5f};
+    const std::unique_ptr<System> system = fan_nest(watch, ambient);
+    ASSERT_TRUE(system);
+    // Along the fan's axis from the middle of the finest cascade, through the finest one's blend zone (5..8
+    // m), the fan in the second cascade and its blend zone (20..32 m), to the third (to 128 m) and beyond it,
+    // at y and z of the second cascade's cell centres, where the wind varies most between them.
+    std::vector<Vec3> points;
+    for (float x = 0.25f; x < 160.0f; x += x < 40.0f ? 0.5f : 4.0f)
+        points.push_back({x, 2.0f, 2.0f});
+    std::vector<Vec3> sampled(points.size()), queried(points.size());
+    ASSERT_TRUE(system->query(points, queried));
+    ASSERT_TRUE(system->sample(points, sampled));
+    float fan = 0.0f;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vec3 &s = sampled[i], &q = queried[i];
+        fan = std::max(fan, q.z);
+        // The snapshot interpolates cell centres where query interpolates faces, and holds half floats.
+        const float speed = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+        const float tolerance = 0.25f + 0.1f * speed;
+        EXPECT_NEAR(s.x, q.x, tolerance) << "x = " << points[i].x;
+        EXPECT_NEAR(s.y, q.y, tolerance) << "x = " << points[i].x;
+        EXPECT_NEAR(s.z, q.z, tolerance) << "x = " << points[i].x;
+        if (points[i].x > 128.0f) {
+            EXPECT_EQ(s.x, ambient.x) << "beyond every cascade, x = " << points[i].x;
+            EXPECT_EQ(s.z, ambient.z) << "beyond every cascade, x = " << points[i].x;
+        }
+    }
+    EXPECT_GT(fan, 2.0f + ambient.z) << "the fan blows in the second cascade, where the snapshot must see it";
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+
+TEST(Cascades, everyCascadeHasItsOwnTextureOverItsOwnGrid) {
+    Watch watch;
+    const std::unique_ptr<System> system = fan_nest(watch, {0.0f, 0.0f, 0.0f});
+    ASSERT_TRUE(system);
+    const std::span<const WindTexture> textures = system->wind_textures();
+    ASSERT_EQ(textures.size(), 3u);
+    EXPECT_EQ(textures[0].image, system->wind_texture().image);
+    for (int k = 0; k < 3; ++k) {
+        const WindTexture& t = textures[std::size_t(k)];
+        for (int j = 0; j < k; ++j)
+            EXPECT_NE(t.image, textures[std::size_t(j)].image);
+        EXPECT_EQ(t.extent[0], 16u);
+        EXPECT_EQ(t.extent[1], 8u);
+        EXPECT_EQ(t.extent[2], 16u);
+        // Its grid's min corner maps to 0, its far corner (16x8x16 cells of 4^k m) to 1.
+        const Vec3 lo = fan_nest_origin(k);
+        const float h = std::pow(4.0f, float(k)), lo_[3] = {lo.x, lo.y, lo.z};
+        const float hi[3] = {lo.x + 16.0f * h, lo.y + 8.0f * h, lo.z + 16.0f * h};
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_NEAR(t.world_to_texture.m[a * 5] * lo_[a] + t.world_to_texture.m[12 + a], 0.0f, 1e-6f);
+            EXPECT_NEAR(t.world_to_texture.m[a * 5] * hi[a] + t.world_to_texture.m[12 + a], 1.0f, 1e-6f);
+        }
+    }
+    // Cascade k steps every 4^k frames: after 32 steps the finest's texture is from step 32, the second's
+    // from its eighth step (at step 29 or later: a frame it shares with the third waits one), the third's
+    // from step 17 or later.
+    EXPECT_EQ(textures[0].frame, 32u);
+    EXPECT_GE(textures[1].frame, 29u);
+    EXPECT_LE(textures[1].frame, 32u);
+    EXPECT_GE(textures[2].frame, 17u);
+    EXPECT_LE(textures[2].frame, 32u);
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+
+/// What a host's compute shader reads through gust_wind.glsl (shaders/cascade_wind.comp) from three cascades'
+/// `textures` at `points`, on the host's device; empty on failure, with the reason in `error`.
+std::vector<Vec3> read_through_glsl(const HostDevice& host, std::span<const WindTexture> textures,
+                                    Vec3 ambient, std::span<const Vec3> points, std::string& error) {
+    gpu::HostDevice adopted;
+    adopted.instance = host.instance;
+    adopted.physical_device = host.physical_device;
+    adopted.device = host.device;
+    adopted.queue_family = host.queue_family;
+    adopted.queue_index = host.queue_index;
+    adopted.get_instance_proc_addr = host.get_instance_proc_addr;
+    adopted.get_device_proc_addr =
+        host.get_device_proc_addr ? host.get_device_proc_addr
+                                  : reinterpret_cast<PFN_vkGetDeviceProcAddr>(
+                                        host.get_instance_proc_addr(host.instance, "vkGetDeviceProcAddr"));
+    auto ctx = gpu::Context::adopt(adopted);
+    if (!ctx) {
+        error = ctx.message();
+        return {};
+    }
+    gpu::Context& c = **ctx;
+    const auto load = [&](const char* name) { return adopted.get_device_proc_addr(host.device, name); };
+    const auto create_set_layout =
+        reinterpret_cast<PFN_vkCreateDescriptorSetLayout>(load("vkCreateDescriptorSetLayout"));
+    const auto destroy_set_layout =
+        reinterpret_cast<PFN_vkDestroyDescriptorSetLayout>(load("vkDestroyDescriptorSetLayout"));
+    const auto create_pool = reinterpret_cast<PFN_vkCreateDescriptorPool>(load("vkCreateDescriptorPool"));
+    const auto destroy_pool = reinterpret_cast<PFN_vkDestroyDescriptorPool>(load("vkDestroyDescriptorPool"));
+    const auto allocate_sets =
+        reinterpret_cast<PFN_vkAllocateDescriptorSets>(load("vkAllocateDescriptorSets"));
+    const auto update_sets = reinterpret_cast<PFN_vkUpdateDescriptorSets>(load("vkUpdateDescriptorSets"));
+    const auto bind_sets = reinterpret_cast<PFN_vkCmdBindDescriptorSets>(load("vkCmdBindDescriptorSets"));
+    const gpu::Dispatch& vk = c.vk();
+    const VkDevice device = host.device;
+
+    // The inputs: the points, and the matrices and ambient wind as the shader's Frame block lays them out.
+    struct Frame {
+        float world_to_texture[3][16];
+        float ambient[3];
+    } frame{};
+    for (std::size_t k = 0; k < 3; ++k)
+        std::memcpy(frame.world_to_texture[k], textures[k].world_to_texture.m,
+                    sizeof(frame.world_to_texture[k]));
+    std::memcpy(frame.ambient, &ambient, sizeof(frame.ambient));
+    auto point_buffer = gpu::Buffer::create(c, points.size_bytes(), gpu::MemoryUse::Upload);
+    auto wind_buffer = gpu::Buffer::create(c, points.size_bytes(), gpu::MemoryUse::Readback);
+    auto frame_buffer = gpu::Buffer::create(c, sizeof(frame), gpu::MemoryUse::Upload);
+    if (!point_buffer || !wind_buffer || !frame_buffer) {
+        error = "buffers";
+        return {};
+    }
+    std::memcpy(point_buffer->mapped(), points.data(), points.size_bytes());
+    std::memcpy(frame_buffer->mapped(), &frame, sizeof(frame));
+
+    VkDescriptorSetLayoutBinding binding{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 3,
+                                         VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    set_info.bindingCount = 1;
+    set_info.pBindings = &binding;
+    VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+    VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0,
+                             3 * sizeof(VkDeviceAddress) + sizeof(std::uint32_t)};
+    VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layout_info.setLayoutCount = 1;
+    layout_info.pSetLayouts = &set_layout;
+    layout_info.pushConstantRangeCount = 1;
+    layout_info.pPushConstantRanges = &push;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    module_info.codeSize = sizeof(cascade_wind_comp);
+    module_info.pCode = cascade_wind_comp;
+    VkShaderModule module = VK_NULL_HANDLE;
+    VkComputePipelineCreateInfo pipeline_info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 3};
+    VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    pool_info.maxSets = 1;
+    pool_info.poolSizeCount = 1;
+    pool_info.pPoolSizes = &size;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    std::vector<Vec3> winds;
+    if (create_set_layout(device, &set_info, nullptr, &set_layout) == VK_SUCCESS &&
+        vk.vkCreatePipelineLayout(device, &layout_info, nullptr, &layout) == VK_SUCCESS &&
+        vk.vkCreateShaderModule(device, &module_info, nullptr, &module) == VK_SUCCESS &&
+        create_pool(device, &pool_info, nullptr, &pool) == VK_SUCCESS) {
+        pipeline_info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+        pipeline_info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+        pipeline_info.stage.module = module;
+        pipeline_info.stage.pName = "main";
+        pipeline_info.layout = layout;
+        VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+        allocate.descriptorPool = pool;
+        allocate.descriptorSetCount = 1;
+        allocate.pSetLayouts = &set_layout;
+        if (vk.vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline) ==
+                VK_SUCCESS &&
+            allocate_sets(device, &allocate, &set) == VK_SUCCESS) {
+            VkDescriptorImageInfo images[3];
+            for (std::size_t k = 0; k < 3; ++k)
+                images[k] = {textures[k].sampler, textures[k].view, textures[k].layout};
+            VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            write.dstSet = set;
+            write.descriptorCount = 3;
+            write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+            write.pImageInfo = images;
+            update_sets(device, 1, &write, 0, nullptr);
+            struct {
+                VkDeviceAddress points, winds, frame;
+                std::uint32_t count;
+            } constants{point_buffer->address(), wind_buffer->address(), frame_buffer->address(),
+                        std::uint32_t(points.size())};
+            const Status ran = c.submit_and_wait([&](VkCommandBuffer cmd) {
+                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
+                bind_sets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &set, 0, nullptr);
+                vk.vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push.size, &constants);
+                vk.vkCmdDispatch(cmd, (std::uint32_t(points.size()) + 63) / 64, 1, 1);
+                gpu::barrier(c, cmd);
+            });
+            if (ran) {
+                winds.resize(points.size());
+                std::memcpy(winds.data(), wind_buffer->mapped(), points.size_bytes());
+            } else {
+                error = ran.message();
+            }
+        } else {
+            error = "the pipeline or its descriptor set";
+        }
+    } else {
+        error = "the layouts, shader module or pool";
+    }
+    vk.vkDestroyPipeline(device, pipeline, nullptr);
+    destroy_pool(device, pool, nullptr);
+    vk.vkDestroyShaderModule(device, module, nullptr);
+    vk.vkDestroyPipelineLayout(device, layout, nullptr);
+    destroy_set_layout(device, set_layout, nullptr);
+    return winds;
+}
+
+TEST(Cascades, aHostShaderReadsTheBlendedCascadesThroughTheGlslInclude) {
+    HostVulkan host;
+    ASSERT_TRUE(host.ok()) << host.error();
+    Watch watch;
+    const Vec3 ambient{1.0f, 0.0f, 0.5f};
+    const std::unique_ptr<System> system = fan_nest(watch, ambient, &host.device());
+    ASSERT_TRUE(system);
+    // From the finest cascade through both blend zones and the fan to beyond the coarsest (as above).
+    std::vector<Vec3> points;
+    for (float x = 0.25f; x < 160.0f; x += x < 40.0f ? 0.5f : 4.0f)
+        points.push_back({x, 2.0f, 2.0f});
+    points.push_back({-140.0f, 300.0f, 3.0f});
+    std::string error;
+    const std::vector<Vec3> read =
+        read_through_glsl(host.device(), system->wind_textures(), ambient, points, error);
+    ASSERT_EQ(read.size(), points.size()) << error;
+    std::vector<Vec3> sampled(points.size());
+    ASSERT_TRUE(system->sample(points, sampled));
+    float fan = 0.0f;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        // The same texels and blend; the GPU's sampler weighs texels with 8-bit fractions (Vulkan's minimum).
+        const Vec3 &g = read[i], &s = sampled[i];
+        fan = std::max(fan, g.z);
+        const float speed = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+        const float tolerance = 0.01f + 0.02f * speed;
+        EXPECT_NEAR(g.x, s.x, tolerance) << "x = " << points[i].x;
+        EXPECT_NEAR(g.y, s.y, tolerance) << "x = " << points[i].x;
+        EXPECT_NEAR(g.z, s.z, tolerance) << "x = " << points[i].x;
+    }
+    EXPECT_GT(fan, 2.0f + ambient.z) << "the fan in the second cascade reaches the shader";
+    EXPECT_EQ(read.back().x, ambient.x) << "beyond every cascade, the ambient wind";
+    EXPECT_EQ(read.back().z, ambient.z);
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+    EXPECT_EQ(host.messages(), 0);
+}
+
+#if GUST_WITH_OPENVDB
+TEST(Cascades, theOpenVdbFileHoldsEveryCascadesGridsOnItsOwnCells) {
+    Watch watch;
+    const std::unique_ptr<System> system = fan_nest(watch, {0.0f, 0.0f, 0.0f});
+    ASSERT_TRUE(system);
+    const std::filesystem::path path = std::filesystem::temp_directory_path() / "gust_cascades_export.vdb";
+    ASSERT_TRUE(system->export_vdb(path.c_str()));
+    openvdb::initialize();
+    openvdb::io::File file(path.string());
+    file.open();
+    for (const char* name :
+         {"occupancy", "solid", "velocity", "pressure", "solid_cascade1", "velocity_cascade1",
+          "pressure_cascade1", "solid_cascade2", "velocity_cascade2", "pressure_cascade2"})
+        EXPECT_TRUE(file.hasGrid(name)) << name;
+    EXPECT_FALSE(file.hasGrid("velocity_cascade3"));
+    std::array<openvdb::Vec3SGrid::Ptr, 3> velocity;
+    for (int k = 0; k < 3; ++k)
+        velocity[std::size_t(k)] = openvdb::gridPtrCast<openvdb::Vec3SGrid>(
+            file.readGrid(k == 0 ? "velocity" : "velocity_cascade" + std::to_string(k)));
+    file.close();
+    std::filesystem::remove(path);
+    for (int k = 0; k < 3; ++k) {
+        const openvdb::Vec3SGrid& grid = *velocity[std::size_t(k)];
+        const double h = std::pow(4.0, k);
+        EXPECT_NEAR(grid.voxelSize().x(), h, 1e-6) << k;
+        EXPECT_EQ(grid.activeVoxelCount(), 16u * 8u * 16u) << k;
+        const openvdb::Vec3d c = grid.indexToWorld(openvdb::Coord(2, 3, 4));
+        const Vec3 lo = fan_nest_origin(k);
+        EXPECT_NEAR(c.x(), lo.x + 2.5 * h, 1e-4) << k;
+        EXPECT_NEAR(c.y(), lo.y + 3.5 * h, 1e-4) << k;
+        EXPECT_NEAR(c.z(), lo.z + 4.5 * h, 1e-4) << k;
+    }
+    // The second cascade's cell centred at (18, 2, 2) m, in its interior and beyond the finest cascade, holds
+    // the velocity query answers there (from that cascade alone); the fan blows through it.
+    const openvdb::Coord cell(12, 3, 8);
+    const openvdb::Vec3s stored = velocity[1]->getConstAccessor().getValue(cell);
+    const openvdb::Vec3d centre = velocity[1]->indexToWorld(cell);
+    const Vec3 point{float(centre.x()), float(centre.y()), float(centre.z())};
+    Vec3 queried;
+    ASSERT_TRUE(system->query({&point, 1}, {&queried, 1}));
+    EXPECT_GT(stored.z(), 1.0f);
+    EXPECT_NEAR(stored.x(), queried.x, 0.02f);
+    EXPECT_NEAR(stored.y(), queried.y, 0.02f);
+    EXPECT_NEAR(stored.z(), queried.z, 0.02f);
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+#endif
+
 TEST(Cascades, shiftingTheOriginMovesTheWindTheSolidsAndThePendingQueries) {
     // Two Systems of one scene; the second's world is rebased half-way by an offset of no whole cells.
     const Vec3 offset{37.3f, -2.5f, -12.9f};
-    // Off the voxel planes, so that no face of it lies where rounding the shifted coordinates could flip a voxel.
+    // Off the voxel planes, so that no face of it lies where rounding the shifted coordinates could flip a
+    // voxel.
     const Slab block({-1.8f, 0.1f, -0.9f}, {1.2f, 2.9f, 1.7f});
     std::unique_ptr<System> systems[2];
     Watch watch[2];

@@ -459,8 +459,13 @@ gust_result gust_system_fetch(gust_system system, gust_query query, gust_vec3* v
 /// Wind at one world point (m) in the form engines' wind sources use.
 gust_result gust_system_wind_at(gust_system system, gust_vec3 point, gust_wind_sample* sample);
 
-/// Fills `texture` with the wind texture's handles and mapping (handles owned by the system).
+/// Fills `texture` with the wind texture's handles and mapping (handles owned by the system): the finest
+/// cascade's.
 gust_result gust_system_wind_texture(gust_system system, gust_wind_texture* texture);
+
+/// Fills `texture` with cascade `cascade`'s wind texture (0: the finest, as gust_system_wind_texture; up to
+/// domain.cascades - 1); GUST_INVALID_ARGUMENT beyond the last. gust_wind.glsl blends them.
+gust_result gust_system_cascade_texture(gust_system system, uint32_t cascade, gust_wind_texture* texture);
 
 /// Fills `stats` with the last step's statistics (a writer call; gust::System::read_stats is the reader's).
 gust_result gust_system_stats(gust_system system, gust_frame_stats* stats);

@@ -148,9 +148,9 @@ struct WindDomain {
     std::uint32_t hysteresis = 8;
     /// Nested grids around the focus (docs/solver.md "Cascades"), 1..8: cascade k has `cells` cells of
     /// cell_size · ratio^k, the finest first. 1: one grid with the ambient wind beyond it. Queries, wind_at
-    /// and query_async answer from the finest cascade that holds the point, blended into the next over its
-    /// last cells; the wind texture, the debug views and write_vdb hold the finest cascade; `snapshot` is
-    /// refused with more than one cascade (it would answer the ambient wind beyond the finest).
+    /// query_async and sample answer from the finest cascade that holds the point, blended into the next over
+    /// its last cells; each cascade has its own wind texture (wind_textures; gust_wind.glsl blends them as
+    /// the answers do) and its own grids in export_vdb; the debug views hold the finest cascade.
     std::uint32_t cascades = 1;
     std::uint32_t ratio = 4; ///< cell size from one cascade to the next coarser: 2 or 4
 };
@@ -347,7 +347,7 @@ struct FrameStats {
 /// The snapshot a System::sample call answered from.
 struct SnapshotInfo {
     std::uint64_t frame = 0;      ///< WindTexture::frame of the step that wrote it (1 after the first)
-    Vec3 origin{};                ///< the domain's min corner then, m
+    Vec3 origin{};                ///< the (finest cascade's) domain's min corner then, m
     float cell_size = 0.0f;       ///< m
     std::uint32_t extent[3] = {}; ///< cells per axis
 };
@@ -494,8 +494,14 @@ class System {
     /// Wind at one point in the form engines' wind sources use.
     Outcome wind_at(const Vec3& point, WindSample& sample);
 
-    /// The wind texture (valid until the System is destroyed; contents change at each step).
+    /// The wind texture (valid until the System is destroyed; contents change at each step): the finest
+    /// cascade's.
     const WindTexture& wind_texture() const;
+    /// Every cascade's wind texture, finest first (WindDomain::cascades of them; the first is
+    /// wind_texture()). A coarser cascade's changes at its own steps (its `frame` says which); its
+    /// world_to_texture follows its grid. include/gust/gust_wind.glsl picks and blends them in a host's
+    /// shaders.
+    std::span<const WindTexture> wind_textures() const;
     /// Writer call (read_stats from other threads): the last step's statistics (HostCommands: those of the
     /// frame recorded frames_in_flight steps ago).
     const FrameStats& stats() const;
@@ -503,7 +509,8 @@ class System {
     Vec3 domain_origin() const;
     /// The Vulkan device the System runs on (VkPhysicalDeviceProperties::deviceName), valid while it lives.
     const char* device_name() const;
-    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure; docs/design.md layout);
+    /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure, and each coarser cascade's
+    /// velocity_cascadeK, solid_cascadeK and pressure_cascadeK; docs/design.md layout);
     /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).
     Outcome export_vdb(const char* path);
 

@@ -44,6 +44,8 @@ inline constexpr float kMaxStep = 10.0f;
 inline constexpr float kMaxAmbientSpeed = 1e4f;
 /// The most cascades a nest holds (WindSolver::couple).
 inline constexpr std::uint32_t kMaxCascades = 8;
+/// Cells over which a cascade's answer blends into the next coarser one's, inward from its border.
+inline constexpr float kCascadeBlendCells = 3.0f;
 /// The most emitters a solver takes.
 inline constexpr std::size_t kMaxEmitterCount = 64;
 /// An emitter's largest |strength|, m/s, and largest falloff exponent.
