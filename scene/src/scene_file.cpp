@@ -34,6 +34,13 @@ using nlohmann::json;
 constexpr std::uintmax_t kMaxFileBytes = 64u << 20;
 // Deeper nesting than any scene needs; the limit keeps recursive JSON copies and frees shallow.
 constexpr std::size_t kMaxDepth = 64;
+// Terrain limits: lengths and heights within 100 km (far beyond any domain, well inside a float's
+// metre precision), a mesh of at most 8 million triangles (about 150 MB of positions and indices), and
+// few enough features that every vertex sums them quickly.
+constexpr double kMaxTerrainLength = 100000.0;
+constexpr std::uint32_t kMaxTerrainSamples = 2048;
+constexpr std::uint64_t kMaxTerrainTriangles = 8000000;
+constexpr std::size_t kMaxTerrainFeatures = 64;
 
 /// A failed check: "<key path>: <reason>" (load_scene adds the file).
 struct Invalid {
@@ -437,12 +444,143 @@ std::vector<Keyframe> read_keyframes(const json& value, const std::string& at) {
     return keyframes;
 }
 
+/// A number within ±kMaxTerrainLength metres.
+float terrain_length(const json& value, const std::string& at) {
+    const double v = number(value, at);
+    if (std::abs(v) > kMaxTerrainLength) {
+        fail(at, "must be within ±" + format(kMaxTerrainLength) + " m (found " + format(v) + ")");
+    }
+    return static_cast<float>(v);
+}
+
+/// A number in (0, kMaxTerrainLength] metres.
+float terrain_positive_length(const json& value, const std::string& at) {
+    const float v = positive_float(value, at);
+    if (double(v) > kMaxTerrainLength) {
+        fail(at, "must be at most " + format(kMaxTerrainLength) + " m (found " + format(v) + ")");
+    }
+    return v;
+}
+
+/// Exactly two items of `value` (a JSON array), read by `read`.
+template <class Read> auto pair_of(const json& value, const std::string& at, const char* what, Read read) {
+    if (!value.is_array() || value.size() != 2) {
+        const std::string found =
+            value.is_array() ? std::to_string(value.size()) + " items" : std::string(value.type_name());
+        fail(at, std::string("expected an array of 2 ") + what + " (found " + found + ")");
+    }
+    return std::array{read(value[0], index_path(at, 0)), read(value[1], index_path(at, 1))};
+}
+
+glm::vec2 terrain_point(const json& value, const std::string& at) {
+    const auto p = pair_of(value, at, "numbers [x, z]", terrain_length);
+    return {p[0], p[1]};
+}
+
+TerrainFeature read_terrain_feature(const json& value, const std::string& at) {
+    object(value, at);
+    const std::string type_at = key_path(at, "type");
+    const std::string type = text(required(value, "type", at), type_at);
+    TerrainFeature feature;
+    if (type == "hill") {
+        allow_keys(value, at, {"type", "center", "height", "radius"});
+        feature.from = terrain_point(required(value, "center", at), key_path(at, "center"));
+        feature.to = feature.from;
+        feature.height = terrain_length(required(value, "height", at), key_path(at, "height"));
+        feature.width = terrain_positive_length(required(value, "radius", at), key_path(at, "radius"));
+    } else if (type == "ridge" || type == "valley") {
+        const bool ridge = type == "ridge";
+        const char* amount = ridge ? "height" : "depth";
+        allow_keys(value, at, {"type", "from", "to", amount, "width"});
+        feature.from = terrain_point(required(value, "from", at), key_path(at, "from"));
+        feature.to = terrain_point(required(value, "to", at), key_path(at, "to"));
+        const std::string amount_at = key_path(at, amount);
+        const float height = terrain_length(required(value, amount, at), amount_at);
+        if (!ridge && height < 0.0f) {
+            fail(amount_at,
+                 "must not be negative (found " + format(height) + "); a valley digs by its depth");
+        }
+        feature.height = ridge ? height : -height;
+        feature.width = terrain_positive_length(required(value, "width", at), key_path(at, "width"));
+    } else {
+        fail(type_at, "unknown terrain feature '" + type + "' (expected hill, ridge or valley)");
+    }
+    return feature;
+}
+
+TerrainNoise read_terrain_noise(const json& value, const std::string& at) {
+    object(value, at);
+    allow_keys(value, at, {"amplitude", "wavelength", "octaves", "seed"});
+    TerrainNoise noise;
+    if (const json* v = member(value, "amplitude")) {
+        const std::string amplitude_at = key_path(at, "amplitude");
+        noise.amplitude = terrain_length(*v, amplitude_at);
+        if (noise.amplitude < 0.0f)
+            fail(amplitude_at, "must not be negative (found " + format(noise.amplitude) + ")");
+    }
+    if (const json* v = member(value, "wavelength")) {
+        const std::string wavelength_at = key_path(at, "wavelength");
+        noise.wavelength = terrain_positive_length(*v, wavelength_at);
+        // Keeps lattice coordinates (up to 100 km / wavelength · 2^15) well inside 64-bit integers.
+        if (noise.wavelength < 0.01f)
+            fail(wavelength_at, "must be at least 0.01 m (found " + format(noise.wavelength) + ")");
+    }
+    if (const json* v = member(value, "octaves")) noise.octaves = integer(*v, key_path(at, "octaves"), 1, 16);
+    if (const json* v = member(value, "seed")) {
+        noise.seed = integer(*v, key_path(at, "seed"), 0, std::numeric_limits<std::uint32_t>::max());
+    }
+    return noise;
+}
+
+TerrainDesc read_terrain(const json& value, const std::string& at) {
+    object(value, at);
+    allow_keys(value, at, {"size", "samples", "base", "features", "noise"});
+    TerrainDesc terrain;
+    if (const json* v = member(value, "size")) {
+        const auto size = pair_of(*v, key_path(at, "size"), "numbers [sx, sz]", terrain_positive_length);
+        terrain.size = {size[0], size[1]};
+    }
+    if (const json* v = member(value, "samples")) {
+        const std::string samples_at = key_path(at, "samples");
+        const auto samples =
+            pair_of(*v, samples_at, "integers [nx, nz]", [](const json& item, const std::string& item_at) {
+                return integer(item, item_at, 1, kMaxTerrainSamples);
+            });
+        terrain.samples = {samples[0], samples[1]};
+        const std::uint64_t triangles = 2ull * samples[0] * samples[1];
+        if (triangles > kMaxTerrainTriangles) {
+            fail(samples_at, "2 · nx · nz = " + std::to_string(triangles) + " triangles, more than " +
+                                 std::to_string(kMaxTerrainTriangles));
+        }
+    }
+    if (const json* v = member(value, "base")) terrain.base = terrain_length(*v, key_path(at, "base"));
+    if (const json* v = member(value, "features")) {
+        const std::string features_at = key_path(at, "features");
+        array(*v, features_at);
+        if (v->size() > kMaxTerrainFeatures) {
+            fail(features_at, "at most " + std::to_string(kMaxTerrainFeatures) + " features (found " +
+                                  std::to_string(v->size()) + ")");
+        }
+        for (std::size_t i = 0; i < v->size(); ++i)
+            terrain.features.push_back(read_terrain_feature((*v)[i], index_path(features_at, i)));
+    }
+    if (const json* v = member(value, "noise")) terrain.noise = read_terrain_noise(*v, key_path(at, "noise"));
+    return terrain;
+}
+
 SceneObject read_object(const json& value, const std::string& at, const fs::path& folder) {
     object(value, at);
-    allow_keys(value, at, {"mesh", "static", "transform", "keyframes", "animation"});
+    allow_keys(value, at, {"mesh", "static", "transform", "keyframes", "animation", "terrain"});
     SceneObject object_desc;
     const std::string mesh_at = key_path(at, "mesh");
-    object_desc.mesh = resolve_mesh(text(required(value, "mesh", at), mesh_at), folder, mesh_at);
+    const json* mesh = member(value, "mesh");
+    const json* terrain = member(value, "terrain");
+    if (mesh != nullptr && terrain != nullptr)
+        fail(key_path(at, "terrain"), "an object has either a mesh or a terrain, not both");
+    if (mesh == nullptr && terrain == nullptr)
+        fail(mesh_at, "missing required key (an object needs a mesh or a terrain)");
+    if (mesh != nullptr) object_desc.mesh = resolve_mesh(text(*mesh, mesh_at), folder, mesh_at);
+    if (terrain != nullptr) object_desc.terrain = read_terrain(*terrain, key_path(at, "terrain"));
     if (const json* v = member(value, "static")) object_desc.is_static = boolean(*v, key_path(at, "static"));
     const json* transform = member(value, "transform");
     const json* keyframes = member(value, "keyframes");
@@ -463,6 +601,7 @@ SceneObject read_object(const json& value, const std::string& at, const fs::path
     if (animation != nullptr) {
         const std::string animation_at = key_path(at, "animation");
         if (object_desc.is_static) fail(animation_at, "a static object cannot be animated");
+        if (object_desc.terrain) fail(animation_at, "a terrain cannot be animated (only glTF meshes can)");
         object_desc.animation = read_animation(*animation, animation_at, object_desc.mesh);
     }
     return object_desc;

@@ -1,7 +1,9 @@
-// SceneRuntime: one load per mesh file, then each object's matrix and (posed) positions on demand.
+// SceneRuntime: one load per mesh file (terrains generated), then each object's matrix and (posed) positions
+// on demand.
 #include "gust/scene/scene_runtime.hpp"
 
 #include "gust/scene/import.hpp"
+#include "gust/scene/primitives.hpp"
 
 #include <cassert>
 #include <cmath>
@@ -49,6 +51,12 @@ Result<SceneRuntime> SceneRuntime::load(const SceneDesc& scene) {
             const SceneObject& desc = scene.objects[i];
             Object object;
             object.desc = desc;
+            if (desc.terrain) {
+                // Generated per object: scenes hold one terrain or a few different ones.
+                object.mesh = std::make_shared<const Mesh>(make_terrain_mesh(*desc.terrain));
+                runtime.objects_.push_back(std::move(object));
+                continue;
+            }
             auto mesh = meshes.find(desc.mesh);
             if (mesh == meshes.end()) {
                 Result<Mesh> loaded = load_mesh(desc.mesh);

@@ -904,5 +904,28 @@ TEST(CliSimulate, takesTheScenesPressureSolverAdvectionAndHysteresis) {
     fs::remove_all(dir);
 }
 
+// Issue 30's example world: a village in a generated 1 km valley of 500,000 triangles, four cascades of
+// ratio 4, runs under the validation layer with every solve converged and nothing rejected.
+TEST(CliSimulate, theValleyRunsItsKilometreOfTerrainThroughFourCascades) {
+    const fs::path dir = fresh_dir("simulate_valley");
+    const CliRun run = gust("simulate " + asset("scenes/valley.json") + " --frames 3 --validation --out " +
+                            (dir / "out").string());
+    ASSERT_EQ(run.code, 0) << run.err;
+    std::ifstream stats(dir / "out" / "stats.jsonl");
+    std::string line;
+    int frames = 0;
+    while (std::getline(stats, line)) {
+        const auto j = nlohmann::json::parse(line);
+        EXPECT_TRUE(j["converged"].get<bool>()) << line;
+        EXPECT_FALSE(j["diverged"].get<bool>()) << line;
+        EXPECT_EQ(j["rejected"].get<int>(), 0) << line;
+        EXPECT_GT(j["voxels"].get<int>(), 0) << line;
+        ++frames;
+    }
+    EXPECT_EQ(frames, 3);
+    EXPECT_TRUE(fs::exists(dir / "out" / "frame_0000.vdb"));
+    fs::remove_all(dir);
+}
+
 } // namespace
 } // namespace gust::test

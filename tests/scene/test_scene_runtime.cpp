@@ -1,7 +1,8 @@
 // SceneRuntime: meshes loaded once and shared, animated objects posed at the scene's clip time, load
 // errors naming the object and file; and the example scenes in assets/scenes load and stay inside
-// their domains.
+// their domains (the valley's in its cascades).
 #include "gust/scene/animated_mesh.hpp"
+#include "gust/scene/primitives.hpp"
 #include "gust/scene/scene_file.hpp"
 #include "gust/scene/scene_runtime.hpp"
 #include "scene_test_support.hpp"
@@ -290,6 +291,85 @@ TEST(ExampleScenes, dragonFliesThroughTheArchOpeningAndPastTheWall) {
         }
     }
     EXPECT_GT(inside_arch, 1000u) << "the dragon does pass through the arch";
+}
+
+Box cascade_box(const gust::DomainDesc& domain, std::uint32_t cascade) {
+    const float cell = domain.cell_size * std::pow(float(domain.ratio), float(cascade));
+    const glm::vec3 half = glm::vec3(domain.cells) * cell * 0.5f;
+    return {domain.center - half, domain.center + half};
+}
+
+bool inside(const Box& box, const Box& outer) {
+    return glm::all(glm::greaterThanEqual(box.min, outer.min)) &&
+           glm::all(glm::lessThanEqual(box.max, outer.max));
+}
+
+TEST(ExampleScenes, valleyIsA500kTriangleKilometreOfTerrainInsideTheCoarsestCascade) {
+    const gust::SceneDesc desc = scene_ok(kAssets / "scenes/valley.json");
+    gust::SceneRuntime runtime = runtime_ok(desc);
+    ASSERT_TRUE(desc.objects.at(0).terrain.has_value());
+    EXPECT_TRUE(desc.objects[0].is_static);
+    EXPECT_EQ(desc.objects[0].terrain->size, glm::vec2(1000.0f, 1000.0f));
+    EXPECT_EQ(runtime.mesh(0).triangle_count(), 500000u);
+    EXPECT_EQ(runtime.mesh(0).positions.size(), 501u * 501u);
+    EXPECT_EQ(desc.domain.cells, glm::uvec3(32, 16, 32));
+    EXPECT_EQ(desc.domain.cascades, 4u);
+    EXPECT_EQ(desc.domain.ratio, 4u);
+    EXPECT_DOUBLE_EQ(desc.dt, 0.05);
+    const Box coarsest = cascade_box(desc.domain, desc.domain.cascades - 1);
+    for (std::size_t i = 0; i < runtime.object_count(); ++i)
+        EXPECT_TRUE(inside(world_box(runtime, i, 0.0), coarsest)) << "object " << i;
+}
+
+TEST(ExampleScenes, valleyVillageAndWalkingFoxStandOnTheGroundInsideTheFinestCascade) {
+    const gust::SceneDesc desc = scene_ok(kAssets / "scenes/valley.json");
+    gust::SceneRuntime runtime = runtime_ok(desc);
+    const gust::TerrainDesc& terrain = desc.objects.at(0).terrain.value();
+    const Box finest = cascade_box(desc.domain, 0);
+    std::size_t buildings = 0;
+    std::size_t trees = 0;
+    for (std::size_t i = 1; i < runtime.object_count(); ++i) {
+        const bool moves = !desc.objects[i].keyframes.empty();
+        const std::string name = desc.objects[i].mesh.filename().string();
+        if (name.starts_with("building")) ++buildings;
+        if (name == "tree_detailed.glb") ++trees;
+        for (double t = 0.0; t <= (moves ? desc.objects[i].keyframes.back().t : 0.0); t += 0.5) {
+            const Box box = world_box(runtime, i, t);
+            const glm::vec3 centre = (box.min + box.max) * 0.5f;
+            const double ground = gust::terrain_height(terrain, centre.x, centre.z);
+            // Sunk a little into the ground under its footprint (so no air passes beneath), never floating.
+            EXPECT_LE(box.min.y, ground + 0.05) << name << " (object " << i << ") at t = " << t;
+            EXPECT_GE(box.min.y, ground - 3.0) << name << " (object " << i << ") at t = " << t;
+            if (name != "tree_detailed.glb") {
+                EXPECT_TRUE(inside(box, finest)) << name << " (object " << i << ") at t = " << t;
+            }
+        }
+    }
+    EXPECT_GE(buildings, 4u);
+    EXPECT_GE(trees, 10u);
+    EXPECT_TRUE(runtime.deforms(runtime.object_count() - 1)) << "the Fox walks";
+}
+
+TEST(ExampleScenes, valleyWindCrossesARidgeUpwindOfTheVillage) {
+    const gust::SceneDesc desc = scene_ok(kAssets / "scenes/valley.json");
+    const gust::TerrainDesc& terrain = desc.objects.at(0).terrain.value();
+    ASSERT_GT(glm::length(desc.ambient_velocity), 0.0f);
+    const glm::vec2 upwind = -glm::normalize(glm::vec2(desc.ambient_velocity.x, desc.ambient_velocity.z));
+    const double village = gust::terrain_height(terrain, 0.0, 0.0);
+    double crest = village;
+    double crest_distance = 0.0;
+    for (double d = 0.0; d <= 450.0; d += 1.0) {
+        const double h = gust::terrain_height(terrain, upwind.x * d, upwind.y * d);
+        if (h > crest) {
+            crest = h;
+            crest_distance = d;
+        }
+    }
+    EXPECT_GE(crest_distance, 150.0);
+    EXPECT_LE(crest_distance, 250.0);
+    EXPECT_GE(crest - village, 30.0);
+    EXPECT_NEAR(glm::length(desc.domain.center - glm::vec3(0.0f, float(village), 0.0f)), 6.0f, 0.5f)
+        << "the domain is centred on the village, a few metres above its ground";
 }
 
 } // namespace

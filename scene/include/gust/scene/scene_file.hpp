@@ -3,6 +3,7 @@
 #pragma once
 
 #include "gust/gpu/result.hpp"
+#include "gust/scene/primitives.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -40,13 +41,15 @@ struct AnimationDesc {
     double offset = 0.0; ///< clip time at scene time 0, seconds
 };
 
-/// One mesh instance in the scene.
+/// One mesh instance in the scene: a mesh file or a generated terrain.
 struct SceneObject {
-    std::filesystem::path mesh;             ///< absolute (resolved relative to the scene file's folder)
-    bool is_static = false;                 ///< JSON "static": never moves, voxelized once
-    Transform transform;                    ///< used when there are no keyframes
+    std::filesystem::path
+        mesh;               ///< absolute (resolved relative to the scene file's folder); empty for a terrain
+    bool is_static = false; ///< JSON "static": never moves, voxelized once
+    Transform transform;    ///< used when there are no keyframes
     std::vector<Keyframe> keyframes;        ///< strictly increasing t; empty for a fixed transform
     std::optional<AnimationDesc> animation; ///< a skinned clip deforming the mesh, if any
+    std::optional<TerrainDesc> terrain;     ///< JSON "terrain": a generated mesh instead of a file
 };
 
 /// One key of a moving emitter's path.

@@ -18,9 +18,10 @@ namespace gust {
 /// thread-safe: positions() reuses a buffer per object.
 class SceneRuntime {
   public:
-    /// Loads every mesh of `scene` once (shared between objects with the same path) and finds each
-    /// animation clip. On failure the message is "<scene file>: objects[i].<key>: <reason>", the reason
-    /// naming the mesh file (and listing the file's clips when a clip is missing); it never throws.
+    /// Loads every mesh of `scene` once (shared between objects with the same path), generates each
+    /// terrain (make_terrain_mesh) and finds each animation clip. On failure the message is "<scene file>:
+    /// objects[i].<key>: <reason>", the reason naming the mesh file (and listing the file's clips when a clip
+    /// is missing); it never throws.
     static Result<SceneRuntime> load(const SceneDesc& scene);
 
     /// Number of objects, as in the scene description.
