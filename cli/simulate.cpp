@@ -25,9 +25,10 @@ int fail(const std::string& message) {
     return 1;
 }
 
-/// "<scene>: objects[i].mesh: <mesh>: ", the start of an error about object i.
-std::string object_at(const std::string& scene, std::size_t i, const std::filesystem::path& mesh) {
-    return scene + ": objects[" + std::to_string(i) + "].mesh: " + mesh.string() + ": ";
+/// "<scene>: objects[i].mesh: <mesh>: " (or "objects[i].terrain: "), the start of an error about object i.
+std::string object_at(const std::string& scene, std::size_t i, const SceneObject& object) {
+    const std::string at = scene + ": objects[" + std::to_string(i) + "]";
+    return object.terrain ? at + ".terrain: " : at + ".mesh: " + object.mesh.string() + ": ";
 }
 
 std::string frame_file(std::uint64_t frame) {
@@ -204,7 +205,7 @@ int run_simulate(const SimulateArgs& args) {
         } else {
             const std::vector<glm::vec3>& positions = runtime->positions(i, -dt);
             if (Outcome o = system->create_mesh(mesh_desc(source, positions, deforms), meshes[i]); !o)
-                return fail(object_at(args.scene, i, scene->objects[i].mesh) +
+                return fail(object_at(args.scene, i, scene->objects[i]) +
                             (deforms ? "posed one step before frame 0: " : "") + o.message());
             if (!deforms) shared.emplace(&source, meshes[i]);
         }
@@ -213,7 +214,7 @@ int run_simulate(const SimulateArgs& args) {
                 ? system->create_instance(meshes[i], to_mat4(runtime->model(i, 0.0)), false, instances[i])
                 : system->create_moving_instance(meshes[i], to_mat4(runtime->model(i, 0.0)),
                                                  to_mat4(runtime->model(i, -dt)), instances[i]);
-        if (!placed) return fail(object_at(args.scene, i, scene->objects[i].mesh) + placed.message());
+        if (!placed) return fail(object_at(args.scene, i, scene->objects[i]) + placed.message());
     }
 
     VoxelGridInfo grid;
@@ -234,11 +235,11 @@ int run_simulate(const SimulateArgs& args) {
                 if (Outcome o = system->set_vertices(meshes[i], floats(positions),
                                                      std::uint32_t(positions.size()), 12, jump);
                     !o)
-                    return fail(object_at(args.scene, i, scene->objects[i].mesh) + "posed at frame " +
+                    return fail(object_at(args.scene, i, scene->objects[i]) + "posed at frame " +
                                 std::to_string(frame) + ": " + o.message());
             }
             if (Outcome o = system->set_transform(instances[i], to_mat4(runtime->model(i, t)), jump); !o)
-                return fail(object_at(args.scene, i, scene->objects[i].mesh) + "placed at frame " +
+                return fail(object_at(args.scene, i, scene->objects[i]) + "placed at frame " +
                             std::to_string(frame) + ": " + o.message());
         }
         const std::vector<WindEmitter> emitters = emitters_at(*scene, t);

@@ -90,14 +90,13 @@ Outcome Frame::scroll_for(const WindSolver& solver, glm::vec3 focus, glm::ivec3&
     return {};
 }
 
-Cascade* Frame::next_cascade(float dt) {
+Cascade* Frame::next_cascade() {
     // Cascade k steps every ratio^k frames with that many frames' time, so every cascade runs at the same
     // CFL number; when two are due in one frame, the most overdue goes first and the other waits a frame
     // (docs/solver.md, "Cascades").
     Cascade* due = nullptr;
     for (Cascade& c : coarser_) {
         ++c.waited;
-        c.seconds += dt;
         if (c.waited >= c.period && (!due || c.waited * due->period > due->waited * c.period)) due = &c;
     }
     return due;
@@ -106,6 +105,8 @@ Cascade* Frame::next_cascade(float dt) {
 Outcome Frame::record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascade& c, FrameSlot& slot) {
     glm::ivec3 shift;
     if (Outcome o = scroll_for(*c.solver, in.focus, shift); !o) return o;
+    // The field it leaves behind, which the finer cascades blend from until its next step.
+    c.solver->record_keep_previous(cmd);
     if (shift != glm::ivec3(0)) {
         c.solver->record_scroll(cmd, shift);
         if (Status s = c.world->move_grid(c.solver->origin()); !s) return device_failure(s);
@@ -122,16 +123,20 @@ Outcome Frame::record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascad
             span = std::max(span, glm::length(glm::vec3(instance.model[a])) * extent[a]);
         if (span >= c.voxel_size) moving_.push_back(instance);
     }
-    // The instances' motion is over this frame's dt; the cascade's step spans the frames it waited.
+    // The instances' motion is over this frame's dt. The cascade's step runs ahead to the end of the last
+    // frame before its next turn (at this frame's dt), so the finer cascades read its wind in between: a
+    // period of frames at a steady dt, and it makes up for a dt that changed.
     if (Status s = c.world->record(cmd, moving_, in.dt); !s) return device_failure(s);
     const SolidSource solid = solid_source(*c.world);
-    const float dt = std::min(c.seconds, kMaxStep);
+    const double target = time_ + double(in.dt) * double(c.period);
+    const float dt = float(std::clamp(target - c.ahead, double(in.dt), double(kMaxStep)));
     if (Status s = c.solver->record_step(cmd, dt, &solid); !s) return device_failure(s);
+    c.before = c.ahead;
+    c.ahead += double(dt);
     c.world->record_readback(cmd, slot.readback.handle(), ReadbackLayout::cascade_world());
     c.solver->record_readback(cmd, slot.readback.handle(), ReadbackLayout::cascade_wind());
     c.static_stale = false;
     c.waited = 0;
-    c.seconds = 0.0f;
     slot.cascade = int(&c - coarser_.data());
     record_texture_copy(cmd, std::size_t(slot.cascade) + 1);
     return {};
@@ -176,8 +181,13 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         for (Cascade& c : coarser_)
             c.static_stale = true;
     }
-    if (Cascade* c = next_cascade(in.dt))
+    if (Cascade* c = next_cascade())
         if (Outcome o = record_cascade(cmd, in, *c, slot); !o) return o;
+    // Where this frame's end lies between each coarser cascade's last two steps, for the cascades inside it.
+    const double now = time_ + double(in.dt);
+    for (Cascade& c : coarser_)
+        c.solver->record_time_blend(cmd, c.ahead > c.before ? float((now - c.before) / (c.ahead - c.before))
+                                                            : 1.0f);
     // Scroll: the wind moves in whole cells and the voxel grid follows the solver's origin.
     if (in.shift != glm::ivec3(0)) {
         solver_->record_scroll(cmd, in.shift);
@@ -219,6 +229,7 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     slot.frame = ctx_->recording_frame();
     slot.dispatches = ctx_->work().dispatches - dispatched;
     ++recorded_;
+    time_ += double(in.dt);
     slot.snapshot_recorded = snapshot_ != nullptr;
     for (std::size_t k = 0; k < textures_.size(); ++k)
         slot.snapshot_origins[k] = solver(k).origin();

@@ -64,13 +64,16 @@ struct FrameSlot {
 };
 
 /// A coarser cascade of the nest (docs/solver.md "Cascades"): its voxel world and solver (owned by System),
-/// and when it steps: every `period` frames, with the time waited since its last step.
+/// and when it steps: every `period` frames, ahead of the finest cascade by up to a period, so that the finer
+/// cascades read its wind between its last two steps.
 struct Cascade {
     VoxelWorld* world = nullptr;
     WindSolver* solver = nullptr;
     std::uint32_t period = 1; ///< frames between its steps: ratio^k for cascade k
-    std::uint32_t waited = 0; ///< frames since its last step
-    float seconds = 0.0f;     ///< their time
+    std::uint32_t waited =
+        0;               ///< frames since its last step (period − 1 at first: it steps in the first frame)
+    double before = 0.0; ///< s: the time its field stood at before its last step (the kept field)
+    double ahead = 0.0;  ///< s: the time its last step reached
     bool static_stale = true; ///< the static set changed since it last took it
     float voxel_size = 0.0f;  ///< m: a moving instance smaller than this is not voxelized into it
 };
@@ -139,8 +142,8 @@ class Frame {
 
   private:
     static Outcome scroll_for(const WindSolver& solver, glm::vec3 focus, glm::ivec3& cells);
-    /// The coarser cascade whose turn it is after a frame of `dt` seconds (null: none), its clock advanced.
-    Cascade* next_cascade(float dt);
+    /// The coarser cascade whose turn it is this frame (null: none), every cascade's count advanced.
+    Cascade* next_cascade();
     /// Records the coarser cascade `c`'s scroll, voxels and step into `cmd`, its counters into `slot`.
     Outcome record_cascade(VkCommandBuffer cmd, const FrameInputs& in, Cascade& c, FrameSlot& slot);
     /// Cascade k's solver (0: the finest).
@@ -165,6 +168,7 @@ class Frame {
     std::pmr::vector<WindTexture> published_;   ///< what the host reads, finest first
     VkSampler sampler_ = VK_NULL_HANDLE;
     std::uint64_t recorded_ = 0;
+    double time_ = 0.0; ///< s: the finest cascade's time, the sum of the frames' dt
     SnapshotRing* snapshot_ = nullptr;
 };
 

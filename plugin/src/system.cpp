@@ -227,6 +227,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
             coarser.push_back({.world = m.coarse_worlds.back().get(),
                                .solver = m.coarse_solvers.back().get(),
                                .period = period,
+                               .waited = period - 1,
                                .voxel_size = cascade_desc.cell_size / float(cascade_desc.voxels_per_cell)});
         }
         for (std::uint32_t k = 0; k < cascades; ++k) {
@@ -235,7 +236,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
             const WindSolver* inner = k == 0   ? nullptr
                                       : k == 1 ? m.solver.get()
                                                : m.coarse_solvers[k - 2].get();
-            s.couple(outer, inner);
+            if (Status coupled = s.couple(outer, inner); !coupled) return device_failure(coupled);
         }
 
         m.frame.emplace(*m.ctx, *m.world, *m.solver, std::move(coarser), m.hooks);

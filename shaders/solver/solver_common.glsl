@@ -142,7 +142,12 @@ float beyond_component(uint axis, vec3 x) {
         bool inside = all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(dims)));
         float w = !inside ? 0.0 : next == 0ul ? 1.0 : cascade_weight(p, dims);
         if (w > 0.0) {
-            sum += left * w * cascade_component(r.b.current, dims, h, origin, axis, x);
+            // Between two of the coarser cascade's steps, in time as well as in space.
+            float u = cascade_component(r.b.current, dims, h, origin, axis, x);
+            float blend = r.b.time_blend;
+            if (blend < 1.0)
+                u = mix(cascade_component(r.b.previous, dims, h, r.b.previous_origin, axis, x), u, blend);
+            sum += left * w * u;
             left *= 1.0 - w;
         }
         at = next;

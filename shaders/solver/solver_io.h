@@ -208,10 +208,12 @@ struct SolverBindings {
     /// Cascades (docs/solver.md "Cascades"). `current`: the velocity buffer that holds the field the last
     /// step (or scroll) left, which the neighbouring cascades read. `outer`: the SolverBindings of the next
     /// coarser cascade (0: none, and the ambient wind lies beyond the grid). `inner`: those of the next finer
-    /// (0: none).
+    /// (0: none). `previous`: a copy of the field as it stood before the last step, which the finer cascade
+    /// blends with `current` by `time_blend` (a solver with an inner only; 0: none).
     GUST_ADDRESS current;
     GUST_ADDRESS outer;
     GUST_ADDRESS inner;
+    GUST_ADDRESS previous;
     ivec3 dims;           ///< wind cells per axis
     float h;              ///< cell size, m
     vec3 origin;          ///< world position of the grid's min corner, m
@@ -238,6 +240,10 @@ struct SolverBindings {
     uint smoothing;           ///< red-black sweeps per V-cycle level and leg (SolverDesc::smoothing)
     uint cycles_recorded;     ///< V-cycles (Jacobi: blocks) this step records, for the stats
     uint omni_count;          ///< the first emitters are the omni ones (set_emitters puts them first)
+    vec3 previous_origin; ///< world position of `previous`'s min corner, m (before the last step's scroll)
+    /// Where the finer cascade's time lies between `previous` (0) and `current` (1): the nest's steps run
+    /// ahead of the finest, and the finer cascades read the wind in between (docs/solver.md "Cascades").
+    float time_blend;
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };

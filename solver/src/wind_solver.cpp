@@ -3,6 +3,7 @@
 // wind_solver_step.cpp.
 #include "wind_solver_impl.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 
@@ -303,9 +304,39 @@ Status WindSolver::set_ambient(glm::vec3 velocity) {
                   faces.size() * sizeof(float));
 }
 
-void WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
-    impl_->b.outer = outer ? outer->impl_->bindings.address() : 0;
-    impl_->b.inner = inner ? inner->impl_->bindings.address() : 0;
+Status WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
+    Impl& m = *impl_;
+    if (inner && !m.previous) {
+        auto previous = gpu::Buffer::create(ctx_, face_count() * 4, gpu::MemoryUse::Device, 0,
+                                            "gust velocity before the last step");
+        if (!previous) return previous.status();
+        m.previous = std::move(*previous);
+    }
+    m.b.outer = outer ? outer->impl_->bindings.address() : 0;
+    m.b.inner = inner ? inner->impl_->bindings.address() : 0;
+    // Until the first keep, the finer cascade reads the current field alone.
+    m.b.previous = inner ? m.previous.address() : 0;
+    m.b.previous_origin = origin_;
+    m.b.time_blend = 1.0f;
+    return Status{};
+}
+
+void WindSolver::record_keep_previous(VkCommandBuffer cmd) {
+    Impl& m = *impl_;
+    if (!m.previous) return;
+    gpu::barrier(ctx_, cmd);
+    const VkBufferCopy region{0, 0, face_count() * 4};
+    ctx_.vk().vkCmdCopyBuffer(cmd, m.current_velocity().handle(), m.previous.handle(), 1, &region);
+    m.b.previous_origin = origin_;
+    gpu::barrier(ctx_, cmd);
+}
+
+void WindSolver::record_time_blend(VkCommandBuffer cmd, float blend) {
+    Impl& m = *impl_;
+    if (!m.previous) return;
+    m.b.time_blend = std::clamp(blend, 0.0f, 1.0f);
+    // The whole bindings: previous_origin changed with the keep too.
+    m.put_bindings(ctx_, cmd);
 }
 
 Status WindSolver::shift_origin(glm::vec3 offset) {
@@ -313,6 +344,7 @@ Status WindSolver::shift_origin(glm::vec3 offset) {
     if (!std::isfinite(moved.x) || !std::isfinite(moved.y) || !std::isfinite(moved.z))
         return Status::failure("the shifted origin must be finite");
     origin_ = moved;
+    impl_->b.previous_origin += offset;
     for (std::uint32_t e = 0; e < impl_->emitter_count; ++e)
         impl_->emitter_data[e].position += offset;
     impl_->solids_stale = true;

@@ -33,6 +33,9 @@ struct WindSolver::Impl : gpu::HostObject {
         pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,
         cell_motion, labels, region_motion, vorticity_buf, confinement, emitters, state, dispatch, bindings,
         points, samples, state_readback;
+    /// The field before the last step, for the finer cascade's blend in time (WindSolver::couple with an
+    /// inner; empty otherwise).
+    gpu::Buffer previous;
     gpu::Profiler profiler;
     std::pmr::vector<shaderio::GridLevel> levels;
     /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.

@@ -1,6 +1,7 @@
 // `gust voxelize` and `gust info` through the installed binary, as other tools use them.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -905,11 +906,12 @@ TEST(CliSimulate, takesTheScenesPressureSolverAdvectionAndHysteresis) {
 }
 
 // Issue 30's example world: a village in a generated 1 km valley of 500,000 triangles, four cascades of
-// ratio 4, runs under the validation layer with every solve converged and nothing rejected.
+// ratio 4, runs under the validation layer with every solve converged and nothing rejected, and its frames
+// hold every cascade's grids on that cascade's own cells (docs/design.md).
 TEST(CliSimulate, theValleyRunsItsKilometreOfTerrainThroughFourCascades) {
     const fs::path dir = fresh_dir("simulate_valley");
-    const CliRun run = gust("simulate " + asset("scenes/valley.json") + " --frames 3 --validation --out " +
-                            (dir / "out").string());
+    const CliRun run = gust("simulate " + asset("scenes/valley.json") +
+                            " --frames 3 --every 2 --validation --out " + (dir / "out").string());
     ASSERT_EQ(run.code, 0) << run.err;
     std::ifstream stats(dir / "out" / "stats.jsonl");
     std::string line;
@@ -923,7 +925,35 @@ TEST(CliSimulate, theValleyRunsItsKilometreOfTerrainThroughFourCascades) {
         ++frames;
     }
     EXPECT_EQ(frames, 3);
-    EXPECT_TRUE(fs::exists(dir / "out" / "frame_0000.vdb"));
+    auto scene = load_scene(asset("scenes/valley.json"));
+    ASSERT_TRUE(scene) << scene.message();
+    openvdb::initialize();
+    // Frame 2: each coarser cascade takes its first step in one of the first frames (docs/solver.md).
+    openvdb::io::File file((dir / "out" / "frame_0002.vdb").string());
+    file.open();
+    for (std::uint32_t k = 0; k < 4; ++k) {
+        const std::string suffix = k == 0 ? "" : "_cascade" + std::to_string(k);
+        auto velocity = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("velocity" + suffix));
+        auto solid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("solid" + suffix));
+        ASSERT_TRUE(velocity && solid) << k;
+        EXPECT_TRUE(file.hasGrid("pressure" + suffix)) << k;
+        // Cascade k: the same cells, ratio^k times larger, centred on the domain's centre.
+        const double h = scene->domain.cell_size * std::pow(4.0, k);
+        EXPECT_NEAR(velocity->voxelSize().x(), h, 1e-6 * h) << k;
+        const glm::dvec3 corner =
+            glm::dvec3(scene->domain.center) - 0.5 * glm::dvec3(scene->domain.cells) * h;
+        const openvdb::Vec3d c = velocity->indexToWorld(openvdb::Coord(0, 0, 0));
+        EXPECT_NEAR(c.x(), corner.x + 0.5 * h, 1e-3 * h) << k;
+        EXPECT_NEAR(c.y(), corner.y + 0.5 * h, 1e-3 * h) << k;
+        EXPECT_NEAR(c.z(), corner.z + 0.5 * h, 1e-3 * h) << k;
+        EXPECT_EQ(velocity->activeVoxelCount(),
+                  std::uint64_t(scene->domain.cells.x) * scene->domain.cells.y * scene->domain.cells.z)
+            << k;
+        // Every cascade holds the valley floor (the coarser ones the slopes and the ridge too).
+        EXPECT_GT(solid->activeVoxelCount(), 0u) << k;
+    }
+    EXPECT_FALSE(file.hasGrid("velocity_cascade4"));
+    file.close();
     fs::remove_all(dir);
 }
 

@@ -39,8 +39,8 @@ struct Nest {
         coarse = std::move(*c);
         fine = std::move(*f);
         if (coupled) {
-            coarse->couple(nullptr, fine.get());
-            fine->couple(coarse.get(), nullptr);
+            EXPECT_TRUE(coarse->couple(nullptr, fine.get()));
+            EXPECT_TRUE(fine->couple(coarse.get(), nullptr));
         }
     }
     /// The coarse cascade steps every second frame with twice the step, as a ratio of 2 has it.

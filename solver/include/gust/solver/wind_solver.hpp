@@ -160,8 +160,10 @@ class WindSolver : public gpu::HostObject {
     /// (shaderio::nested_open_sides); where `inner` (the next finer cascade) covers a face with at least
     /// one of this grid's cells inside inner's border, the face takes inner's wind averaged over it in place
     /// of advection and forces. Either may be null (null, null: one grid again). Each reads the other's
-    /// field as its last step or scroll left it; both outlive the coupling.
-    void couple(const WindSolver* outer, const WindSolver* inner);
+    /// field as its last step or scroll left it; `inner` reads this one's blended in time between its last
+    /// two steps (record_keep_previous, record_time_blend). Both outlive the coupling. With an inner, it
+    /// allocates a copy of the field (fails when it cannot).
+    Status couple(const WindSolver* outer, const WindSolver* inner);
     /// Moves the grid, its field and its emitters by `offset` (world m, finite), for a world whose origin
     /// moved: the field keeps its values, now `offset` away. The next step redoes its solids.
     Status shift_origin(glm::vec3 offset);
@@ -233,6 +235,13 @@ class WindSolver : public gpu::HostObject {
     void record_bindings(VkCommandBuffer cmd);
     /// scroll() recorded (the origin moves now).
     void record_scroll(VkCommandBuffer cmd, glm::ivec3 cells);
+    /// Cascades with an inner (couple): copies the field as it stands, and where it stands, for the finer
+    /// cascade to blend from until the next keep. Recorded before the scroll and step it precedes.
+    void record_keep_previous(VkCommandBuffer cmd);
+    /// Cascades with an inner: where the finer cascade's time now lies between the field kept by
+    /// record_keep_previous (0) and the current one (1), clamped to [0, 1]; read by the finer cascade's
+    /// passes recorded after it.
+    void record_time_blend(VkCommandBuffer cmd, float blend);
     /// Fails when `texels` is too small for write_texels() or record_texels().
     Status check_texels(const gpu::Buffer& texels) const;
     /// write_texels() recorded, without `then` (`texels` checked by check_texels); a full-grid pass, for a
