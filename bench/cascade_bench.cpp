@@ -4,11 +4,11 @@
 //   gust_bench_cascades [--frames N] [--write docs/results.md]
 #include "bench_common.hpp"
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <gust/gust.hpp>
+#include <gust/scene/primitives.hpp>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -18,30 +18,15 @@ namespace {
 
 constexpr const char* kTool = "gust_bench_cascades";
 
-/// A closed box from lo to hi, world space.
-struct Slab {
-    std::array<float, 24> positions{};
-    std::vector<std::uint32_t> indices;
-    Slab(gust::Vec3 lo, gust::Vec3 hi) {
-        for (int i = 0; i < 8; ++i) {
-            positions[std::size_t(3 * i)] = (i & 1) ? hi.x : lo.x;
-            positions[std::size_t(3 * i + 1)] = (i & 2) ? hi.y : lo.y;
-            positions[std::size_t(3 * i + 2)] = (i & 4) ? hi.z : lo.z;
-        }
-        const std::uint32_t q[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-        for (const auto& f : q)
-            indices.insert(indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
-    }
-    gust::MeshDesc desc() const {
-        gust::MeshDesc d;
-        d.positions = positions.data();
-        d.vertex_count = 8;
-        d.indices = indices.data();
-        d.index_count = std::uint32_t(indices.size());
-        return d;
-    }
-};
+/// A rigid MeshDesc borrowing `mesh`'s arrays (valid while it lives unchanged).
+gust::MeshDesc desc_of(const gust::Mesh& mesh) {
+    gust::MeshDesc d;
+    d.positions = &mesh.positions[0].x;
+    d.vertex_count = std::uint32_t(mesh.positions.size());
+    d.indices = mesh.indices.data();
+    d.index_count = std::uint32_t(mesh.indices.size());
+    return d;
+}
 
 struct Nest {
     std::uint32_t cascades = 1, ratio = 4;
@@ -70,14 +55,15 @@ gust::Outcome build(Nest& nest) {
     desc.domain.ratio = nest.ratio;
     if (gust::Outcome o = gust::System::create(desc, nest.system); !o) return o;
     gust::System& s = *nest.system;
-    static const Slab ground({-2000.0f, -100.0f, -2000.0f}, {2000.0f, 0.0f, 2000.0f});
-    static const Slab house({-3.0f, 0.0f, -3.0f}, {3.0f, 5.0f, 3.0f});
-    static const Slab crate({-0.6f, -0.6f, -0.6f}, {0.6f, 0.6f, 0.6f});
+    static const gust::Mesh ground =
+        gust::make_box_mesh({-2000.0f, -100.0f, -2000.0f}, {2000.0f, 0.0f, 2000.0f});
+    static const gust::Mesh house = gust::make_box_mesh({-3.0f, 0.0f, -3.0f}, {3.0f, 5.0f, 3.0f});
+    static const gust::Mesh crate = gust::make_box_mesh({-0.6f, -0.6f, -0.6f}, {0.6f, 0.6f, 0.6f});
     gust::MeshId g = 0, h = 0, c = 0;
     gust::InstanceId id = 0;
-    if (gust::Outcome o = s.create_mesh(ground.desc(), g); !o) return o;
-    if (gust::Outcome o = s.create_mesh(house.desc(), h); !o) return o;
-    if (gust::Outcome o = s.create_mesh(crate.desc(), c); !o) return o;
+    if (gust::Outcome o = s.create_mesh(desc_of(ground), g); !o) return o;
+    if (gust::Outcome o = s.create_mesh(desc_of(house), h); !o) return o;
+    if (gust::Outcome o = s.create_mesh(desc_of(crate), c); !o) return o;
     if (gust::Outcome o = s.create_instance(g, gust::Mat4{}, false, id); !o) return o;
     for (float x : {-40.0f, -10.0f, 25.0f, 90.0f, 300.0f})
         if (gust::Outcome o = s.create_instance(h, translation(x, 0.0f, 0.5f * x), false, id); !o) return o;

@@ -63,14 +63,15 @@ inline Mat4 translation(float x, float y, float z) {
     return m;
 }
 
-/// A unit box (12 triangles) centred on the origin.
+/// A closed box (12 triangles): from -extent to extent on every axis, or from lo to hi.
 struct Box {
     std::vector<float> positions;
     std::vector<std::uint32_t> indices;
-    explicit Box(float extent) {
+    explicit Box(float extent) : Box({-extent, -extent, -extent}, {extent, extent, extent}) {}
+    Box(Vec3 lo, Vec3 hi) {
         for (int i = 0; i < 8; ++i)
-            for (int a = 0; a < 3; ++a)
-                positions.push_back((i >> a & 1) ? extent : -extent);
+            positions.insert(positions.end(),
+                             {(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
         const std::uint32_t q[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
                                        {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
         for (const auto& f : q)

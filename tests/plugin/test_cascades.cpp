@@ -20,29 +20,6 @@ namespace {
 
 #include "gust_shaders/cascade_wind_comp.h"
 
-/// A closed box from lo to hi (world, m), as a mesh placed by the identity.
-struct Slab {
-    std::array<float, 24> positions{};
-    std::vector<std::uint32_t> indices;
-    Slab(Vec3 lo, Vec3 hi) {
-        const Box unit(1.0f);
-        for (int i = 0; i < 8; ++i) {
-            positions[std::size_t(3 * i)] = (i & 1) ? hi.x : lo.x;
-            positions[std::size_t(3 * i + 1)] = (i & 2) ? hi.y : lo.y;
-            positions[std::size_t(3 * i + 2)] = (i & 4) ? hi.z : lo.z;
-        }
-        indices = unit.indices;
-    }
-    MeshDesc desc() const {
-        MeshDesc d;
-        d.positions = positions.data();
-        d.vertex_count = 8;
-        d.indices = indices.data();
-        d.index_count = std::uint32_t(indices.size());
-        return d;
-    }
-};
-
 TEST(Cascades, badNestsAreRefusedWithTheirReason) {
     struct Case {
         std::uint32_t cascades, ratio;
@@ -445,7 +422,7 @@ TEST(Cascades, shiftingTheOriginMovesTheWindTheSolidsAndThePendingQueries) {
     const Vec3 offset{37.3f, -2.5f, -12.9f};
     // Off the voxel planes, so that no face of it lies where rounding the shifted coordinates could flip a
     // voxel.
-    const Slab block({-1.8f, 0.1f, -0.9f}, {1.2f, 2.9f, 1.7f});
+    const Box block({-1.8f, 0.1f, -0.9f}, {1.2f, 2.9f, 1.7f});
     std::unique_ptr<System> systems[2];
     Watch watch[2];
     for (int i = 0; i < 2; ++i) {
@@ -515,8 +492,8 @@ float wind_at_player(const WindDomain& domain, bool ridge, int frames) {
     const Outcome created = System::create(desc, system);
     EXPECT_TRUE(created) << created.message();
     if (!created) return 0.0f;
-    const Slab ground({-600.0f, -200.0f, -600.0f}, {600.0f, 0.0f, 600.0f});
-    const Slab hill({-108.0f, -10.0f, -600.0f}, {-92.0f, 32.0f, 600.0f});
+    const Box ground({-600.0f, -200.0f, -600.0f}, {600.0f, 0.0f, 600.0f});
+    const Box hill({-108.0f, -10.0f, -600.0f}, {-92.0f, 32.0f, 600.0f});
     MeshId ground_mesh = 0, hill_mesh = 0;
     InstanceId id = 0;
     EXPECT_TRUE(system->create_mesh(ground.desc(), ground_mesh));
