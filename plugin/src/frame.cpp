@@ -181,6 +181,10 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         for (Cascade& c : coarser_)
             c.static_stale = true;
     }
+    // A new ambient wind reaches every cascade in this frame, stepping or not (docs/solver.md, "Ambient
+    // wind").
+    for (Cascade& c : coarser_)
+        c.solver->record_ambient_change(cmd);
     if (Cascade* c = next_cascade())
         if (Outcome o = record_cascade(cmd, in, *c, slot); !o) return o;
     // Where this frame's end lies between each coarser cascade's last two steps, for the cascades inside it.

@@ -244,6 +244,9 @@ struct SolverBindings {
     /// Where the finer cascade's time lies between `previous` (0) and `current` (1): the nest's steps run
     /// ahead of the finest, and the finer cascades read the wind in between (docs/solver.md "Cascades").
     float time_blend;
+    /// m/s: how much the ambient wind changed since the last step (WindSolver::set_ambient), added to every
+    /// open face before the step's advection (scroll.comp kScrollAmbientChange).
+    vec3 ambient_change;
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -309,6 +312,11 @@ GUST_CONST uint kJacobiCheck = 1u; ///< the residual's maximum and the convergen
 GUST_CONST uint kSamplePoints = 0u; ///< per query point, the velocity there
 GUST_CONST uint kSampleTexels = 1u; ///< per cell, its texel of the wind texture (finish.comp's, when bound)
 GUST_CONST uint kSampleCells = 2u;  ///< per cell, the velocity at its centre
+
+// scroll.comp's modes.
+GUST_CONST uint kScrollMove = 0u;          ///< the field moved by SolverPush::shift cells
+GUST_CONST uint kScrollAmbientChange = 1u; ///< SolverBindings::ambient_change added to every open face
+GUST_CONST uint kScrollAmbientChangePrevious = 2u; ///< the same, to SolverBindings::previous
 
 /// diffuse.comp reads face field SolverPush::mode (kFieldVelocity, then each iteration's target) and
 /// writes this one: the iterations alternate between kFieldTmp and kFieldBack.

@@ -43,6 +43,7 @@ Result<std::unique_ptr<CpuWind>> CpuWind::create(const SolverDesc& desc) {
 
 Status CpuWind::set_ambient(glm::vec3 velocity) {
     if (Status s = detail::validate_ambient(velocity); !s) return s;
+    if (impl_->last_dt > 0.0f) impl_->ambient_change += velocity - impl_->k.ambient;
     impl_->k.ambient = velocity;
     if (impl_->last_dt == 0.0f) {
         const auto faces = detail::uniform_faces(impl_->k.dims, velocity);
@@ -290,6 +291,13 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
     m.coarse_weights();
 
     std::vector<float>& u = k.face[shaderio::kFieldVelocity];
+    // scroll.comp's kScrollAmbientChange.
+    if (m.ambient_change != glm::vec3(0.0f)) {
+        m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
+            if (k.face_open(a, f)) u[std::size_t(i)] += m.ambient_change[a];
+        });
+        m.ambient_change = glm::vec3(0.0f);
+    }
     std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
     std::vector<float>& back = k.face[shaderio::kFieldBack];
     if (desc.advection != Advection::None) {

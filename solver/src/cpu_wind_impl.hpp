@@ -69,7 +69,8 @@ struct CpuWind::Impl {
     std::vector<glm::ivec4> region_motion; ///< two per root node, as region_motion
     std::uint32_t face_mask[6 * kCellWords];
     float last_dt = 0.0f;
-    bool has_guess = false; ///< as WindSolver's: φ may start the next solve
+    glm::vec3 ambient_change{0.0f}; ///< set_ambient's change since the last step (WindSolver's likewise)
+    bool has_guess = false;         ///< as WindSolver's: φ may start the next solve
 
     std::size_t faces() const { return std::size_t(shaderio::faces_total(k.dims)); }
     std::size_t cells() const { return std::size_t(k.dims.x) * k.dims.y * k.dims.z; }

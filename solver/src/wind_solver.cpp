@@ -295,8 +295,13 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
 
 Status WindSolver::set_ambient(glm::vec3 velocity) {
     if (Status s = detail::validate_ambient(velocity); !s) return s;
+    if (last_dt_ > 0.0f) {
+        // A change of the far-field wind reaches the whole field at once (docs/solver.md, "Ambient wind").
+        ambient_change_ += velocity - ambient_;
+        ambient_ = velocity;
+        return Status{};
+    }
     ambient_ = velocity;
-    if (last_dt_ > 0.0f) return Status{};
     const std::pmr::vector<float> faces =
         detail::uniform_faces(glm::ivec3(desc_.cells), velocity, ctx_.memory());
     Impl& m = *impl_;
@@ -329,6 +334,29 @@ void WindSolver::record_keep_previous(VkCommandBuffer cmd) {
     ctx_.vk().vkCmdCopyBuffer(cmd, m.current_velocity().handle(), m.previous.handle(), 1, &region);
     m.b.previous_origin = origin_;
     gpu::barrier(ctx_, cmd);
+}
+
+void WindSolver::record_ambient_change(VkCommandBuffer cmd) {
+    if (ambient_change_ == glm::vec3(0.0f)) return;
+    // Added to the air everywhere at once: a uniform field is divergence-free, so this is the response of
+    // incompressible air to a new far field, and the next projection fits it to the solids (docs/solver.md,
+    // "Ambient wind"). The field kept for the finer cascades too, so their blend in time sees it whole.
+    Impl& m = *impl_;
+    m.b.ambient_change = ambient_change_;
+    m.put_bindings(ctx_, cmd);
+    SolverPush push{};
+    push.nest = m.nest();
+    push.bindings = m.bindings.address();
+    push.swap = m.swap;
+    const LevelDispatch g = groups_for(face_count());
+    for (std::uint32_t mode : {shaderio::kScrollAmbientChange, shaderio::kScrollAmbientChangePrevious}) {
+        if (mode == shaderio::kScrollAmbientChangePrevious && !m.previous) continue;
+        push.mode = mode;
+        m.scroll.bind(cmd, &push, sizeof(push));
+        m.scroll.dispatch(cmd, g.x, g.y, g.z);
+    }
+    gpu::barrier(ctx_, cmd);
+    ambient_change_ = glm::vec3(0.0f);
 }
 
 void WindSolver::record_time_blend(VkCommandBuffer cmd, float blend) {
@@ -504,6 +532,7 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     push.nest = m.nest();
     push.bindings = m.bindings.address();
     push.shift = cells;
+    push.mode = shaderio::kScrollMove;
     push.swap = m.swap;
     const LevelDispatch g = groups_for(std::max(face_count(), cell_count()));
     m.scroll.bind(cmd, &push, sizeof(push));

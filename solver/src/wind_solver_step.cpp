@@ -153,6 +153,9 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     }
     m.profiler.end(cmd);
 
+    // A change of the ambient wind since the last step (unless record_ambient_change took it already).
+    record_ambient_change(cmd);
+
     // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
     // then holds the velocity.
     m.profiler.begin(cmd, "advect");

@@ -412,7 +412,8 @@ gust_result gust_system_destroy_instance(gust_system system, gust_instance insta
 /// rejected whole, keeping the old ones, if any is invalid.
 gust_result gust_system_set_emitters(gust_system system, const gust_wind_emitter* emitters, size_t count);
 
-/// Prevailing wind, m/s world: enters through the upwind sides of the domain.
+/// Prevailing wind, m/s world: enters through the upwind sides of the domain; a change after the first step
+/// reaches the air of every cascade at the next step (docs/solver.md "Ambient wind").
 gust_result gust_system_set_ambient(gust_system system, gust_vec3 velocity);
 
 /// Centre of interest (world m); the domain follows it in whole cells at the next step. Invalid (the old

@@ -440,7 +440,8 @@ class System {
 
     /// Replaces the emitters (at most 64); rejected whole, keeping the old ones, if any is invalid.
     Outcome set_emitters(std::span<const WindEmitter> emitters);
-    /// Prevailing wind, m/s: enters through the upwind sides of the domain.
+    /// Prevailing wind, m/s: enters through the upwind sides of the domain. A change after the first step
+    /// reaches the air of every cascade at the next step (docs/solver.md "Ambient wind").
     Outcome set_ambient(const Vec3& velocity);
     /// Centre of interest; the domain follows it in whole cells at the next step. InvalidArgument (the old
     /// focus kept) for a point more than a million cells from the domain's centre, or more than 2^19 cells

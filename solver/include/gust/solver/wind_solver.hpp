@@ -152,7 +152,9 @@ class WindSolver : public gpu::HostObject {
 
     /// Ambient wind, m/s: enters through the domain's upwind faces, fills new cells when scrolling.
     /// Before the first step it also sets the air everywhere: a level loads into wind already blowing,
-    /// rather than into still air that the first projection must set moving (a large, slow solve).
+    /// rather than into still air that the first projection must set moving (a large, slow solve). After,
+    /// the next step adds the change to the air everywhere before it advects (a new far field reaches
+    /// incompressible air at once; its projection fits it to the solids), docs/solver.md "Ambient wind".
     Status set_ambient(glm::vec3 velocity);
     /// Nests this solver among cascades of one focus (docs/solver.md "Cascades"). From its next step, beyond
     /// its grid it takes the wind of `outer` (the next coarser cascade, and those beyond it) in place of the
@@ -238,6 +240,10 @@ class WindSolver : public gpu::HostObject {
     /// Cascades with an inner (couple): copies the field as it stands, and where it stands, for the finer
     /// cascade to blend from until the next keep. Recorded before the scroll and step it precedes.
     void record_keep_previous(VkCommandBuffer cmd);
+    /// Adds the ambient wind's change since set_ambient last took effect to the field (and to the field kept
+    /// by record_keep_previous) now, rather than at the next step; a cascade that does not step every frame
+    /// takes a new far field in the frame it is set, with the rest of the nest. No-op without a change.
+    void record_ambient_change(VkCommandBuffer cmd);
     /// Cascades with an inner: where the finer cascade's time now lies between the field kept by
     /// record_keep_previous (0) and the current one (1), clamped to [0, 1]; read by the finer cascade's
     /// passes recorded after it.
@@ -268,6 +274,7 @@ class WindSolver : public gpu::HostObject {
     SolverDesc desc_;
     glm::vec3 origin_{0.0f};
     glm::vec3 ambient_{0.0f};
+    glm::vec3 ambient_change_{0.0f}; ///< set_ambient's change since the last step, added at the next
     std::uint32_t levels_ = 1;
     float last_dt_ = 0.0f;
     std::uint32_t cycles_to_record_ = 0; ///< V-cycles the next step records (MGPCG and multigrid)
