@@ -139,7 +139,7 @@ void lee(const Stage& stage, float u, OrbitCamera& camera, Views&) {
     // behind and above it, two rows across the frame.
     const glm::vec3 across(-stage.upwind.z, 0.0f, stage.upwind.x);
     const glm::vec3 middle = 0.5f * (stage.ridge_grove + stage.lee_grove);
-    camera = looking_at(middle + glm::vec3(0.0f, 6.0f, 0.0f), -stage.upwind + 0.3f * across + 0.25f * kUp,
+    camera = looking_at(middle - glm::vec3(0.0f, 4.0f, 0.0f), -stage.upwind + 0.3f * across + 0.25f * kUp,
                         150.0f - 15.0f * u);
 }
 

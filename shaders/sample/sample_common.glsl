@@ -40,7 +40,7 @@ vec3 shade(vec3 albedo, vec3 n, vec3 world) {
     float sun = max(dot(n, frame.light.xyz), 0.0);
     float sky = 0.5 + 0.5 * n.y;
     vec3 lit = albedo * (0.85 * sun * vec3(1.0, 0.96, 0.88) + 0.35 * sky * vec3(0.55, 0.65, 0.8));
-    float haze = 1.0 - exp(-0.0012 * length(world - frame.camera.xyz));
+    float haze = 1.0 - exp(-0.0007 * length(world - frame.camera.xyz));
     return mix(lit, vec3(0.62, 0.72, 0.85), haze);
 }
 
