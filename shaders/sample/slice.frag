@@ -7,5 +7,6 @@ layout(location = 0) in vec3 world;
 layout(location = 0) out vec4 colour;
 
 void main() {
-    colour = vec4(speed_colour(length(wind_at(world))) * mix(0.15, 1.0, air_at(world)), 0.6);
+    vec4 w = wind_and_air_at(world);
+    colour = vec4(speed_colour(length(w.xyz)) * mix(0.15, 1.0, w.a), 0.6);
 }
