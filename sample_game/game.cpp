@@ -450,6 +450,13 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     const auto [mean, largest] = renderer_->grass_bend();
     line["grass_bend_mean"] = mean;
     line["grass_bend_max"] = largest;
+    // The groves on the ridge's crest and in its lee: the lee's crowns bend less (docs/sample.md).
+    for (const char* grove : {"crest", "lee"}) {
+        std::vector<std::uint32_t> slots;
+        for (const WorldObject& o : world_->objects())
+            if (o.name == std::string(grove) + " tree") slots.push_back(o.foliage_slot);
+        line[std::string(grove) + "_bend"] = renderer_->crown_bend(slots);
+    }
     // Flushed each frame: a run stopped from outside (or watched while it runs) keeps every frame's line.
     stats << line.dump() << "\n" << std::flush;
 }

@@ -398,6 +398,14 @@ std::pair<float, float> Renderer::grass_bend() const {
     return {grass_count_ ? static_cast<float>(sum / grass_count_) : 0.0f, largest};
 }
 
+float Renderer::crown_bend(std::span<const std::uint32_t> slots) const {
+    const auto* states = static_cast<const io::FoliageState*>(states_.mapped);
+    float sum = 0.0f;
+    for (std::uint32_t slot : slots)
+        sum += glm::length(glm::vec2(states[slot].bend));
+    return slots.empty() ? 0.0f : sum / static_cast<float>(slots.size());
+}
+
 void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent, const FrameView& view,
                      const Views& views) {
     io::FrameUniforms u{};

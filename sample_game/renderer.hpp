@@ -66,6 +66,8 @@ class Renderer {
     void forget_targets();
     /// Mean and largest bend of the grass blades after the last frame (tip displacement over height).
     std::pair<float, float> grass_bend() const;
+    /// Mean bend of the crowns in foliage `slots` after the last frame (tip displacement over height).
+    float crown_bend(std::span<const std::uint32_t> slots) const;
 
   private:
     void begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent, const FrameView& view,

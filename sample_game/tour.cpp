@@ -123,15 +123,15 @@ void field(const Stage&, float u, OrbitCamera& camera, Views& views) {
 
 void valley(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
     // High over the valley, from downwind and to the side, turning a little: the ridge across the wind,
-    // each cascade's extent as a box and the wind's speed 15 m above the valley floor, every cascade's
-    // blended, with the calm behind the ridge.
+    // each cascade's extent as a box and the wind's speed 8 m above the valley floor, every cascade's
+    // blended.
     const glm::vec3 across(-stage.upwind.z, 0.0f, stage.upwind.x);
     camera = looking_at(0.15f * stage.ridge_grove, -stage.upwind + (0.5f + 0.3f * u) * across + 1.6f * kUp,
                         720.0f);
     views.grass = false;
     views.slice = true;
     views.cascades = true;
-    views.slice_height = 15.0f;
+    views.slice_height = 8.0f;
 }
 
 void lee(const Stage& stage, float u, OrbitCamera& camera, Views&) {
@@ -169,8 +169,8 @@ constexpr Shot kShots[] = {
      "the fan's jet.",
      2.5f, field},
     {"valley", "Cascades over the valley",
-     "Three nested wind grids, each 4 times coarser, reach over the valley; the wind 15 m up, every "
-     "cascade blended: calm in the ridge's lee.",
+     "Three nested wind grids, each 4 times coarser, reach over the valley: their boxes, and the wind 8 m "
+     "up with every cascade blended, the ridge standing through it.",
      3.0f, valley},
     {"lee", "The ridge's lee",
      "Trees on the ridge's crest sway in the full wind; the grove in its lee, sheltered by it, stands "

@@ -183,8 +183,10 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
     const glm::vec2 groves[] = {crest, crest - kLeeDistance * upwind, -150.0f * upwind + 40.0f * across};
     std::mt19937 grove_rng(11u);
     std::uniform_real_distribution<float> spread(-1.0f, 1.0f);
-    for (const glm::vec2 middle : groves)
+    const char* grove_names[] = {"crest tree", "lee tree", "valley tree"};
+    for (std::size_t g = 0; g < std::size(groves); ++g)
         for (int i = 0; i < 7; ++i) {
+            const glm::vec2 middle = groves[g];
             // Along the crest, a few metres either side of the line across the wind.
             const glm::vec2 xz = middle +
                                  (12.0f * static_cast<float>(i - 3) + 3.0f * spread(grove_rng)) * across +
@@ -192,7 +194,7 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
             const glm::vec3 root = on_ground(xz) - glm::vec3(0.0f, 0.3f, 0.0f);
             const float height = 8.0f + 3.0f * (0.5f + 0.5f * spread(grove_rng));
             const float scale = height / tree_top;
-            WorldObject tree{"grove tree",
+            WorldObject tree{grove_names[g],
                              grove_tree,
                              ObjectKind::Tree,
                              place(root, 3.0f * spread(grove_rng), scale),

@@ -212,6 +212,13 @@ TEST(SampleGame, theDefaultHeadlessRunIsTheTourWithACaptionedShotPerLineAndAnAni
         EXPECT_EQ(views, expected) << shot << " at frame " << line["frame"];
     }
 
+    // The ridge shelters its lee: by the lee shot the crowns there bend less than those on its crest.
+    for (const nlohmann::json& line : stats) {
+        if (line.value("shot", "") != "lee") continue;
+        EXPECT_LT(line["lee_bend"].get<double>(), 0.7 * line["crest_bend"].get<double>())
+            << "at frame " << line["frame"];
+    }
+
     // Each cut moves the camera and changes the picture: the first frame of a shot against the last frame
     // of the one before. The valley's green slopes fill the background of the village's shots where the sky
     // did, so the cut from the overview to the grass changes 14% of the pixels (measured), the others over
