@@ -22,7 +22,7 @@ struct OrbitCamera {
     }
     /// Projection times view for a target of `aspect` (width over height), Vulkan's clip space.
     glm::mat4 view_proj(float aspect) const {
-        glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(fov_deg), aspect, 0.1f, 300.0f);
+        glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(fov_deg), aspect, 0.1f, 2500.0f);
         proj[1][1] *= -1.0f; // Vulkan's clip space has y down
         return proj * glm::lookAt(eye(), target, glm::vec3(0, 1, 0));
     }

@@ -50,9 +50,12 @@ gust::Vec3 domain_centre(glm::vec3 focus, float cell_size, std::uint32_t cells_y
 /// Key of a tree node for telling this frame's nodes from last frame's.
 using NodeKey = std::tuple<std::uint32_t, std::int64_t, std::int64_t, std::int64_t>;
 
-/// Twelve edges of a box as line vertices.
-void add_box(std::vector<LineVertex>& out, glm::vec3 lo, float size, glm::vec4 colour) {
-    const glm::vec3 hi = lo + size;
+/// Frames a tree node stays green after it is made, or red after it is freed (a second at the headless
+/// 30 frames a second): a walker's nodes change in one frame of many, too briefly to see otherwise.
+constexpr std::uint32_t kNodeChangeFrames = 30;
+
+/// Twelve edges of the box [lo, hi] as line vertices.
+void add_box(std::vector<LineVertex>& out, glm::vec3 lo, glm::vec3 hi, glm::vec4 colour) {
     const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
                             {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
     const int edges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
@@ -121,6 +124,8 @@ class Game {
     bool paused_ = false, show_hud_ = true, panels_ = false, rebuild_wind_ = false;
     double fps_ = 0.0, loop_ms_ = 0.0;
     std::set<NodeKey> last_nodes_;
+    std::map<NodeKey, std::uint32_t> made_; ///< nodes made in the last kNodeChangeFrames frames: frames since
+    std::map<NodeKey, std::uint32_t> freed_; ///< nodes freed in the last kNodeChangeFrames frames: the same
     std::map<std::uint32_t, std::uint64_t> nodes_per_level_;
     bool dragging_ = false;
     double drag_x_ = 0.0, drag_y_ = 0.0;
@@ -253,6 +258,9 @@ void Game::make_wind() {
     desc.domain.voxels_per_cell = detail_.voxels_per_cell;
     // An octree, as in the seed, so that E (one more level) doubles the resolution.
     desc.domain.branching = 2;
+    // Nested cascades around the village reach over the valley (docs/sample.md, "Cascades").
+    desc.domain.cascades = detail_.cascades;
+    desc.domain.ratio = detail_.ratio;
     // The domain's floor sits just under the ground so the grass roots are inside it.
     desc.domain.focus = domain_centre(glm::vec3(0.0f), detail_.cell_size, detail_.cells[1]);
     // A game's fixed budget (the preset's V-cycles a frame), stopping early once the divergence left is
@@ -264,8 +272,10 @@ void Game::make_wind() {
         throw std::runtime_error("gust::System::create: " + made.message());
     domain_ = desc.domain;
     world_->attach(*wind_);
-    renderer_->set_wind(wind_->wind_texture(), domain_);
+    renderer_->set_wind(wind_->wind_textures(), domain_);
     last_nodes_.clear();
+    made_.clear();
+    freed_.clear();
 }
 
 void Game::refresh_debug_views() {
@@ -279,18 +289,34 @@ void Game::refresh_debug_views() {
             renderer_->set_voxels(grid, voxels);
         }
     }
+    std::vector<LineVertex> lines;
+    if (views_.cascades) {
+        // Each cascade's extent, finest first, from yellow to purple.
+        const std::span<const gust::WindTexture> textures = wind_->wind_textures();
+        for (std::size_t k = 0; k < textures.size(); ++k) {
+            glm::mat4 to_texture;
+            std::copy_n(textures[k].world_to_texture.m, 16, &to_texture[0][0]);
+            const glm::mat4 to_world = glm::inverse(to_texture);
+            const float f =
+                static_cast<float>(k) / static_cast<float>(std::max<std::size_t>(textures.size() - 1, 1));
+            add_box(lines, glm::vec3(to_world * glm::vec4(0.0f, 0.0f, 0.0f, 1.0f)),
+                    glm::vec3(to_world * glm::vec4(1.0f, 1.0f, 1.0f, 1.0f)),
+                    glm::vec4(glm::mix(glm::vec3(1.0f, 0.9f, 0.1f), glm::vec3(0.7f, 0.2f, 0.9f), f), 1.0f));
+        }
+    }
     if (!views_.nodes) {
         // Nothing to compare the next frame's nodes with: when R comes on again, its first frame is all kept.
         last_nodes_.clear();
+        made_.clear();
+        freed_.clear();
         nodes_per_level_.clear();
     } else {
         std::vector<gust::TreeNode> nodes(wind_->stats().nodes);
         std::size_t count = 0;
         if (!wind_->debug_tree_nodes(nodes, count)) return;
         nodes.resize(std::min(count, nodes.size()));
-        // Colour by what changed since the last frame: new nodes (refined) green, nodes gone (coarsened)
-        // red, the rest grey, darker the deeper.
-        std::vector<LineVertex> lines;
+        // Colour by what changed lately: nodes made in the last kNodeChangeFrames frames (refined) green,
+        // nodes freed in them (coarsened) red, the rest grey, darker the deeper.
         std::set<NodeKey> now;
         nodes_per_level_.clear();
         const auto root =
@@ -302,29 +328,51 @@ void Game::refresh_debug_views() {
         auto size_at = [&](std::uint32_t level) {
             return root_size / std::pow(2.0f, static_cast<float>(level));
         };
+        auto age = [](std::map<NodeKey, std::uint32_t>& ages) {
+            for (auto it = ages.begin(); it != ages.end();)
+                it = ++it->second >= kNodeChangeFrames ? ages.erase(it) : std::next(it);
+        };
+        age(made_);
+        age(freed_);
+        for (const gust::TreeNode& n : nodes) {
+            const glm::vec3 corner = (glm::vec3(n.min.x, n.min.y, n.min.z) - root_min) / size_at(n.level);
+            now.insert({n.level, std::llround(corner.x), std::llround(corner.y), std::llround(corner.z)});
+        }
+        if (!last_nodes_.empty()) {
+            for (const NodeKey& key : now)
+                if (!last_nodes_.count(key)) {
+                    made_[key] = 0;
+                    freed_.erase(key);
+                }
+            for (const NodeKey& gone : last_nodes_)
+                if (!now.count(gone)) {
+                    freed_[gone] = 0;
+                    made_.erase(gone);
+                }
+        }
         for (const gust::TreeNode& n : nodes) {
             const glm::vec3 corner = (glm::vec3(n.min.x, n.min.y, n.min.z) - root_min) / size_at(n.level);
             const NodeKey key{n.level, std::llround(corner.x), std::llround(corner.y),
                               std::llround(corner.z)};
-            now.insert(key);
             ++nodes_per_level_[n.level];
-            const bool refined = !last_nodes_.empty() && !last_nodes_.count(key);
+            const bool refined = made_.count(key) > 0;
             if (!views_.every_node && !refined && n.state != gust::TreeNodeState::Reached) continue;
             const float shade = 0.9f - 0.1f * static_cast<float>(n.level);
-            add_box(lines, {n.min.x, n.min.y, n.min.z}, n.size,
+            const glm::vec3 lo(n.min.x, n.min.y, n.min.z);
+            add_box(lines, lo, lo + n.size,
                     refined ? glm::vec4(0.1f, 0.95f, 0.2f, 1.0f) : glm::vec4(shade, shade, shade, 1.0f));
         }
-        for (const NodeKey& gone : last_nodes_)
-            if (!now.count(gone)) {
-                const float size = size_at(std::get<0>(gone));
-                const glm::vec3 corner(static_cast<float>(std::get<1>(gone)),
-                                       static_cast<float>(std::get<2>(gone)),
-                                       static_cast<float>(std::get<3>(gone)));
-                add_box(lines, root_min + corner * size, size, glm::vec4(0.95f, 0.15f, 0.1f, 1.0f));
-            }
+        for (const auto& [gone, frames] : freed_) {
+            const float size = size_at(std::get<0>(gone));
+            const glm::vec3 corner(static_cast<float>(std::get<1>(gone)),
+                                   static_cast<float>(std::get<2>(gone)),
+                                   static_cast<float>(std::get<3>(gone)));
+            const glm::vec3 lo = root_min + corner * size;
+            add_box(lines, lo, lo + size, glm::vec4(0.95f, 0.15f, 0.1f, 1.0f));
+        }
         last_nodes_ = std::move(now);
-        renderer_->set_lines(lines);
     }
+    if (views_.nodes || views_.cascades) renderer_->set_lines(lines);
 }
 
 void Game::direct_camera(bool windowed, double start) {
@@ -376,6 +424,8 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     line["voxels_per_cell"] = domain_.voxels_per_cell;
     line["grass"] = world_->grass_count();
     line["max_iterations"] = detail_.max_cycles;
+    line["cascades"] = domain_.cascades;
+    line["ratio"] = domain_.ratio;
     line["frame_ms"] = frame_ms;
     line["wind_cpu_ms"] = wind_ms;
     line["fragments"] = s.fragments;
@@ -400,6 +450,13 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     const auto [mean, largest] = renderer_->grass_bend();
     line["grass_bend_mean"] = mean;
     line["grass_bend_max"] = largest;
+    // The groves on the ridge's crest and in its lee: the lee's crowns bend less (docs/sample.md).
+    for (const char* grove : {"crest", "lee"}) {
+        std::vector<std::uint32_t> slots;
+        for (const WorldObject& o : world_->objects())
+            if (o.name == std::string(grove) + " tree") slots.push_back(o.foliage_slot);
+        line[std::string(grove) + "_bend"] = renderer_->crown_bend(slots);
+    }
     // Flushed each frame: a run stopped from outside (or watched while it runs) keeps every frame's line.
     stats << line.dump() << "\n" << std::flush;
 }
@@ -441,12 +498,12 @@ int Game::run() {
     options_.world.grass_blades = detail_.grass_blades;
     std::fprintf(stderr,
                  "gust_sample: %s on %s, %s; quality %s%s: %ux%ux%u cells of %.2f m, %u voxels per cell, %u "
-                 "grass blades, %u pressure iterations a frame\n",
+                 "grass blades, %u pressure iterations a frame, %u cascades of ratio %u\n",
                  windowed ? "windowed" : "headless", vk_->properties().deviceName,
                  device_type_words(device_type), quality_name(quality_),
                  options_.quality == Quality::Auto ? " (auto)" : "", detail_.cells[0], detail_.cells[1],
                  detail_.cells[2], detail_.cell_size, detail_.voxels_per_cell, detail_.grass_blades,
-                 detail_.max_cycles);
+                 detail_.max_cycles, detail_.cascades, detail_.ratio);
     world_ = std::make_unique<World>(options_.assets, options_.world);
     if (windowed)
         swapchain_ = std::make_unique<Swapchain>(*vk_, window_);
@@ -535,6 +592,7 @@ int Game::run() {
         view.dt = dt;
         const gust::Vec3 origin = wind_->domain_origin();
         view.wind_origin = {origin.x, origin.y, origin.z};
+        view.ambient = world_->ambient(t_);
         renderer_->record(cmd_, target.view, target.extent, view, views_,
                           [&](VkCommandBuffer c) { hud_->draw(c); });
         if (!windowed) offscreen_->record_readback(cmd_);

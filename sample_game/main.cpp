@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
     std::string out, assets = options.assets.string(), views;
     std::vector<std::uint32_t> cells;
     float cell_size = 0.0f, dt = 0.0f;
-    std::uint32_t voxels_per_cell = 0, grass = 0, max_iterations = 0;
+    std::uint32_t voxels_per_cell = 0, grass = 0, max_iterations = 0, cascades = 0;
     app.add_flag("--headless", options.headless,
                  "render offscreen and write PNG frames (also without a display)");
     app.add_option("--frames", options.frames, "stop after N frames (headless default: the tour's length)");
@@ -58,6 +58,11 @@ int main(int argc, char** argv) {
     CLI::Option* iterations_option = app.add_option("--max-iterations", max_iterations,
                                                     "pressure iterations per frame (default: the preset's)")
                                          ->check(CLI::Range(1u, 200u));
+    CLI::Option* cascades_option =
+        app.add_option(
+               "--cascades", cascades,
+               "nested wind grids around the village, each 4 times coarser, 1..4 (default: the preset's)")
+            ->check(CLI::Range(1u, sample::kMaxCascades));
     CLI::Option* dt_option =
         app.add_option("--dt", dt, "fixed time step, s (default 1/30 headless; windowed: the clock)")
             ->check(CLI::Range(0.001f, 0.5f));
@@ -107,6 +112,7 @@ int main(int argc, char** argv) {
     if (voxels_option->count()) options.detail.voxels_per_cell = voxels_per_cell;
     if (grass_option->count()) options.detail.grass_blades = grass;
     if (iterations_option->count()) options.detail.max_cycles = max_iterations;
+    if (cascades_option->count()) options.detail.cascades = cascades;
     if (dt_option->count()) options.dt = dt;
     // Asking for views or the follow camera is asking for a camera of one's own.
     options.tour = !no_tour && !views_option->count() && !follow_option->count();

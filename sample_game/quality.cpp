@@ -25,16 +25,18 @@ Detail preset(Quality quality) {
     case Quality::Low:
         // Measured on lavapipe (docs/sample.md): the grid and grass of the old defaults, with voxels of
         // 0.44 m instead of 0.875 m so that the characters are more than one block; a bigger grid costs
-        // lavapipe more in per-dispatch overhead than finer voxels do.
-        return {{16, 8, 16}, 1.75f, 4, 20000, 8};
+        // lavapipe more in per-dispatch overhead than finer voxels do. Three cascades of ratio 4 reach
+        // 448 m across, the valley around the village.
+        return {{16, 8, 16}, 1.75f, 4, 20000, 8, 3, 4};
     case Quality::High:
         // About 0.5 m cells and 0.125 m voxels over 32 m x 12 m x 32 m: the fox is six voxels tall.
-        return {{64, 24, 64}, 0.5f, 4, 200000, 16};
+        // Four cascades of ratio 4 reach 2 km across.
+        return {{64, 24, 64}, 0.5f, 4, 200000, 16, 4, 4};
     case Quality::Auto:
     case Quality::Medium:
         break;
     }
-    return {{32, 12, 32}, 1.0f, 4, 60000, 8};
+    return {{32, 12, 32}, 1.0f, 4, 60000, 8, 3, 4};
 }
 
 Detail apply(Detail detail, const DetailOverrides& overrides) {
@@ -43,6 +45,7 @@ Detail apply(Detail detail, const DetailOverrides& overrides) {
     if (overrides.voxels_per_cell) detail.voxels_per_cell = *overrides.voxels_per_cell;
     if (overrides.grass_blades) detail.grass_blades = *overrides.grass_blades;
     if (overrides.max_cycles) detail.max_cycles = *overrides.max_cycles;
+    if (overrides.cascades) detail.cascades = *overrides.cascades;
     return detail;
 }
 

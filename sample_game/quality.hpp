@@ -17,6 +17,9 @@ enum class Quality {
     High,   ///< a discrete GPU: a fine wind grid and a dense field
 };
 
+/// The most cascades the sample's shaders read (GUST_CASCADES in shaders/sample/sample_common.glsl).
+inline constexpr std::uint32_t kMaxCascades = 4;
+
 /// What a preset sets: gust's domain, the grass and the pressure budget.
 struct Detail {
     std::array<std::uint32_t, 3> cells{}; ///< wind cells per axis
@@ -24,6 +27,8 @@ struct Detail {
     std::uint32_t voxels_per_cell = 4;    ///< voxels per wind cell per axis (1, 2, 4 or 8)
     std::uint32_t grass_blades = 0;
     std::uint32_t max_cycles = 4; ///< pressure iterations per frame (the field carries over)
+    std::uint32_t cascades = 3;   ///< nested wind grids around the focus, 1..kMaxCascades
+    std::uint32_t ratio = 4;      ///< cell size from one cascade to the next coarser: 2 or 4
 };
 
 /// The values a command line gave explicitly; each replaces the preset's.
@@ -33,6 +38,7 @@ struct DetailOverrides {
     std::optional<std::uint32_t> voxels_per_cell;
     std::optional<std::uint32_t> grass_blades;
     std::optional<std::uint32_t> max_cycles;
+    std::optional<std::uint32_t> cascades;
 };
 
 /// What `auto` picks for a device: CPU -> Low; discrete GPU -> High; integrated, virtual or other -> Medium.

@@ -17,6 +17,7 @@
 #include <gust_shaders/slice_vert.h>
 #include <gust_shaders/voxels_frag.h>
 #include <gust_shaders/voxels_vert.h>
+#include <stdexcept>
 
 namespace sample {
 
@@ -29,7 +30,7 @@ constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr float kFoliageDrag = 0.025f;
 
 static_assert(sizeof(io::DrawPush) == 96);
-static_assert(sizeof(io::FrameUniforms) == 3 * 64 + 6 * 16);
+static_assert(sizeof(io::FrameUniforms) == (2 + io::kWindCascades) * 64 + 8 * 16);
 static_assert(sizeof(io::VoxelFace) == 8);
 static_assert(sizeof(io::FoliageSeed) == 32 && sizeof(io::FoliageState) == 16);
 
@@ -88,7 +89,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
         VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
     VkDescriptorSetLayoutBinding bindings[5] = {
         {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, all, nullptr},
-        {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, all, nullptr},
+        {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, io::kWindCascades, all, nullptr},
         {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
@@ -99,7 +100,7 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     check(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout_),
           "vkCreateDescriptorSetLayout");
     VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, io::kWindCascades},
                                      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3}};
     VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     pool_info.maxSets = 1;
@@ -275,7 +276,12 @@ void Renderer::write_descriptors() {
     VkDescriptorBufferInfo uniforms{uniforms_.buffer, 0, VK_WHOLE_SIZE};
     VkDescriptorBufferInfo seeds{seeds_.buffer, 0, VK_WHOLE_SIZE};
     VkDescriptorBufferInfo states{states_.buffer, 0, VK_WHOLE_SIZE};
-    VkDescriptorImageInfo wind{wind_.sampler, wind_.view, wind_.layout};
+    // The slots past the coarsest cascade hold the coarsest again (sample_io.h, kWindCascades).
+    VkDescriptorImageInfo wind[io::kWindCascades];
+    for (std::uint32_t k = 0; k < io::kWindCascades; ++k) {
+        const gust::WindTexture& t = wind_[std::min<std::size_t>(k, wind_.size() - 1)];
+        wind[k] = {t.sampler, t.view, t.layout};
+    }
     VkDescriptorBufferInfo faces{faces_.buffer, 0, VK_WHOLE_SIZE};
     VkWriteDescriptorSet writes[5]{};
     for (std::uint32_t i = 0; i < 5; ++i) {
@@ -287,7 +293,8 @@ void Renderer::write_descriptors() {
     writes[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[0].pBufferInfo = &uniforms;
     writes[1].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    writes[1].pImageInfo = &wind;
+    writes[1].descriptorCount = io::kWindCascades;
+    writes[1].pImageInfo = wind;
     writes[2].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[2].pBufferInfo = &seeds;
     writes[3].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -297,8 +304,10 @@ void Renderer::write_descriptors() {
     vkUpdateDescriptorSets(vk_.device(), 5, writes, 0, nullptr);
 }
 
-void Renderer::set_wind(const gust::WindTexture& texture, const gust::WindDomain& domain) {
-    wind_ = texture;
+void Renderer::set_wind(std::span<const gust::WindTexture> textures, const gust::WindDomain& domain) {
+    if (textures.empty() || textures.size() > io::kWindCascades)
+        throw std::runtime_error("the sample's shaders read 1 to 4 wind cascades");
+    wind_ = textures;
     domain_ = domain;
     write_descriptors();
 }
@@ -389,12 +398,28 @@ std::pair<float, float> Renderer::grass_bend() const {
     return {grass_count_ ? static_cast<float>(sum / grass_count_) : 0.0f, largest};
 }
 
+float Renderer::crown_bend(std::span<const std::uint32_t> slots) const {
+    const auto* states = static_cast<const io::FoliageState*>(states_.mapped);
+    float sum = 0.0f;
+    for (std::uint32_t slot : slots)
+        sum += glm::length(glm::vec2(states[slot].bend));
+    return slots.empty() ? 0.0f : sum / static_cast<float>(slots.size());
+}
+
 void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent, const FrameView& view,
                      const Views& views) {
     io::FrameUniforms u{};
     u.view_proj = view.view_proj;
     u.inverse_view_proj = glm::inverse(view.view_proj);
-    std::memcpy(&u.wind_world_to_texture, wind_.world_to_texture.m, sizeof(u.wind_world_to_texture));
+    // Each cascade's grid scrolls with the focus: its world_to_texture as of gust's last step.
+    for (std::uint32_t k = 0; k < io::kWindCascades; ++k)
+        std::memcpy(&u.wind_world_to_texture[k],
+                    wind_[std::min<std::size_t>(k, wind_.size() - 1)].world_to_texture.m, sizeof(glm::mat4));
+    u.ambient = glm::vec4(view.ambient, 0.0f);
+    const glm::vec3 coarse_min = glm::vec3(glm::inverse(u.wind_world_to_texture[wind_.size() - 1]) *
+                                           glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    u.coarse_min = glm::vec4(coarse_min, domain_.cell_size * std::pow(static_cast<float>(domain_.ratio),
+                                                                      static_cast<float>(wind_.size() - 1)));
     u.camera = glm::vec4(view.eye, view.time);
     u.light = glm::vec4(glm::normalize(glm::vec3(0.45f, 0.8f, 0.3f)), static_cast<float>(grass_count_));
     u.voxel_origin =
@@ -460,7 +485,7 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, voxels_);
         vkCmdDraw(cmd, face_count_ * io::kFaceVertices, 1, 0, 0);
     }
-    if (views.nodes && line_count_ > 0) {
+    if ((views.nodes || views.cascades) && line_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lines_);
         const VkDeviceSize offset = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &lines_buffer_.buffer, &offset);

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <gust/gust.hpp>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -27,7 +28,8 @@ struct FrameView {
     glm::vec3 eye{0.0f};
     float time = 0.0f;
     float dt = 0.0f;             ///< foliage step (s); 0 holds the foliage still
-    glm::vec3 wind_origin{0.0f}; ///< min corner of gust's domain this frame (world, m)
+    glm::vec3 wind_origin{0.0f}; ///< min corner of gust's (finest) domain this frame (world, m)
+    glm::vec3 ambient{0.0f};     ///< gust's ambient wind this frame, m/s
 };
 
 class Renderer {
@@ -39,8 +41,10 @@ class Renderer {
     Renderer& operator=(const Renderer&) = delete;
 
     VkRenderPass render_pass() const { return pass_; }
-    /// Binds gust's wind texture and domain (again after the System is re-created). The GPU must be idle.
-    void set_wind(const gust::WindTexture& texture, const gust::WindDomain& domain);
+    /// Binds gust's wind textures, finest first (System::wind_textures, 1..kWindCascades of them; read
+    /// again each frame for their grids, so valid while the System lives), and its domain (again after the
+    /// System is re-created). The GPU must be idle.
+    void set_wind(std::span<const gust::WindTexture> textures, const gust::WindDomain& domain);
     /// Replaces the voxels drawn by the W view (ijk triples in the grid given, each once). The GPU must have
     /// finished the last frame.
     void set_voxels(const gust::VoxelGridInfo& grid, std::span<const gust::VoxelCoord> voxels);
@@ -62,6 +66,8 @@ class Renderer {
     void forget_targets();
     /// Mean and largest bend of the grass blades after the last frame (tip displacement over height).
     std::pair<float, float> grass_bend() const;
+    /// Mean bend of the crowns in foliage `slots` after the last frame (tip displacement over height).
+    float crown_bend(std::span<const std::uint32_t> slots) const;
 
   private:
     void begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent, const FrameView& view,
@@ -88,7 +94,7 @@ class Renderer {
     Buffer faces_; ///< face_list_ for the W view's draw
     std::uint32_t face_count_ = 0;
     gust::VoxelGridInfo voxel_grid_{};
-    gust::WindTexture wind_{};
+    std::span<const gust::WindTexture> wind_;
     gust::WindDomain domain_{};
     struct MeshBuffers {
         Buffer vertices, indices;

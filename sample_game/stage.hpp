@@ -19,11 +19,14 @@ struct Obstacle {
 
 /// The actors the tour films (World::stage).
 struct Stage {
-    Actor fox;                       ///< walking a circle through the grass
-    Actor walker;                    ///< CesiumMan, walking an ellipse
-    Actor flyer;                     ///< the bunny with a motor, flying a figure of eight
-    glm::vec3 fan{0.0f};             ///< the fan's head
-    std::vector<Obstacle> obstacles; ///< the bounds of what stands still and hides what is behind it
+    Actor fox;                           ///< walking a circle through the grass
+    Actor walker;                        ///< CesiumMan, walking an ellipse
+    Actor flyer;                         ///< the bunny with a motor, flying a figure of eight
+    glm::vec3 fan{0.0f};                 ///< the fan's head
+    glm::vec3 ridge_grove{0.0f};         ///< middle of the grove on the ridge's crest, on the ground
+    glm::vec3 lee_grove{0.0f};           ///< middle of the grove in the ridge's lee, on the ground
+    glm::vec3 upwind{-1.0f, 0.0f, 0.0f}; ///< horizontal unit vector from the village towards the ridge
+    std::vector<Obstacle> obstacles;     ///< the bounds of what stands still and hides what is behind it
 };
 
 } // namespace sample

@@ -101,8 +101,9 @@ void tree(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
     // Seen from the middle of the field, turned where a palm or a building would stand in the way.
     const Actor& walker = stage.walker;
     const glm::vec3 inwards = glm::normalize(glm::vec3(-walker.position.x, 0.0f, -walker.position.z));
+    // Close enough that the low preset's voxels (0.44 m) and nodes read as blocks around the walker.
     camera = clear_view(stage, walker.position + glm::vec3(0.0f, 0.7f, 0.0f),
-                        inwards + 0.4f * walker.forward + 0.8f * kUp, 6.5f - 1.0f * u);
+                        inwards + 0.4f * walker.forward + 0.8f * kUp, 5.5f - 0.8f * u);
     views.triangles = false;
     views.grass = false;
     views.voxels = true;
@@ -118,6 +119,28 @@ void field(const Stage&, float u, OrbitCamera& camera, Views& views) {
     views.slice = true;
     views.arrows = true;
     views.slice_height = 1.0f;
+}
+
+void valley(const Stage& stage, float u, OrbitCamera& camera, Views& views) {
+    // High over the valley, from downwind and to the side, turning a little: the ridge across the wind,
+    // each cascade's extent as a box and the wind's speed 8 m above the valley floor, every cascade's
+    // blended.
+    const glm::vec3 across(-stage.upwind.z, 0.0f, stage.upwind.x);
+    camera = looking_at(0.15f * stage.ridge_grove, -stage.upwind + (0.5f + 0.3f * u) * across + 1.6f * kUp,
+                        720.0f);
+    views.grass = false;
+    views.slice = true;
+    views.cascades = true;
+    views.slice_height = 8.0f;
+}
+
+void lee(const Stage& stage, float u, OrbitCamera& camera, Views&) {
+    // From downwind of the ridge, a little to the side: the grove in its lee in front, the one on its crest
+    // behind and above it, two rows across the frame.
+    const glm::vec3 across(-stage.upwind.z, 0.0f, stage.upwind.x);
+    const glm::vec3 middle = 0.5f * (stage.ridge_grove + stage.lee_grove);
+    camera = looking_at(middle - glm::vec3(0.0f, 4.0f, 0.0f), -stage.upwind + 0.3f * across + 0.25f * kUp,
+                        150.0f - 15.0f * u);
 }
 
 constexpr Shot kShots[] = {
@@ -138,13 +161,21 @@ constexpr Shot kShots[] = {
      "it leaves.",
      2.5f, wake},
     {"tree", "The voxel tree",
-     "gust's voxels and the tree nodes that moving meshes reach: green made this frame, grey kept, red freed "
-     "as the walker moves.",
+     "gust's voxels and the tree nodes that moving meshes reach: green made in the last second, grey kept, "
+     "red freed as the walker moves.",
      3.0f, tree},
     {"field", "The wind field",
      "Wind speed 1 m above the ground, blue still to red 8 m/s, with arrows: shelter behind the buildings, "
      "the fan's jet.",
      2.5f, field},
+    {"valley", "Cascades over the valley",
+     "Three nested wind grids, each 4 times coarser, reach over the valley: their boxes, and the wind 8 m "
+     "up with every cascade blended, the ridge standing through it.",
+     3.0f, valley},
+    {"lee", "The ridge's lee",
+     "Trees on the ridge's crest sway in the full wind; the grove in its lee, sheltered by it, stands "
+     "calmer.",
+     3.0f, lee},
 };
 
 } // namespace

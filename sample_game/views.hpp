@@ -14,6 +14,7 @@ struct Views {
     bool every_node = true;    ///< R draws every node; off: only those moving meshes reach, made or freed
     bool slice = false;        ///< T: wind speed on a horizontal slice
     bool arrows = false;       ///< Y: wind arrows on the slice
+    bool cascades = false;     ///< each wind cascade's extent as a box (the tour's valley shot)
     float slice_height = 1.0f; ///< world y of the slice and the arrows, m
 };
 

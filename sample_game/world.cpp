@@ -18,6 +18,36 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 /// Half the edge of the square the grass grows in (m).
 constexpr float kFieldHalf = 14.0f;
+/// The valley: terrain this wide (m) in quads of 5 m, flat around the village.
+constexpr float kValleySize = 1000.0f;
+constexpr std::uint32_t kValleySamples = 200;
+/// The ridge upwind of the village: its crest this far from the middle (m), this high and wide (m).
+constexpr float kRidgeDistance = 130.0f, kRidgeHeight = 60.0f, kRidgeWidth = 35.0f;
+/// The lee grove stands this far downwind of the crest (m).
+constexpr float kLeeDistance = 60.0f;
+
+/// Whether an object is the ground (the terrain or the bedrock under it): no obstacle, no footprint.
+bool is_ground(const std::string& name) {
+    return name == "ground" || name == "bedrock";
+}
+
+/// The valley around the village (docs/sample.md): flat at y = 0 within 60 m of the middle, a ridge across
+/// the wind `upwind` of it, lower hills and a ridge downwind around it.
+gust::TerrainDesc valley(glm::vec2 upwind) {
+    const glm::vec2 across(-upwind.y, upwind.x);
+    const glm::vec2 crest = kRidgeDistance * upwind;
+    gust::TerrainDesc terrain;
+    terrain.size = glm::vec2(kValleySize);
+    terrain.samples = glm::uvec2(kValleySamples);
+    terrain.features = {
+        {crest - 160.0f * across, crest + 160.0f * across, kRidgeHeight, kRidgeWidth},
+        {-220.0f * upwind - 250.0f * across, -220.0f * upwind + 250.0f * across, 30.0f, 50.0f},
+        {-300.0f * upwind + 300.0f * across, -300.0f * upwind + 300.0f * across, 45.0f, 90.0f},
+        {200.0f * upwind - 280.0f * across, 200.0f * upwind - 280.0f * across, 50.0f, 100.0f},
+        {150.0f * across, 150.0f * across, 20.0f, 40.0f},
+    };
+    return terrain;
+}
 
 gust::Mesh load_or_throw(const std::filesystem::path& path) {
     gust::Result<gust::Mesh> mesh = gust::load_mesh(path);
@@ -85,8 +115,16 @@ std::size_t World::add_mesh(gust::Mesh mesh) {
 }
 
 World::World(const std::filesystem::path& assets, const WorldSettings& settings) : settings_(settings) {
-    const std::size_t ground = add_mesh(gust::make_box_mesh({-24.0f, -1.0f, -24.0f}, {24.0f, 0.0f, 24.0f}));
+    const float heading = glm::radians(settings_.wind_heading_deg);
+    const glm::vec2 upwind(-std::cos(heading), -std::sin(heading));
+    const gust::TerrainDesc terrain = valley(upwind);
+    const std::size_t ground = add_mesh(gust::make_terrain_mesh(terrain));
     objects_.push_back({"ground", ground, ObjectKind::Static, glm::mat4(1.0f), {0.32f, 0.42f, 0.22f}});
+    // The terrain is an open sheet: under it, a block of rock keeps the air out of the hills (gust
+    // voxelizes surfaces), as deep as the coarsest cascade reaches.
+    const std::size_t rock = add_mesh(gust::make_box_mesh({-0.5f * kValleySize, -400.0f, -0.5f * kValleySize},
+                                                          {0.5f * kValleySize, -0.25f, 0.5f * kValleySize}));
+    objects_.push_back({"bedrock", rock, ObjectKind::Static, glm::mat4(1.0f), {0.35f, 0.33f, 0.3f}});
 
     struct Building {
         const char* file;
@@ -127,6 +165,53 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
                          glm::vec4(0.0f, 0.0f, 6.0f, 0.0f)});
     }
 
+    // Groves far out: one on the ridge's crest, one in its lee, one in the valley downwind. Trees sway;
+    // gust gets each one's trunk as a static solid, which every cascade voxelizes.
+    const std::size_t grove_tree = add_mesh(load_or_throw(assets / "foliage/tree_detailed.glb"));
+    const std::size_t trunk = add_mesh(gust::make_box_mesh({-0.3f, 0.0f, -0.3f}, {0.3f, 1.0f, 0.3f}));
+    float tree_top = 0.0f;
+    for (const glm::vec3& p : meshes_[grove_tree].mesh.positions)
+        tree_top = std::max(tree_top, p.y);
+    auto on_ground = [&](glm::vec2 xz) {
+        return glm::vec3(xz.x, static_cast<float>(gust::terrain_height(terrain, xz.x, xz.y)), xz.y);
+    };
+    const glm::vec2 across(-upwind.y, upwind.x);
+    const glm::vec2 crest = kRidgeDistance * upwind;
+    stage_.upwind = glm::vec3(upwind.x, 0.0f, upwind.y);
+    stage_.ridge_grove = on_ground(crest);
+    stage_.lee_grove = on_ground(crest - kLeeDistance * upwind);
+    const glm::vec2 groves[] = {crest, crest - kLeeDistance * upwind, -150.0f * upwind + 40.0f * across};
+    std::mt19937 grove_rng(11u);
+    std::uniform_real_distribution<float> spread(-1.0f, 1.0f);
+    const char* grove_names[] = {"crest tree", "lee tree", "valley tree"};
+    for (std::size_t g = 0; g < std::size(groves); ++g)
+        for (int i = 0; i < 7; ++i) {
+            const glm::vec2 middle = groves[g];
+            // Along the crest, a few metres either side of the line across the wind.
+            const glm::vec2 xz = middle +
+                                 (12.0f * static_cast<float>(i - 3) + 3.0f * spread(grove_rng)) * across +
+                                 4.0f * spread(grove_rng) * upwind;
+            const glm::vec3 root = on_ground(xz) - glm::vec3(0.0f, 0.3f, 0.0f);
+            const float height = 8.0f + 3.0f * (0.5f + 0.5f * spread(grove_rng));
+            const float scale = height / tree_top;
+            WorldObject tree{grove_names[g],
+                             grove_tree,
+                             ObjectKind::Tree,
+                             place(root, 3.0f * spread(grove_rng), scale),
+                             {0.22f, 0.45f, 0.2f}};
+            tree.sway_height = 0.3f * tree_top;
+            tree.sway_length = 0.7f * tree_top;
+            objects_.push_back(tree);
+            trees.push_back(
+                {glm::vec4(root + glm::vec3(0.0f, height, 0.0f), height), glm::vec4(0.0f, 0.0f, 5.0f, 0.0f)});
+            objects_.push_back(
+                {"trunk",
+                 trunk,
+                 ObjectKind::Static,
+                 glm::scale(glm::translate(glm::mat4(1.0f), root), glm::vec3(1.0f, 0.5f * height, 1.0f)),
+                 {0.35f, 0.25f, 0.15f}});
+        }
+
     const std::size_t fan_post = add_mesh(gust::make_box_mesh({-0.08f, 0.0f, -0.08f}, {0.08f, 1.2f, 0.08f}));
     objects_.push_back({"fan post",
                         fan_post,
@@ -166,7 +251,7 @@ World::World(const std::filesystem::path& assets, const WorldSettings& settings)
                         {0.85f, 0.82f, 0.78f}});
 
     for (const WorldObject& o : objects_) {
-        if ((o.kind != ObjectKind::Static && o.kind != ObjectKind::Tree) || o.name == "ground") continue;
+        if ((o.kind != ObjectKind::Static && o.kind != ObjectKind::Tree) || is_ground(o.name)) continue;
         Obstacle box{glm::vec3(std::numeric_limits<float>::max()),
                      glm::vec3(std::numeric_limits<float>::lowest())};
         for (const glm::vec3& p : meshes_[o.mesh].mesh.positions) {
@@ -190,7 +275,7 @@ void World::plant_grass() {
     std::vector<Footprint> avoid;
     for (const WorldObject& o : objects_) {
         if (o.kind != ObjectKind::Static && o.kind != ObjectKind::Tree) continue;
-        if (o.name == "ground") continue;
+        if (is_ground(o.name)) continue;
         const glm::vec3 c(o.model[3]);
         const float half =
             o.kind == ObjectKind::Tree ? 0.6f : 0.5f * glm::length(glm::vec3(o.model[0])) + 0.3f;

@@ -1,15 +1,48 @@
 // Bindings every sample shader shares (one descriptor set; renderer.cpp creates its layout).
 #include "sample_io.h"
 
+#define GUST_CASCADES 4 // kWindCascades; the slots past a System's coarsest hold its coarsest again
+#include "gust/gust_wind.glsl"
+
 layout(set = 0, binding = 0, std140) uniform Frame { FrameUniforms frame; };
-layout(set = 0, binding = 1) uniform sampler3D wind_texture;
+layout(set = 0, binding = 1) uniform sampler3D wind_textures[GUST_CASCADES]; // finest first
 layout(set = 0, binding = 2, std430) readonly buffer Seeds { FoliageSeed seeds[]; };
 layout(set = 0, binding = 3, std430) buffer States { FoliageState states[]; };
 
-/// gust's wind at a world point (m/s); the ambient wind outside the domain comes from the clamped edge.
+/// gust's wind at a world point (m/s): the finest cascade that holds it, blended into the coarser ones as
+/// gust's own answers are; beyond the coarsest, the ambient wind. gust_wind's sum, cascade by cascade, but
+/// a coarser cascade is read only while the finer ones leave it a share: in the middle of the finest
+/// cascade (the village, its grass) that is one texture read instead of four.
 vec3 wind_at(vec3 world) {
-    vec3 uvw = (frame.wind_world_to_texture * vec4(world, 1.0)).xyz;
-    return texture(wind_texture, uvw).xyz;
+    vec3 sum = vec3(0.0);
+    float left = 1.0;
+    gust_blend_cascade(wind_textures[0], frame.wind_world_to_texture[0], false, world, sum, left);
+    if (left > 0.0) gust_blend_cascade(wind_textures[1], frame.wind_world_to_texture[1], false, world, sum, left);
+    if (left > 0.0) gust_blend_cascade(wind_textures[2], frame.wind_world_to_texture[2], false, world, sum, left);
+    if (left > 0.0) gust_blend_cascade(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
+    return sum + left * frame.ambient.xyz;
+}
+
+/// Cascade k's share of the wind and the air fraction (rgb: m/s, a: gust's 1 − solid fraction) at
+/// `world`, blended as wind_at blends the wind.
+#define SAMPLE_BLEND_TEXEL(k)                                                                               \
+    if (left > 0.0) {                                                                                        \
+        vec3 uvw = (frame.wind_world_to_texture[k] * vec4(world, 1.0)).xyz;                                  \
+        float w = gust_cascade_weight(uvw, vec3(textureSize(wind_textures[k], 0)), k == GUST_CASCADES - 1);  \
+        if (w > 0.0) sum += left * w * textureLod(wind_textures[k], uvw, 0.0);                               \
+        left *= 1.0 - w;                                                                                     \
+    }
+
+/// The wind (rgb, m/s) and the air fraction (a) at a world point in one pass over the cascades: the
+/// ambient wind and open air beyond the coarsest.
+vec4 wind_and_air_at(vec3 world) {
+    vec4 sum = vec4(0.0);
+    float left = 1.0;
+    SAMPLE_BLEND_TEXEL(0)
+    SAMPLE_BLEND_TEXEL(1)
+    SAMPLE_BLEND_TEXEL(2)
+    SAMPLE_BLEND_TEXEL(3)
+    return sum + left * vec4(frame.ambient.xyz, 1.0);
 }
 
 /// Sun and sky on a surface of albedo `albedo` with normal `n`, faded into haze with distance.
@@ -17,7 +50,7 @@ vec3 shade(vec3 albedo, vec3 n, vec3 world) {
     float sun = max(dot(n, frame.light.xyz), 0.0);
     float sky = 0.5 + 0.5 * n.y;
     vec3 lit = albedo * (0.85 * sun * vec3(1.0, 0.96, 0.88) + 0.35 * sky * vec3(0.55, 0.65, 0.8));
-    float haze = 1.0 - exp(-0.004 * length(world - frame.camera.xyz));
+    float haze = 1.0 - exp(-0.0007 * length(world - frame.camera.xyz));
     return mix(lit, vec3(0.62, 0.72, 0.85), haze);
 }
 

@@ -16,7 +16,9 @@ using namespace sample;
 
 /// The shots docs/sample.md lists, in order, with their lengths in seconds.
 const std::vector<std::pair<std::string, double>> kDocumentedShots = {
-    {"overview", 2.0}, {"grass", 3.0}, {"fan", 2.5}, {"wake", 2.5}, {"tree", 3.0}, {"field", 2.5}};
+    {"overview", 2.0}, {"grass", 3.0}, {"fan", 2.5},    {"wake", 2.5},
+    {"tree", 3.0},     {"field", 2.5}, {"valley", 3.0}, {"lee", 3.0}};
+constexpr double kTourSeconds = 21.5;
 
 /// A stage with the actors somewhere in the field, heading in different directions.
 Stage some_stage() {
@@ -25,6 +27,10 @@ Stage some_stage() {
     stage.walker = {{-2.0f, 0.0f, -5.0f}, {1.0f, 0.0f, 0.0f}};
     stage.flyer = {{5.0f, 2.7f, 1.0f}, {0.0f, 0.0f, -1.0f}};
     stage.fan = {-10.8f, 1.2f, 0.0f};
+    // The ridge 130 m upwind (the wind blowing from 200 degrees), 60 m high, the lee grove 60 m behind it.
+    stage.upwind = glm::normalize(glm::vec3(-0.94f, 0.0f, -0.34f));
+    stage.ridge_grove = 130.0f * stage.upwind + glm::vec3(0.0f, 60.0f, 0.0f);
+    stage.lee_grove = 70.0f * stage.upwind + glm::vec3(0.0f, 3.0f, 0.0f);
     return stage;
 }
 
@@ -51,14 +57,14 @@ double start_of(std::size_t shot) {
 TEST(SampleTour, playsTheDocumentedShotsInOrderAndStartsAgainAtTheEnd) {
     const Stage stage = some_stage();
     ASSERT_EQ(tour_shots().size(), kDocumentedShots.size());
-    EXPECT_DOUBLE_EQ(tour_seconds(), 15.5);
+    EXPECT_DOUBLE_EQ(tour_seconds(), kTourSeconds);
     for (std::size_t i = 0; i < kDocumentedShots.size(); ++i) {
         const double middle = start_of(i) + 0.5 * kDocumentedShots[i].second;
         const TourFrame frame = tour_at(middle, stage);
         EXPECT_EQ(frame.index, i);
         EXPECT_EQ(frame.shot->key, kDocumentedShots[i].first);
         EXPECT_GT(std::string(frame.shot->caption).size(), 20u) << frame.shot->key;
-        EXPECT_EQ(tour_at(middle + 15.5, stage).index, i) << "a second time round";
+        EXPECT_EQ(tour_at(middle + kTourSeconds, stage).index, i) << "a second time round";
     }
     EXPECT_EQ(tour_at(start_of(1) - 0.01, stage).index, 0u);
     EXPECT_EQ(tour_at(start_of(1) + 0.01, stage).index, 1u);
@@ -91,6 +97,45 @@ TEST(SampleTour, closeShotsFrameTheirActorNearTheMiddle) {
     const TourFrame tree = tour_at(start_of(4) + 1.0, stage);
     const glm::vec3 walker = in_picture(tree.camera, stage.walker.position + glm::vec3(0.0f, 0.7f, 0.0f));
     EXPECT_LT(std::max(std::abs(walker.x), std::abs(walker.y)), 0.2f);
+    // Close enough that the low preset's 0.44 m voxels and their nodes read as blocks.
+    EXPECT_LT(glm::distance(tree.camera.eye(), stage.walker.position), 6.0f);
+}
+
+TEST(SampleTour, theValleyShotLooksDownOnEveryCascadeAndTheRidge) {
+    const Stage stage = some_stage();
+    for (double into : {0.1, 1.5, 2.9}) {
+        const TourFrame valley = tour_at(start_of(6) + into, stage);
+        EXPECT_EQ(valley.shot->key, std::string("valley"));
+        EXPECT_TRUE(valley.views.cascades && valley.views.slice);
+        EXPECT_GT(valley.camera.eye().y, 200.0f) << "a high view";
+        // The low preset's coarsest cascade: 16 cells of 28 m, 448 m across, around the village; its
+        // corners on the ground and the ridge all in the picture.
+        for (glm::vec3 p :
+             {glm::vec3(-224.0f, 0.0f, -224.0f), glm::vec3(224.0f, 0.0f, -224.0f),
+              glm::vec3(-224.0f, 0.0f, 224.0f), glm::vec3(224.0f, 0.0f, 224.0f), stage.ridge_grove}) {
+            const glm::vec3 seen = in_picture(valley.camera, p);
+            EXPECT_LT(std::max(std::abs(seen.x), std::abs(seen.y)), 1.0f)
+                << p.x << ", " << p.z << " at " << into;
+            EXPECT_GT(seen.z, 0.0f);
+            EXPECT_LT(seen.z, 1.0f) << "beyond the far plane";
+        }
+    }
+}
+
+TEST(SampleTour, theLeeShotFramesBothGrovesTheLeeOneInFront) {
+    const Stage stage = some_stage();
+    for (double into : {0.1, 1.5, 2.9}) {
+        const TourFrame lee = tour_at(start_of(7) + into, stage);
+        EXPECT_EQ(lee.shot->key, std::string("lee"));
+        // The trees' crowns, about 9 m up.
+        const glm::vec3 crest = in_picture(lee.camera, stage.ridge_grove + glm::vec3(0.0f, 9.0f, 0.0f));
+        const glm::vec3 sheltered = in_picture(lee.camera, stage.lee_grove + glm::vec3(0.0f, 9.0f, 0.0f));
+        for (const glm::vec3& seen : {crest, sheltered})
+            EXPECT_LT(std::max(std::abs(seen.x), std::abs(seen.y)), 0.8f) << "at " << into;
+        EXPECT_LT(glm::distance(lee.camera.eye(), stage.lee_grove),
+                  glm::distance(lee.camera.eye(), stage.ridge_grove));
+        EXPECT_LT(crest.y, sheltered.y) << "the crest grove above the lee grove in the picture (y down)";
+    }
 }
 
 /// Whether the segment from `a` to `b` passes through `box`, by sampling it every centimetre.
@@ -136,6 +181,10 @@ TEST(SampleTour, eachShotTurnsOnTheViewsItsCaptionTalksAbout) {
     const Views field = tour_at(start_of(5) + 1.0, stage).views;
     EXPECT_TRUE(field.slice && field.arrows);
     EXPECT_FLOAT_EQ(field.slice_height, 1.0f);
+    for (const Views& other : {overview, tree, field})
+        EXPECT_FALSE(other.cascades);
+    const Views lee = tour_at(start_of(7) + 1.0, stage).views;
+    EXPECT_TRUE(lee.triangles && !lee.slice && !lee.cascades);
 }
 
 TEST(SampleWorld, theWalkersNeverPassThroughABuildingOrATree) {
@@ -274,4 +323,60 @@ TEST(SampleVoxelFaces, aSolidCubeShowsOnlyItsSurface) {
         EXPECT_FALSE(f.ij == (21u | 1u << 16) && (f.k_side & 0xffffu) == 11u) << "the centre voxel is hidden";
     finder.find({}, faces);
     EXPECT_TRUE(faces.empty());
+}
+
+TEST(SampleQuality, everyPresetNestsCascadesThatTheShadersRead) {
+    for (Quality q : {Quality::Low, Quality::Medium, Quality::High}) {
+        const Detail d = preset(q);
+        EXPECT_GE(d.cascades, 1u);
+        EXPECT_LE(d.cascades, kMaxCascades) << "the sample's shaders bind kMaxCascades wind textures";
+        EXPECT_TRUE(d.ratio == 2 || d.ratio == 4);
+    }
+    // The goal: three cascades of ratio 4 at the low preset, reaching 448 m across the valley.
+    const Detail low = preset(Quality::Low);
+    EXPECT_EQ(low.cascades, 3u);
+    EXPECT_EQ(low.ratio, 4u);
+    EXPECT_GE(static_cast<float>(low.cells[0]) * low.cell_size * 16.0f, 440.0f);
+    DetailOverrides one;
+    one.cascades = 1u;
+    const Detail d = apply(low, one);
+    EXPECT_EQ(d.cascades, 1u);
+    EXPECT_EQ(d.cells, low.cells);
+}
+
+TEST(SampleWorld, theValleyHasARidgeUpwindWithGrovesOnItsCrestAndInItsLeeAndAFlatVillage) {
+    WorldSettings settings;
+    settings.grass_blades = 100;
+    World world(GUST_SAMPLE_ASSETS, settings);
+    const Stage& stage = world.stage();
+    const float heading = glm::radians(settings.wind_heading_deg);
+    EXPECT_GT(glm::dot(stage.upwind, -glm::vec3(std::cos(heading), 0.0f, std::sin(heading))), 0.99f);
+    EXPECT_GT(stage.ridge_grove.y, 40.0f) << "the crest stands high";
+    EXPECT_LT(stage.lee_grove.y, 0.3f * stage.ridge_grove.y) << "the lee grove stands low behind it";
+    EXPECT_LT(glm::length(stage.lee_grove), glm::length(stage.ridge_grove))
+        << "between the ridge and the village";
+    // Both groves inside the low preset's coarsest cascade (224 m either side of the village).
+    for (glm::vec3 g : {stage.ridge_grove, stage.lee_grove})
+        EXPECT_LT(std::max(std::abs(g.x), std::abs(g.z)), 210.0f);
+    const auto ground = std::find_if(world.objects().begin(), world.objects().end(),
+                                     [](const WorldObject& o) { return o.name == "ground"; });
+    ASSERT_NE(ground, world.objects().end());
+    const gust::Mesh& terrain = world.meshes()[ground->mesh].mesh;
+    EXPECT_LT(terrain.indices.size() / 3, 100000u) << "a modest mesh that lavapipe draws at the tour's rate";
+    float span = 0.0f;
+    for (const glm::vec3& p : terrain.positions) {
+        span = std::max(span, std::abs(p.x));
+        // The village and the walkers' paths stay on flat ground.
+        if (std::max(std::abs(p.x), std::abs(p.z)) < 30.0f) {
+            EXPECT_LT(std::abs(p.y), 0.05f) << p.x << ", " << p.z;
+        }
+    }
+    EXPECT_GE(span, 450.0f) << "about 1 km across";
+    int crest = 0, lee = 0;
+    for (const WorldObject& o : world.objects()) {
+        crest += o.name == "crest tree";
+        lee += o.name == "lee tree";
+    }
+    EXPECT_GE(crest, 5);
+    EXPECT_GE(lee, 5);
 }
