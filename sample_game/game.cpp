@@ -44,7 +44,7 @@ constexpr glm::vec3 kFieldCentre{0.0f, 1.0f, 0.0f};
 /// Where gust's domain is centred for a focus on the ground at `focus`: the domain's floor sits 1 m under
 /// the ground so that the ground is a solid inside it.
 gust::Vec3 domain_centre(glm::vec3 focus, float cell_size, std::uint32_t cells_y) {
-    return {focus.x, 0.5f * cell_size * static_cast<float>(cells_y) - 1.0f, focus.z};
+    return {focus.x, focus.y + 0.5f * cell_size * static_cast<float>(cells_y) - 1.0f, focus.z};
 }
 
 /// Key of a tree node for telling this frame's nodes from last frame's.
@@ -117,6 +117,7 @@ class Game {
     OrbitCamera camera_;
     Views views_;
     bool follow_ = false;
+    bool fly_ = false; ///< GameOptions::fly
     bool touring_ = false;
     double tour_start_ = 0.0; ///< world time at which the tour (re)started, s
     TourFrame tour_frame_;    ///< this frame's shot while touring
@@ -381,6 +382,14 @@ void Game::direct_camera(bool windowed, double start) {
         tour_frame_ = tour_at(start - tour_start_, world_->stage());
         camera_ = tour_frame_.camera;
         views_ = tour_frame_.views;
+    } else if (fly_) {
+        // From above and behind the flight's heading (it circles anticlockwise seen from above), far enough
+        // to see the cascades' ground go by.
+        camera_.target = world_->flight_at(t_);
+        const glm::vec3 ahead = world_->flight_at(t_ + 1.0) - camera_.target;
+        camera_.yaw = std::atan2(-ahead.z, -ahead.x);
+        camera_.pitch = 0.6f;
+        camera_.distance = 60.0f;
     } else if (follow_) {
         camera_.target = world_->follow_target();
     } else if (!windowed) {
@@ -416,6 +425,8 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     if (touring_) line["shot"] = tour_frame_.shot->key;
     line["views"] = view_letters(views_);
     line["follow"] = follow_;
+    const gust::Vec3 origin = wind_->domain_origin();
+    line["domain_origin"] = {origin.x, origin.y, origin.z};
     const glm::vec3 eye = camera_.eye();
     line["eye"] = {eye.x, eye.y, eye.z};
     line["quality"] = quality_name(quality_);
@@ -517,6 +528,9 @@ int Game::run() {
     make_wind();
     views_ = options_.views;
     follow_ = options_.follow;
+    fly_ = options_.fly;
+    // The flight shows what it is for: the cascades' extents moving over the ground, and the wind.
+    if (fly_) views_.cascades = views_.slice = true;
     touring_ = options_.tour;
     show_hud_ = options_.hud;
 
@@ -559,7 +573,9 @@ int Game::run() {
         direct_camera(windowed, start_t);
         const Clock::time_point wind_start = Clock::now();
         if (dt > 0.0f) {
-            const glm::vec3 focus = follow_ ? world_->follow_target() : glm::vec3(0.0f);
+            const glm::vec3 focus = fly_      ? world_->flight_at(t_)
+                                    : follow_ ? world_->follow_target()
+                                              : glm::vec3(0.0f);
             wind_->set_focus(domain_centre(focus, domain_.cell_size, domain_.cells[1]));
             if (gust::Outcome stepped = world_->step_wind(*wind_, dt, t_); !stepped)
                 throw std::runtime_error("gust step: " + stepped.message());

@@ -26,9 +26,12 @@ struct GameOptions {
     Views views;                     ///< the views to start with (without the tour)
     bool tour = true;                ///< play the guided tour (windowed: until the camera is touched)
     bool follow = false;             ///< start with the camera following the fox
-    bool hud = true;                 ///< start with the overlay shown (H toggles it)
-    bool video = true;               ///< headless: encode the PNG frames into an animated WebP as well
-    WorldSettings world;             ///< its grass_blades are the preset's (or --grass)
+    /// The wind's focus and the camera fly a loop over the valley (World::flight_at), so that every
+    /// cascade scrolls: the long run of docs/sample.md, "A flight across the world".
+    bool fly = false;
+    bool hud = true;     ///< start with the overlay shown (H toggles it)
+    bool video = true;   ///< headless: encode the PNG frames into an animated WebP as well
+    WorldSettings world; ///< its grass_blades are the preset's (or --grass)
 };
 
 /// Runs the game; returns the process exit code (0: fine). Prints what went wrong on stderr.

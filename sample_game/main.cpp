@@ -78,6 +78,8 @@ int main(int argc, char** argv) {
                 },
                 "LETTERS"));
     CLI::Option* follow_option = app.add_flag("--follow", options.follow, "camera follows the fox (no tour)");
+    CLI::Option* fly_option = app.add_flag(
+        "--fly", options.fly, "the wind's focus and the camera fly a loop over the valley (no tour)");
     app.add_flag("--validation", options.validation, "Khronos validation on; any message fails the run");
     app.add_option("--assets", assets, "the repository's assets/ folder");
     CLI11_PARSE(app, argc, argv);
@@ -115,7 +117,7 @@ int main(int argc, char** argv) {
     if (cascades_option->count()) options.detail.cascades = cascades;
     if (dt_option->count()) options.dt = dt;
     // Asking for views or the follow camera is asking for a camera of one's own.
-    options.tour = !no_tour && !views_option->count() && !follow_option->count();
+    options.tour = !no_tour && !views_option->count() && !follow_option->count() && !fly_option->count();
     options.hud = !no_hud;
     options.video = !no_video;
     options.world.fan_on = !no_fan;

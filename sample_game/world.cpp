@@ -117,7 +117,8 @@ std::size_t World::add_mesh(gust::Mesh mesh) {
 World::World(const std::filesystem::path& assets, const WorldSettings& settings) : settings_(settings) {
     const float heading = glm::radians(settings_.wind_heading_deg);
     const glm::vec2 upwind(-std::cos(heading), -std::sin(heading));
-    const gust::TerrainDesc terrain = valley(upwind);
+    terrain_ = valley(upwind);
+    const gust::TerrainDesc& terrain = terrain_;
     const std::size_t ground = add_mesh(gust::make_terrain_mesh(terrain));
     objects_.push_back({"ground", ground, ObjectKind::Static, glm::mat4(1.0f), {0.32f, 0.42f, 0.22f}});
     // The terrain is an open sheet: under it, a block of rock keeps the air out of the hills (gust
@@ -428,6 +429,14 @@ gust::Outcome World::step_wind(gust::System& wind, float dt, double t) {
     if (gust::Outcome set = wind.set_emitters(emitters); !set) return set;
     if (gust::Outcome set = wind.set_ambient(to_gust(ambient(t))); !set) return set;
     return wind.step(dt);
+}
+
+glm::vec3 World::flight_at(double t) const {
+    constexpr double kRadius = 300.0, kSpeed = 12.0;
+    const double angle = kSpeed / kRadius * t;
+    const double x = kRadius * std::cos(angle), z = kRadius * std::sin(angle);
+    return glm::vec3(static_cast<float>(x), static_cast<float>(gust::terrain_height(terrain_, x, z) + 2.0),
+                     static_cast<float>(z));
 }
 
 } // namespace sample

@@ -10,6 +10,7 @@
 #include <gust/gust.hpp>
 #include <gust/scene/animated_mesh.hpp>
 #include <gust/scene/mesh.hpp>
+#include <gust/scene/primitives.hpp>
 #include <memory>
 #include <string>
 #include <vector>
@@ -88,6 +89,9 @@ class World {
     std::uint32_t grass_count() const { return grass_count_; }
     /// Where the follow camera looks: above the fox's feet.
     glm::vec3 follow_target() const { return stage_.fox.position + glm::vec3(0.0f, 0.6f, 0.0f); }
+    /// Where the flight (--fly) is at time t: a loop of 300 m radius around the village at 12 m/s, 2 m
+    /// above the ground, crossing the ridge and the groves.
+    glm::vec3 flight_at(double t) const;
     /// Where the actors are this frame (for the tour's cameras).
     const Stage& stage() const { return stage_; }
     /// The ambient wind at time t (m/s), gusts included.
@@ -103,6 +107,7 @@ class World {
     void plant_grass();
 
     WorldSettings settings_;
+    gust::TerrainDesc terrain_;
     std::vector<WorldMesh> meshes_;
     std::vector<std::vector<glm::vec3>> posed_;
     std::vector<std::vector<glm::mat4>> palettes_; ///< skinned meshes only
