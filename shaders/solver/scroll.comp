@@ -5,7 +5,7 @@
 // next coarser cascade's). The first threads, one per cell, move φ the same way into kCellScratch (new
 // cells 0), so that the next solve's warm start still lines up with the field.
 // kScrollAmbientChange: per open face, the change of the ambient wind added in place (docs/solver.md,
-// "Ambient wind"); kScrollAmbientChangePrevious: the same to the field kept for the finer cascades.
+// "Ambient wind"), and to the field kept for the finer cascades where there is one.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -14,18 +14,14 @@ void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = hot.dims;
-    if (pc.mode == kScrollAmbientChange || pc.mode == kScrollAmbientChangePrevious) {
+    if (pc.mode == kScrollAmbientChange) {
         if (i >= faces_total(n)) return;
         uint axis;
         ivec3 f = face_from_index(n, i, axis);
         if (!face_open(axis, f)) return;
         float change = sb().b.ambient_change[axis];
-        if (pc.mode == kScrollAmbientChange) {
-            store_face(kFieldVelocity, i, load_face(kFieldVelocity, i) + change);
-        } else {
-            FloatsRef previous = FloatsRef(sb().b.previous);
-            previous.v[i] += change;
-        }
+        store_face(kFieldVelocity, i, load_face(kFieldVelocity, i) + change);
+        if (sb().b.previous != 0ul) FloatsRef(sb().b.previous).v[i] += change;
         return;
     }
     if (i < n.x * n.y * n.z) {

@@ -314,9 +314,9 @@ GUST_CONST uint kSampleTexels = 1u; ///< per cell, its texel of the wind texture
 GUST_CONST uint kSampleCells = 2u;  ///< per cell, the velocity at its centre
 
 // scroll.comp's modes.
-GUST_CONST uint kScrollMove = 0u;          ///< the field moved by SolverPush::shift cells
-GUST_CONST uint kScrollAmbientChange = 1u; ///< SolverBindings::ambient_change added to every open face
-GUST_CONST uint kScrollAmbientChangePrevious = 2u; ///< the same, to SolverBindings::previous
+GUST_CONST uint kScrollMove = 0u; ///< the field moved by SolverPush::shift cells
+/// SolverBindings::ambient_change added to every open face, of the field and of `previous` (when set).
+GUST_CONST uint kScrollAmbientChange = 1u;
 
 /// diffuse.comp reads face field SolverPush::mode (kFieldVelocity, then each iteration's target) and
 /// writes this one: the iterations alternate between kFieldTmp and kFieldBack.

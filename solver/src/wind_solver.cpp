@@ -343,19 +343,7 @@ void WindSolver::record_ambient_change(VkCommandBuffer cmd) {
     // "Ambient wind"). The field kept for the finer cascades too, so their blend in time sees it whole.
     Impl& m = *impl_;
     m.b.ambient_change = ambient_change_;
-    m.put_bindings(ctx_, cmd);
-    SolverPush push{};
-    push.nest = m.nest();
-    push.bindings = m.bindings.address();
-    push.swap = m.swap;
-    const LevelDispatch g = groups_for(face_count());
-    for (std::uint32_t mode : {shaderio::kScrollAmbientChange, shaderio::kScrollAmbientChangePrevious}) {
-        if (mode == shaderio::kScrollAmbientChangePrevious && !m.previous) continue;
-        push.mode = mode;
-        m.scroll.bind(cmd, &push, sizeof(push));
-        m.scroll.dispatch(cmd, g.x, g.y, g.z);
-    }
-    gpu::barrier(ctx_, cmd);
+    m.record_scroll_pass(ctx_, cmd, shaderio::kScrollAmbientChange, glm::ivec3(0), face_count());
     ambient_change_ = glm::vec3(0.0f);
 }
 
@@ -527,17 +515,7 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     if (cells == glm::ivec3(0)) return;
     Impl& m = *impl_;
     m.b.ambient = ambient_;
-    m.put_bindings(ctx_, cmd);
-    SolverPush push{};
-    push.nest = m.nest();
-    push.bindings = m.bindings.address();
-    push.shift = cells;
-    push.mode = shaderio::kScrollMove;
-    push.swap = m.swap;
-    const LevelDispatch g = groups_for(std::max(face_count(), cell_count()));
-    m.scroll.bind(cmd, &push, sizeof(push));
-    m.scroll.dispatch(cmd, g.x, g.y, g.z);
-    gpu::barrier(ctx_, cmd);
+    m.record_scroll_pass(ctx_, cmd, shaderio::kScrollMove, cells, std::max(face_count(), cell_count()));
     m.swap ^= 1u;
     // φ was moved into the scratch array; the last step's vorticity would no longer line up, so the next
     // step's confinement starts from none.

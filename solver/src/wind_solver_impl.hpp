@@ -65,6 +65,22 @@ struct WindSolver::Impl : gpu::HostObject {
         b.current = current_velocity().address();
         put_bindings(ctx, cmd);
     }
+    /// Records scroll.comp in `mode` (shaderio::kScroll*) moving by `shift` cells over `count` threads, after
+    /// the bindings `b` the caller set, and a barrier.
+    void record_scroll_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
+                            glm::ivec3 shift, std::uint64_t count) {
+        put_bindings(ctx, cmd);
+        shaderio::SolverPush push{};
+        push.bindings = bindings.address();
+        push.nest = nest();
+        push.mode = mode;
+        push.shift = shift;
+        push.swap = swap;
+        const shaderio::LevelDispatch g = detail::groups_for(count);
+        scroll.bind(cmd, &push, sizeof(push));
+        scroll.dispatch(cmd, g.x, g.y, g.z);
+        gpu::barrier(ctx, cmd);
+    }
     /// Records sample.comp in `mode` (shaderio::kSample*) over `count` threads, after the bindings `b` the
     /// caller set.
     void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <gust/gpu/buffer.hpp>
 #include <gust/gpu/context.hpp>
+#include <span>
 #if GUST_WITH_OPENVDB
 #include <openvdb/openvdb.h>
 #endif
@@ -84,6 +85,29 @@ class FanNest : public ::testing::Test {
 Watch FanNest::watch_;
 std::unique_ptr<System> FanNest::system_;
 
+/// Along the fan's axis from the middle of fan_nest's finest cascade, through the finest one's blend zone
+/// (5..8 m), the fan in the second cascade and its blend zone (20..32 m), to the third (to 128 m) and beyond
+/// it, at y and z of the second cascade's cell centres, where the wind varies most between them.
+std::vector<Vec3> line_through_the_nest() {
+    std::vector<Vec3> points;
+    for (float x = 0.25f; x < 160.0f; x += x < 40.0f ? 0.5f : 4.0f)
+        points.push_back({x, 2.0f, 2.0f});
+    return points;
+}
+
+/// Expects `got` within `tolerance(reference)` of `reference`, component by component, point by point.
+template <class Tolerance>
+void expect_near_each(std::span<const Vec3> points, std::span<const Vec3> got,
+                      std::span<const Vec3> reference, Tolerance tolerance) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vec3 &g = got[i], &r = reference[i];
+        const float t = tolerance(std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z));
+        EXPECT_NEAR(g.x, r.x, t) << "x = " << points[i].x;
+        EXPECT_NEAR(g.y, r.y, t) << "x = " << points[i].x;
+        EXPECT_NEAR(g.z, r.z, t) << "x = " << points[i].x;
+    }
+}
+
 /// The min corner of cascade k of fan_nest.
 Vec3 fan_nest_origin(int k) {
     const float h = std::pow(4.0f, float(k));
@@ -104,25 +128,16 @@ TEST_F(FanNest, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
 TEST_F(FanNest, theSnapshotAnswersFromEveryCascadeAsQueriesDo) {
     const Vec3 ambient = kNestAmbient;
     System* system = system_.get();
-    // Along the fan's axis from the middle of the finest cascade, through the finest one's blend zone (5..8
-    // m), the fan in the second cascade and its blend zone (20..32 m), to the third (to 128 m) and beyond it,
-    // at y and z of the second cascade's cell centres, where the wind varies most between them.
-    std::vector<Vec3> points;
-    for (float x = 0.25f; x < 160.0f; x += x < 40.0f ? 0.5f : 4.0f)
-        points.push_back({x, 2.0f, 2.0f});
+    const std::vector<Vec3> points = line_through_the_nest();
     std::vector<Vec3> sampled(points.size()), queried(points.size());
     ASSERT_TRUE(system->query(points, queried));
     ASSERT_TRUE(system->sample(points, sampled));
+    // The snapshot interpolates cell centres where query interpolates faces, and holds half floats.
+    expect_near_each(points, sampled, queried, [](float speed) { return 0.25f + 0.1f * speed; });
     float fan = 0.0f;
     for (std::size_t i = 0; i < points.size(); ++i) {
-        const Vec3 &s = sampled[i], &q = queried[i];
-        fan = std::max(fan, q.z);
-        // The snapshot interpolates cell centres where query interpolates faces, and holds half floats.
-        const float speed = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
-        const float tolerance = 0.25f + 0.1f * speed;
-        EXPECT_NEAR(s.x, q.x, tolerance) << "x = " << points[i].x;
-        EXPECT_NEAR(s.y, q.y, tolerance) << "x = " << points[i].x;
-        EXPECT_NEAR(s.z, q.z, tolerance) << "x = " << points[i].x;
+        const Vec3& s = sampled[i];
+        fan = std::max(fan, queried[i].z);
         if (points[i].x > 128.0f) {
             EXPECT_EQ(s.x, ambient.x) << "beyond every cascade, x = " << points[i].x;
             EXPECT_EQ(s.z, ambient.z) << "beyond every cascade, x = " << points[i].x;
@@ -308,10 +323,8 @@ TEST(Cascades, aHostShaderReadsTheBlendedCascadesThroughTheGlslInclude) {
     const Vec3 ambient = kNestAmbient;
     const std::unique_ptr<System> system = fan_nest(watch, ambient, &host.device());
     ASSERT_TRUE(system);
-    // From the finest cascade through both blend zones and the fan to beyond the coarsest (as above).
-    std::vector<Vec3> points;
-    for (float x = 0.25f; x < 160.0f; x += x < 40.0f ? 0.5f : 4.0f)
-        points.push_back({x, 2.0f, 2.0f});
+    // From the finest cascade through both blend zones and the fan to beyond the coarsest, and far above.
+    std::vector<Vec3> points = line_through_the_nest();
     points.push_back({-140.0f, 300.0f, 3.0f});
     std::string error;
     const std::vector<Vec3> read =
@@ -319,17 +332,11 @@ TEST(Cascades, aHostShaderReadsTheBlendedCascadesThroughTheGlslInclude) {
     ASSERT_EQ(read.size(), points.size()) << error;
     std::vector<Vec3> sampled(points.size());
     ASSERT_TRUE(system->sample(points, sampled));
+    // The same texels and blend; the GPU's sampler weighs texels with 8-bit fractions (Vulkan's minimum).
+    expect_near_each(points, read, sampled, [](float speed) { return 0.01f + 0.02f * speed; });
     float fan = 0.0f;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        // The same texels and blend; the GPU's sampler weighs texels with 8-bit fractions (Vulkan's minimum).
-        const Vec3 &g = read[i], &s = sampled[i];
+    for (const Vec3& g : read)
         fan = std::max(fan, g.z);
-        const float speed = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
-        const float tolerance = 0.01f + 0.02f * speed;
-        EXPECT_NEAR(g.x, s.x, tolerance) << "x = " << points[i].x;
-        EXPECT_NEAR(g.y, s.y, tolerance) << "x = " << points[i].x;
-        EXPECT_NEAR(g.z, s.z, tolerance) << "x = " << points[i].x;
-    }
     EXPECT_GT(fan, 2.0f + ambient.z) << "the fan in the second cascade reaches the shader";
     EXPECT_EQ(read.back().x, ambient.x) << "beyond every cascade, the ambient wind";
     EXPECT_EQ(read.back().z, ambient.z);
