@@ -65,8 +65,12 @@ struct VoxelizePush {
     ivec3 slab_shift; ///< the scroll in voxels: the old grid's voxel v + slab_shift is the new grid's v
 };
 
-/// Threads per workgroup of voxelize_shift.comp (one kept fragment each).
-GUST_CONST uint kShiftGroupSize = 256;
+/// Threads per workgroup of voxelize_shift.comp.
+GUST_CONST uint kShiftGroupSize = 64;
+/// Kept fragments a thread of voxelize_shift.comp moves per block (one atomic for them).
+GUST_CONST uint kShiftPerThread = 8;
+/// The most workgroups of voxelize_shift.comp, which stride over a longer list.
+GUST_CONST uint kShiftMaxGroups = 2048;
 
 /// Push constants of voxelize_shift.comp, which moves a kept fragment list into a scrolled grid.
 struct ShiftPush {

@@ -15,33 +15,29 @@ layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
 
 layout(push_constant, scalar) uniform Push { ShiftPush pc; };
 
-shared uint group_count;
-shared uint group_slot;
-
 void main() {
     uint counted = Count(pc.source_count).v;
-    uint index = (gl_WorkGroupID.y * kMaxGroupsX + gl_WorkGroupID.x) * kShiftGroupSize + gl_LocalInvocationID.x;
     // A last pass cut short leaves this list short too: count past the capacity, so the host redoes it.
-    if (index == 0u && counted > pc.source_capacity)
+    if (gl_GlobalInvocationID.x == 0u && counted > pc.source_capacity)
         atomicAdd(Counters(pc.counters).c.fragments, min(pc.capacity, 0xfffffffeu) + 1u);
-    if (gl_LocalInvocationID.x == 0u) group_count = 0u;
-    barrier();
-    bool kept = false;
-    uint key = 0u;
-    uint local = 0u;
-    if (index < min(counted, pc.source_capacity)) {
-        uint old = Keys(pc.source).v[index];
-        ivec3 v = ivec3(old & 1023u, (old >> 10) & 1023u, old >> 20) - pc.shift;
-        kept = all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, ivec3(pc.keep)));
-        key = uint(v.x) | (uint(v.y) << 10) | (uint(v.z) << 20);
-        if (kept) local = atomicAdd(group_count, 1u);
+    // The host cannot know the count of a recorded pass, so the workgroups stride over whatever it is:
+    // each takes blocks of kShiftPerThread entries a thread, read side by side across the workgroup.
+    uint total = min(counted, pc.source_capacity);
+    const uint block = kShiftGroupSize * kShiftPerThread;
+    for (uint first = gl_WorkGroupID.x * block; first < total; first += gl_NumWorkGroups.x * block) {
+        uint keys[kShiftPerThread];
+        uint kept = 0u;
+        for (uint i = 0u; i < kShiftPerThread; ++i) {
+            uint index = first + i * kShiftGroupSize + gl_LocalInvocationID.x;
+            if (index >= total) break;
+            uint old = Keys(pc.source).v[index];
+            ivec3 v = ivec3(old & 1023u, (old >> 10) & 1023u, old >> 20) - pc.shift;
+            if (any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, ivec3(pc.keep)))) continue;
+            keys[kept++] = uint(v.x) | (uint(v.y) << 10) | (uint(v.z) << 20);
+        }
+        if (kept == 0u) continue;
+        // One atomic a thread and block, as the voxelize passes batch theirs.
+        uint slot = atomicAdd(Counters(pc.counters).c.fragments, kept);
+        for (uint i = 0u; i < kept && slot + i < pc.capacity; ++i) Out(pc.fragments).v[slot + i] = keys[i];
     }
-    barrier();
-    // One atomic on the list's counter per workgroup.
-    if (gl_LocalInvocationID.x == 0u && group_count > 0u)
-        group_slot = atomicAdd(Counters(pc.counters).c.fragments, group_count);
-    barrier();
-    if (!kept) return;
-    uint slot = group_slot + local;
-    if (slot < pc.capacity) Out(pc.fragments).v[slot] = key;
 }

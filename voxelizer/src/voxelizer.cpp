@@ -24,6 +24,8 @@ namespace {
 
 using shaderio::kMaxGroupsX;
 using shaderio::kShiftGroupSize;
+using shaderio::kShiftMaxGroups;
+using shaderio::kShiftPerThread;
 using shaderio::kSkinGroupSize;
 using shaderio::kSkinMaxGroupsX;
 using shaderio::kVoxelizeGroupSize;
@@ -756,11 +758,12 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
         shift.capacity = std::uint32_t(capacity_);
         shift.shift = *slabs;
         shift.keep = push.keep;
-        const std::uint64_t groups =
-            std::max<std::uint64_t>(1, (spare_capacity_ + kShiftGroupSize - 1) / kShiftGroupSize);
+        // Workgroups for the source's count as last read back (it is still fragment_count_), at most
+        // kShiftMaxGroups: the shader strides over whatever the count is on the GPU.
+        const std::uint64_t block = kShiftGroupSize * kShiftPerThread;
+        const std::uint64_t groups = (fragment_count_ + block - 1) / block;
         shift_.bind(cmd, &shift, sizeof(shift));
-        shift_.dispatch(cmd, std::uint32_t(std::min<std::uint64_t>(groups, kMaxGroupsX)),
-                        std::uint32_t((groups + kMaxGroupsX - 1) / kMaxGroupsX), 1);
+        shift_.dispatch(cmd, std::uint32_t(std::clamp<std::uint64_t>(groups, 1, kShiftMaxGroups)));
         gpu::barrier(ctx_, cmd);
         profiler_.end(cmd);
     }
