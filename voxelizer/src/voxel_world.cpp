@@ -119,11 +119,11 @@ VoxelWorld::StaticPlan VoxelWorld::plan_static() const {
 }
 
 void VoxelWorld::voxelized_static(const StaticPlan& plan, bool slabs) {
+    static_whole_ = false;
     if (slabs) {
         static_at_ = plan.at;
         return;
     }
-    static_whole_ = false;
     static_anchor_ = desc_.grid.origin;
     static_at_ = glm::ivec3(0);
 }
@@ -169,6 +169,8 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
     out.pool_growths += *grown ? 1u : 0u;
     const StaticPlan plan = plan_static();
     const bool voxelize_static = plan.voxelize;
+    // Until this step completes: one that fails after its static list changed has the next voxelize whole.
+    if (voxelize_static) static_whole_ = true;
     if (plan.slabs) {
         auto stats = static_->voxelize_slabs(static_set_, desc_.grid, desc_.method, plan.shift);
         if (!stats) return stats.status();
@@ -186,7 +188,6 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
         last_static_ = *stats;
         append_ms(out.ms, "voxelize_static_", stats->ms);
     }
-    if (voxelize_static) voxelized_static(plan, out.static_slabs);
     auto dyn = dynamic_->voxelize(dynamic, desc_.grid, desc_.method, dt);
     if (!dyn) return dyn.status();
     append_ms(out.ms, "voxelize_", dyn->ms);
@@ -210,6 +211,7 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
         tree = tree_->update(&static_source, &dynamic_source);
         if (!tree) return tree.status();
     }
+    if (voxelize_static) voxelized_static(plan, out.static_slabs);
     static_dirty_ = false;
     rebuild_tree_ = false;
     append_ms(out.ms, "", tree->ms);
@@ -241,13 +243,13 @@ Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dyna
     const StaticPlan plan = plan_static();
     const bool voxelize_static = plan.voxelize;
     const bool rebuild = voxelize_static || rebuild_tree_;
+    if (voxelize_static) static_whole_ = true;
     if (plan.slabs) {
         if (Status s = static_->record_slabs(cmd, static_set_, desc_.grid, desc_.method, plan.shift); !s)
             return s;
     } else if (voxelize_static) {
         if (Status s = static_->record(cmd, static_set_, desc_.grid, desc_.method, 0.0f); !s) return s;
     }
-    if (voxelize_static) voxelized_static(plan, plan.slabs);
     if (Status s = dynamic_->record(cmd, dynamic, desc_.grid, desc_.method, dt); !s) return s;
     const FragmentSource static_source{static_->fragment_buffer().address(),
                                        static_->fragment_count_address(), static_->fragment_capacity()};
@@ -255,6 +257,7 @@ Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dyna
                                         dynamic_->fragment_count_address(), dynamic_->fragment_capacity()};
     if (Status s = tree_->record_update(cmd, rebuild ? &static_source : nullptr, &dynamic_source); !s)
         return s;
+    if (voxelize_static) voxelized_static(plan, plan.slabs);
     static_dirty_ = false;
     rebuild_tree_ = false;
     if (rebuild) ++static_generation_;

@@ -545,9 +545,14 @@ Status Voxelizer::record(VkCommandBuffer cmd, std::span<const GpuInstance> insta
 Status Voxelizer::ensure_slab_pass(std::span<const GpuInstance> instances, const GridDesc& grid) {
     std::swap(fragments_, spare_);
     std::swap(capacity_, spare_capacity_);
-    if (Status s = ensure_pass(instances, grid); !s) return s;
+    Status s = ensure_pass(instances, grid);
     // At least the source's slots, which a full pass needed (it grew them when it overflowed).
-    return ensure_capacity(spare_capacity_);
+    if (s) s = ensure_capacity(spare_capacity_);
+    if (!s) {
+        std::swap(fragments_, spare_);
+        std::swap(capacity_, spare_capacity_);
+    }
+    return s;
 }
 
 Result<VoxelizeStats> Voxelizer::voxelize_slabs(std::span<const GpuInstance> instances, const GridDesc& grid,

@@ -131,7 +131,8 @@ class VoxelWorld : public gpu::HostObject {
         glm::ivec3 at{0};    ///< slabs: voxels from static_anchor_ to the grid's origin
     };
     StaticPlan plan_static() const;
-    /// Records that the static set was voxelized as `plan` says (whole unless `slabs`).
+    /// Records that a step or frame that voxelized the static set as `plan` says (whole unless `slabs`)
+    /// completed.
     void voxelized_static(const StaticPlan& plan, bool slabs);
 
     gpu::Context* ctx_ = nullptr;
