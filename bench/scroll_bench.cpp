@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <gust/gpu/context.hpp>
 #include <gust/scene/primitives.hpp>
@@ -74,7 +75,8 @@ int main(int argc, char** argv) {
     world_desc.grid.voxel_size = 1.0f;
     world_desc.grid.origin = glm::vec3(-float(res) / 2.0f);
     world_desc.method = gust::VoxelizeMethod::Auto;
-    world_desc.tree.branching = 4;
+    // Branching 4 where res is a power of 4, else 2.
+    world_desc.tree.branching = std::countr_zero(res) % 2 == 0 ? 4u : 2u;
     // [0]: slab passes; [1]: the whole static set again at every scroll (as before issue 30).
     std::unique_ptr<gust::VoxelWorld> worlds[2];
     gust::GpuMesh meshes[2];
