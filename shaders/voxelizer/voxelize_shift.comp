@@ -1,8 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Slab pass, first dispatch: moves the last pass's fragment list into the scrolled grid. One thread per
-// kept fragment subtracts the scroll from its key and appends it to the new list, unless it fell out of
-// the grid; the voxelize passes then append the uncovered slabs behind it through the same counter.
+// Slab pass, first dispatch: moves the last pass's fragment list into the scrolled grid. Each key, less
+// the scroll, is appended to the new list unless it fell out of the grid's kept extent; the voxelize
+// passes then append the uncovered slabs behind it through the same counter.
 
 #include "voxelize_io.h"
 
