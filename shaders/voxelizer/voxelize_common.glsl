@@ -77,6 +77,11 @@ vec3 storable_velocity(vec3 velocity) {
 /// invocation ends).
 void emit_voxel(uvec3 ijk, vec3 velocity) {
     if (any(greaterThanEqual(ijk, pc.keep))) return;
+    if (pc.slabs != 0u) {
+        // Voxels the old grid kept are in the list already, shifted.
+        ivec3 old = ivec3(ijk) + pc.slab_shift;
+        if (all(greaterThanEqual(old, ivec3(0))) && all(lessThan(old, ivec3(pc.keep)))) return;
+    }
     pending[pending_count] = ijk.x | (ijk.y << 10) | (ijk.z << 20);
     if (kVelocities) {
         vec3 v = storable_velocity(velocity);
@@ -94,7 +99,15 @@ struct Setup {
     ivec2 col_lo, col_hi; ///< inclusive range of pixel columns, clipped to the grid
 };
 
-/// Projects grid-space vertices; false when the triangle has zero area or lies outside the grid.
+/// Whether every voxel the grid-space box [lo, hi] touches, and one more around it, lies in the old grid's
+/// kept extent of a slab pass: a triangle with those bounds adds no voxel there.
+bool inside_old_grid(vec3 lo, vec3 hi) {
+    vec3 old_lo = lo + vec3(pc.slab_shift), old_hi = hi + vec3(pc.slab_shift);
+    return all(greaterThanEqual(old_lo, vec3(1.0))) && all(lessThanEqual(old_hi, vec3(pc.keep) - 1.0));
+}
+
+/// Projects grid-space vertices; false when the triangle has zero area, lies outside the grid or, in a
+/// slab pass, inside the old grid.
 bool setup_triangle(vec3 g0, vec3 g1, vec3 g2, out Setup s) {
     vec3 n = cross(g1 - g0, g2 - g0);
     if (n == vec3(0.0)) return false;
@@ -115,7 +128,7 @@ bool setup_triangle(vec3 g0, vec3 g1, vec3 g2, out Setup s) {
     vec2 chi = clamp(floor(hi.xy), vec2(0.0), vec2(res - 1.0));
     s.col_lo = ivec2(clo);
     s.col_hi = ivec2(chi);
-    return true;
+    return pc.slabs == 0u || !inside_old_grid(min(g0, min(g1, g2)), max(g0, max(g1, g2)));
 }
 
 /// Fills the vertex velocities of a set-up triangle.

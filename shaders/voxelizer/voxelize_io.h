@@ -59,12 +59,38 @@ struct VoxelizePush {
     uint first_triangle;     ///< compute path: offset of this dispatch's first triangle
     uint large_capacity;     ///< items the large list holds
     uvec3 keep; ///< voxels kept per axis from the grid's origin (the wind domain); the rest dropped
+    /// Nonzero: only the slabs a scroll uncovered are voxelized, the voxels v for which v + slab_shift
+    /// lies outside [0, keep) on some axis (the rest are in the list shifted by voxelize_shift.comp).
+    uint slabs;
+    ivec3 slab_shift; ///< the scroll in voxels: the old grid's voxel v + slab_shift is the new grid's v
+};
+
+/// Threads per workgroup of voxelize_shift.comp.
+GUST_CONST uint kShiftGroupSize = 64;
+/// Kept fragments a thread of voxelize_shift.comp moves per block (one atomic for them).
+GUST_CONST uint kShiftPerThread = 8;
+/// The most workgroups of voxelize_shift.comp, which stride over a longer list.
+GUST_CONST uint kShiftMaxGroups = 2048;
+
+/// Push constants of voxelize_shift.comp, which moves a kept fragment list into a scrolled grid.
+struct ShiftPush {
+    GUST_ADDRESS source;       ///< uint[source_capacity] packed keys of the last pass, in the old grid
+    GUST_ADDRESS source_count; ///< uint: fragments the last pass counted (may exceed source_capacity)
+    GUST_ADDRESS fragments;    ///< uint[capacity]: the new list, appended to through counters
+    GUST_ADDRESS counters;     ///< VoxelizeCounters of the new pass (zeroed before)
+    uint source_capacity;
+    uint capacity;
+    ivec3 shift; ///< old key - shift = new key
+    uvec3 keep;  ///< the new grid's kept voxels per axis; keys outside are dropped
 };
 
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gust::shaderio::VoxelizePush) == 72, "push constants must match the GLSL layout");
+static_assert(sizeof(gust::shaderio::VoxelizePush) == 88, "push constants must match the GLSL layout");
+static_assert(offsetof(gust::shaderio::VoxelizePush, slab_shift) == 76);
+static_assert(sizeof(gust::shaderio::ShiftPush) == 64);
+static_assert(offsetof(gust::shaderio::ShiftPush, shift) == 40);
 static_assert(offsetof(gust::shaderio::VoxelizePush, keep) == 60);
 static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 40);
 static_assert(sizeof(gust::shaderio::VoxelizeInstance) == 224);

@@ -75,7 +75,7 @@ Result<std::unique_ptr<VoxelWorld>> VoxelWorld::create(gpu::Context& ctx, const 
 void VoxelWorld::set_static(std::span<const GpuInstance> instances) {
     const bool same = instances.size() == static_set_.size() &&
                       std::equal(instances.begin(), instances.end(), static_set_.begin(), same_instance);
-    if (!same) static_dirty_ = true;
+    if (!same) static_dirty_ = static_whole_ = true;
     static_set_.assign(instances.begin(), instances.end());
 }
 
@@ -86,6 +86,46 @@ Status VoxelWorld::move_grid(glm::vec3 origin) {
     desc_.grid.origin = origin;
     static_dirty_ = true;
     return Status{};
+}
+
+VoxelWorld::StaticPlan VoxelWorld::plan_static() const {
+    StaticPlan plan;
+    if (!static_dirty_) return plan;
+    plan.voxelize = true;
+    if (static_whole_) return plan;
+    // Whole voxels from where the set was last voxelized whole, so that rounding does not add up over
+    // many scrolls.
+    const GridDesc& grid = desc_.grid;
+    for (int a = 0; a < 3; ++a) {
+        const double voxels = (double(grid.origin[a]) - double(static_anchor_[a])) / double(grid.voxel_size);
+        const double whole = std::round(voxels);
+        if (!(std::abs(voxels - whole) <= kWholeVoxelTolerance) || std::abs(whole) > double(1 << 30))
+            return plan;
+        plan.at[a] = int(whole);
+    }
+    plan.shift = plan.at - static_at_;
+    if (plan.shift == glm::ivec3(0)) {
+        // Back on the lattice point it was voxelized at: the kept list holds this grid's voxels.
+        plan.voxelize = false;
+        return plan;
+    }
+    for (int a = 0; a < 3; ++a) {
+        const std::uint32_t keep = grid.keep[a] == 0 ? grid.res : std::min(grid.keep[a], grid.res);
+        // Nothing kept on this axis: the whole pass is cheaper than the shift and the slabs.
+        if (std::abs(std::int64_t(plan.shift[a])) >= std::int64_t(keep)) return plan;
+    }
+    plan.slabs = true;
+    return plan;
+}
+
+void VoxelWorld::voxelized_static(const StaticPlan& plan, bool slabs) {
+    static_whole_ = false;
+    if (slabs) {
+        static_at_ = plan.at;
+        return;
+    }
+    static_anchor_ = desc_.grid.origin;
+    static_at_ = glm::ivec3(0);
 }
 
 Result<bool> VoxelWorld::grow_pools(TreePools wanted, bool ran_out) {
@@ -127,10 +167,24 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
     auto grown = grow_for(dynamic);
     if (!grown) return grown.status();
     out.pool_growths += *grown ? 1u : 0u;
-    const bool voxelize_static = static_dirty_;
-    if (voxelize_static) {
+    const StaticPlan plan = plan_static();
+    const bool voxelize_static = plan.voxelize;
+    // Until this step completes: one that fails after its static list changed has the next voxelize whole.
+    if (voxelize_static) static_whole_ = true;
+    if (plan.slabs) {
+        auto stats = static_->voxelize_slabs(static_set_, desc_.grid, desc_.method, plan.shift);
+        if (!stats) return stats.status();
+        // A list that overflowed holds a partial set: voxelized whole below, into the grown list.
+        out.static_slabs = !stats->truncated;
+        if (out.static_slabs) {
+            last_static_ = *stats;
+            append_ms(out.ms, "voxelize_static_", stats->ms);
+        }
+    }
+    if (voxelize_static && !out.static_slabs) {
         auto stats = static_->voxelize(static_set_, desc_.grid, desc_.method);
         if (!stats) return stats.status();
+        if (plan.slabs) ++stats->retries;
         last_static_ = *stats;
         append_ms(out.ms, "voxelize_static_", stats->ms);
     }
@@ -157,6 +211,7 @@ Result<WorldFrame> VoxelWorld::step(std::span<const GpuInstance> dynamic, float 
         tree = tree_->update(&static_source, &dynamic_source);
         if (!tree) return tree.status();
     }
+    if (voxelize_static) voxelized_static(plan, out.static_slabs);
     static_dirty_ = false;
     rebuild_tree_ = false;
     append_ms(out.ms, "", tree->ms);
@@ -174,8 +229,9 @@ struct ReadbackHeader {
     std::uint64_t frame;
     std::uint64_t recorded_in; ///< gpu::Context::recording_frame(), which the profilers' slots follow
     std::uint32_t static_voxelized : 1;
+    std::uint32_t static_slabs : 1;   ///< ... only in the slabs a scroll uncovered
     std::uint32_t static_rebuilt : 1; ///< the tree was rebuilt (static set voxelized, or pools grown)
-    std::uint32_t unused : 30;
+    std::uint32_t unused : 29;
     std::uint32_t pool_growths; ///< before the frame was recorded
 };
 } // namespace
@@ -184,10 +240,16 @@ Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dyna
     if (!(dt > 0.0f)) return Status::failure("frame time must be > 0 s, got " + std::to_string(dt));
     auto grown = grow_for(dynamic);
     if (!grown) return grown.status();
-    const bool voxelize_static = static_dirty_;
+    const StaticPlan plan = plan_static();
+    const bool voxelize_static = plan.voxelize;
     const bool rebuild = voxelize_static || rebuild_tree_;
-    if (voxelize_static)
+    if (voxelize_static) static_whole_ = true;
+    if (plan.slabs) {
+        if (Status s = static_->record_slabs(cmd, static_set_, desc_.grid, desc_.method, plan.shift); !s)
+            return s;
+    } else if (voxelize_static) {
         if (Status s = static_->record(cmd, static_set_, desc_.grid, desc_.method, 0.0f); !s) return s;
+    }
     if (Status s = dynamic_->record(cmd, dynamic, desc_.grid, desc_.method, dt); !s) return s;
     const FragmentSource static_source{static_->fragment_buffer().address(),
                                        static_->fragment_count_address(), static_->fragment_capacity()};
@@ -195,10 +257,12 @@ Status VoxelWorld::record(VkCommandBuffer cmd, std::span<const GpuInstance> dyna
                                         dynamic_->fragment_count_address(), dynamic_->fragment_capacity()};
     if (Status s = tree_->record_update(cmd, rebuild ? &static_source : nullptr, &dynamic_source); !s)
         return s;
+    if (voxelize_static) voxelized_static(plan, plan.slabs);
     static_dirty_ = false;
     rebuild_tree_ = false;
     if (rebuild) ++static_generation_;
     recorded_voxelized_ = voxelize_static;
+    recorded_slabs_ = plan.slabs;
     recorded_rebuild_ = rebuild;
     recorded_growths_ = *grown ? 1u : 0u;
     recorded_frame_ = frame_++;
@@ -214,6 +278,7 @@ void VoxelWorld::record_readback(VkCommandBuffer cmd, VkBuffer dst, VkDeviceSize
     header.frame = recorded_frame_;
     header.recorded_in = ctx_->recording_frame();
     header.static_voxelized = recorded_voxelized_ ? 1u : 0u;
+    header.static_slabs = recorded_slabs_ ? 1u : 0u;
     header.static_rebuilt = recorded_rebuild_ ? 1u : 0u;
     header.pool_growths = recorded_growths_;
     ctx_->vk().vkCmdUpdateBuffer(cmd, dst, offset, sizeof(header), &header);
@@ -231,6 +296,7 @@ Result<WorldFrame> VoxelWorld::collect(const void* readback) {
     WorldFrame out(ctx_->memory());
     out.frame = header.frame;
     out.static_rebuilt = header.static_rebuilt != 0;
+    out.static_slabs = header.static_slabs != 0;
     out.pool_growths = header.pool_growths;
     const bool voxelized = header.static_voxelized != 0;
     // The static counters stay as the last rebuild left them, so they are read every frame.
@@ -245,7 +311,8 @@ Result<WorldFrame> VoxelWorld::collect(const void* readback) {
     out.static_voxelize = *fixed;
     out.dynamic_voxelize = *moving;
     // The static counters are new only in a frame that voxelized the static set.
-    if (fixed->truncated && voxelized) static_dirty_ = true;
+    // A slab pass's list holds a partial set then, so the set is voxelized whole.
+    if (fixed->truncated && voxelized) static_dirty_ = static_whole_ = true;
     // Frames recorded before the pools grew ran out too: they do not grow them again.
     if (out.tree.exhausted > 0 && out.frame >= pools_grown_for_) {
         pools_grown_for_ = frame_;

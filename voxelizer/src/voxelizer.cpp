@@ -18,13 +18,18 @@ namespace {
 #include "gust_shaders/voxelize_frag.h"
 #include "gust_shaders/voxelize_geom.h"
 #include "gust_shaders/voxelize_large_comp.h"
+#include "gust_shaders/voxelize_shift_comp.h"
 #include "gust_shaders/voxelize_tri_comp.h"
 #include "gust_shaders/voxelize_vert.h"
 
 using shaderio::kMaxGroupsX;
+using shaderio::kShiftGroupSize;
+using shaderio::kShiftMaxGroups;
+using shaderio::kShiftPerThread;
 using shaderio::kSkinGroupSize;
 using shaderio::kSkinMaxGroupsX;
 using shaderio::kVoxelizeGroupSize;
+using shaderio::ShiftPush;
 using shaderio::SkinPush;
 using shaderio::VoxelizeCounters;
 using shaderio::VoxelizeInstance;
@@ -205,6 +210,14 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
         gpu::Pipeline::compute(ctx, "gust voxelize_args", words(voxelize_args_comp), sizeof(VoxelizePush));
     if (!args) return args.status();
     v->compute_args_ = std::move(*args);
+    auto shift =
+        gpu::Pipeline::compute(ctx, "gust voxelize_shift", words(voxelize_shift_comp), sizeof(ShiftPush));
+    if (!shift) return shift.status();
+    v->shift_ = std::move(*shift);
+    auto source_count = gpu::Buffer::create(ctx, sizeof(std::uint32_t), gpu::MemoryUse::Device, 0,
+                                            "gust voxelizer slab source count");
+    if (!source_count) return source_count.status();
+    v->source_count_ = std::move(*source_count);
     auto skin = gpu::Pipeline::compute(ctx, "gust skin", words(skin_comp), sizeof(SkinPush));
     if (!skin) return skin.status();
     v->skin_ = std::move(*skin);
@@ -529,6 +542,55 @@ Status Voxelizer::record(VkCommandBuffer cmd, std::span<const GpuInstance> insta
     return {};
 }
 
+Status Voxelizer::ensure_slab_pass(std::span<const GpuInstance> instances, const GridDesc& grid) {
+    std::swap(fragments_, spare_);
+    std::swap(capacity_, spare_capacity_);
+    Status s = ensure_pass(instances, grid);
+    // At least the source's slots, which a full pass needed (it grew them when it overflowed).
+    if (s) s = ensure_capacity(spare_capacity_);
+    if (!s) {
+        std::swap(fragments_, spare_);
+        std::swap(capacity_, spare_capacity_);
+    }
+    return s;
+}
+
+Result<VoxelizeStats> Voxelizer::voxelize_slabs(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                                VoxelizeMethod method, glm::ivec3 shift) {
+    auto methods = prepare(instances, grid, method, 0.0f);
+    if (!methods) return methods.status();
+    if (Status s = ensure_slab_pass(instances, grid); !s) return s;
+    VoxelizeStats stats(ctx_.memory());
+    stats.triangles = triangles_of(instances);
+    const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
+    bool skinned = false;
+    for (const GpuInstance& inst : instances)
+        skinned = skinned || !inst.mesh->staged_palette_.empty();
+    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        record_skinning(cmd, instances);
+        record_pass(cmd, instances, *methods, grid, &shift);
+    });
+    if (!recorded) return recorded;
+    VoxelizeCounters counters{};
+    if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
+    stats.ms = skinned ? skin_profiler_.read() : gpu::Timings(ctx_.memory());
+    for (const auto& pass : profiler_.read())
+        stats.ms.push_back(pass);
+    if (Status s = take_counters(counters, capacity, large_capacity, stats); !s) return s;
+    if (!methods->empty()) stats.method = methods->back();
+    return stats;
+}
+
+Status Voxelizer::record_slabs(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
+                               const GridDesc& grid, VoxelizeMethod method, glm::ivec3 shift) {
+    auto methods = prepare(instances, grid, method, 0.0f);
+    if (!methods) return methods.status();
+    if (Status s = ensure_slab_pass(instances, grid); !s) return s;
+    record_pass(cmd, instances, *methods, grid, &shift);
+    method_ = methods->empty() ? method_ : methods->back();
+    return {};
+}
+
 namespace {
 /// What record_readback() writes: the counters, then the capacities the pass ran with.
 struct Readback {
@@ -630,7 +692,8 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
 }
 
 void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
-                            std::span<const VoxelizeMethod> methods, const GridDesc& grid) {
+                            std::span<const VoxelizeMethod> methods, const GridDesc& grid,
+                            const glm::ivec3* slabs) {
     const glm::mat4 to_grid = world_to_grid(grid);
     const auto& vk = ctx_.vk();
     std::pmr::vector<VoxelizeInstance> records(instances.size(), ctx_.memory());
@@ -660,6 +723,10 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
     for (int a = 0; a < 3; ++a)
         push.keep[a] = grid.keep[a] == 0 ? grid.res : std::min(grid.keep[a], grid.res);
     push.capacity = std::uint32_t(capacity_);
+    if (slabs) {
+        push.slabs = 1;
+        push.slab_shift = *slabs;
+    }
 
     profiler_.reset(cmd);
     for (const GpuInstance& inst : instances) {
@@ -676,8 +743,35 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
     }
     if (!records.empty())
         gpu::update(ctx_, cmd, instances_, records.data(), records.size() * sizeof(VoxelizeInstance));
+    if (slabs) {
+        // The last pass's count, before the counters are zeroed for this one.
+        gpu::barrier(ctx_, cmd);
+        const VkBufferCopy region{0, 0, sizeof(std::uint32_t)};
+        vk.vkCmdCopyBuffer(cmd, counters_.handle(), source_count_.handle(), 1, &region);
+        gpu::barrier(ctx_, cmd);
+    }
     vk.vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
     gpu::barrier(ctx_, cmd);
+    if (slabs) {
+        profiler_.begin(cmd, "shift");
+        ShiftPush shift{};
+        shift.source = spare_.address();
+        shift.source_count = source_count_.address();
+        shift.fragments = fragments_.address();
+        shift.counters = counters_.address();
+        shift.source_capacity = std::uint32_t(spare_capacity_);
+        shift.capacity = std::uint32_t(capacity_);
+        shift.shift = *slabs;
+        shift.keep = push.keep;
+        // Workgroups for the source's count as last read back (it is still fragment_count_), at most
+        // kShiftMaxGroups: the shader strides over whatever the count is on the GPU.
+        const std::uint64_t block = kShiftGroupSize * kShiftPerThread;
+        const std::uint64_t groups = (fragment_count_ + block - 1) / block;
+        shift_.bind(cmd, &shift, sizeof(shift));
+        shift_.dispatch(cmd, std::uint32_t(std::clamp<std::uint64_t>(groups, 1, kShiftMaxGroups)));
+        gpu::barrier(ctx_, cmd);
+        profiler_.end(cmd);
+    }
     const bool any_raster =
         std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
     if (any_raster) {

@@ -30,6 +30,10 @@ struct WorldFrame {
     std::uint64_t frame = 0; ///< 0 for the first step
     /// The tree was rebuilt from the static set: it changed (and was voxelized again), or the pools grew.
     bool static_rebuilt = false;
+    /// The static set was voxelized only in the slabs a scroll by whole voxels uncovered, the rest of its
+    /// fragment list shifted into the moved grid (Voxelizer::voxelize_slabs); false when it was voxelized
+    /// whole or not at all. The tree is rebuilt either way.
+    bool static_slabs = false;
     VoxelizeStats static_voxelize;  ///< of the static set (the last rebuild's when not rebuilt now)
     VoxelizeStats dynamic_voxelize; ///< of this frame's dynamic instances
     TreeStats tree;                 ///< after the update
@@ -72,8 +76,13 @@ class VoxelWorld : public gpu::HostObject {
     void set_static(std::span<const GpuInstance> instances);
 
     /// Moves the grid's min corner to `origin` (world, m, finite); the next step voxelizes the static set
-    /// again and rebuilds the tree, whose voxels then index the moved grid.
+    /// again and rebuilds the tree, whose voxels then index the moved grid. When the grid moved by whole
+    /// voxels since the static set was last voxelized whole (within kWholeVoxelTolerance of a voxel on
+    /// each axis) and the set is unchanged, only the slabs the move uncovered are voxelized
+    /// (WorldFrame::static_slabs); the voxels are those of a whole voxelization at the new origin.
     Status move_grid(glm::vec3 origin);
+    /// How far (in voxels) a move may be from whole voxels and still voxelize only the uncovered slabs.
+    static constexpr double kWholeVoxelTolerance = 1e-3;
 
     /// Voxelizes the dynamic instances (with velocities over `dt` seconds, > 0) and updates the tree. Never
     /// returns a partial tree: when the pools ran out they grow and the tree is rebuilt from the kept
@@ -114,19 +123,35 @@ class VoxelWorld : public gpu::HostObject {
     /// grow_pools() with the estimate for the static set and `dynamic`, when the world sizes its pools.
     Result<bool> grow_for(std::span<const GpuInstance> dynamic);
 
+    /// How the next update voxelizes the static set.
+    struct StaticPlan {
+        bool voxelize = false;
+        bool slabs = false;  ///< only the slabs a scroll uncovered
+        glm::ivec3 shift{0}; ///< slabs: the scroll, voxels
+        glm::ivec3 at{0};    ///< slabs: voxels from static_anchor_ to the grid's origin
+    };
+    StaticPlan plan_static() const;
+    /// Records that a step or frame that voxelized the static set as `plan` says (whole unless `slabs`)
+    /// completed.
+    void voxelized_static(const StaticPlan& plan, bool slabs);
+
     gpu::Context* ctx_ = nullptr;
     WorldDesc desc_;
     std::unique_ptr<Voxelizer> static_, dynamic_;
     std::unique_ptr<SparseTree> tree_;
     std::pmr::vector<GpuInstance> static_set_;
-    bool static_dirty_ = true;   ///< the static set must be voxelized again (and the tree rebuilt)
-    bool rebuild_tree_ = false;  ///< the tree must be rebuilt from the kept static fragments (pools grew)
-    bool estimate_pools_ = true; ///< WorldDesc::tree gave no pool sizes
+    bool static_dirty_ = true;      ///< the static set must be voxelized again (and the tree rebuilt)
+    bool static_whole_ = true;      ///< ... and whole: it changed, or its list ran out (not only a scroll)
+    glm::vec3 static_anchor_{0.0f}; ///< the grid's origin when the static set was last voxelized whole
+    glm::ivec3 static_at_{0};       ///< voxels from static_anchor_ to the origin of its last voxelization
+    bool rebuild_tree_ = false;     ///< the tree must be rebuilt from the kept static fragments (pools grew)
+    bool estimate_pools_ = true;    ///< WorldDesc::tree gave no pool sizes
     std::uint64_t static_generation_ = 0;
     VoxelizeStats last_static_;
     std::uint64_t frame_ = 0;
     std::uint64_t recorded_frame_ = 0;   ///< record(): the frame recorded last
     bool recorded_voxelized_ = false;    ///< record(): whether it voxelized the static set
+    bool recorded_slabs_ = false;        ///< record(): ... only in the slabs a scroll uncovered
     bool recorded_rebuild_ = false;      ///< record(): whether it rebuilt the tree
     std::uint32_t recorded_growths_ = 0; ///< record(): pool growths before it
     std::uint64_t pools_grown_for_ = 0; ///< collect(): frames from this one on were recorded with grown pools

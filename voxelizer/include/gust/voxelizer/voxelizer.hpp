@@ -131,6 +131,22 @@ class Voxelizer : public gpu::HostObject {
     Result<VoxelizeStats> voxelize(std::span<const GpuInstance> instances, const GridDesc& grid,
                                    VoxelizeMethod method, float dt = 0.0f);
 
+    /// A scroll's pass, instead of voxelize() when only the grid's origin moved by `shift` whole voxels (the
+    /// old grid's voxel v + shift is `grid`'s v) since the last call, which was made with the same res,
+    /// voxel size and keep and without a frame time. Moves the last call's fragment list into `grid` (keys
+    /// minus `shift`, those outside the kept extent dropped), then appends only the fragments of voxels
+    /// the old grid did not keep (v + shift outside [0, keep) on some axis): the same voxels as
+    /// voxelize() at `grid`, in another order and with the same duplicates. Both paths support it. One
+    /// pass, never redone: when the list overflowed, the stats say `truncated`, the list was grown and
+    /// holds a partial set, and the caller voxelizes again with voxelize().
+    Result<VoxelizeStats> voxelize_slabs(std::span<const GpuInstance> instances, const GridDesc& grid,
+                                         VoxelizeMethod method, glm::ivec3 shift);
+    /// Frames in flight: records voxelize_slabs()'s pass, as record() records voxelize()'s (collect()
+    /// reports an overflow, then the list is partial and the caller records voxelize()'s pass again). A
+    /// last recorded pass that overflowed makes this one count as overflowed too.
+    Status record_slabs(VkCommandBuffer cmd, std::span<const GpuInstance> instances, const GridDesc& grid,
+                        VoxelizeMethod method, glm::ivec3 shift);
+
     /// Replaces a mesh's vertex positions (a skinned pose) with `positions` (mesh space, one per vertex);
     /// the previous ones are kept for velocities. Blocks until uploaded; with frames in flight
     /// (gpu::Context::deferred) the positions are kept and written by the next recorded pass instead.
@@ -200,9 +216,13 @@ class Voxelizer : public gpu::HostObject {
     /// Sizes the fragment list (first guess: the expected fragments of voxelize_work), the instance and
     /// the velocity buffers for a pass.
     Status ensure_pass(std::span<const GpuInstance> instances, const GridDesc& grid);
-    /// Records one pass (instance records, staged positions, the passes) into `cmd`.
+    /// A slab pass's buffers: the last list becomes the shift's source, the spare one the new list.
+    Status ensure_slab_pass(std::span<const GpuInstance> instances, const GridDesc& grid);
+    /// Records one pass (instance records, staged positions, the passes) into `cmd`; with `slabs` (the
+    /// scroll in voxels) a slab pass, which first shifts the spare list into the new one.
     void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
-                     std::span<const VoxelizeMethod> methods, const GridDesc& grid);
+                     std::span<const VoxelizeMethod> methods, const GridDesc& grid,
+                     const glm::ivec3* slabs = nullptr);
     /// Counters into `stats`; grows what overflowed. `capacity` and `large_capacity` are the pass's.
     Status take_counters(const shaderio::VoxelizeCounters& counters, std::uint64_t capacity,
                          std::uint64_t large_capacity, VoxelizeStats& stats);
@@ -212,10 +232,14 @@ class Voxelizer : public gpu::HostObject {
     gpu::Pipeline compute_small_[2];
     gpu::Pipeline compute_args_;
     gpu::Pipeline compute_large_[2];
+    gpu::Pipeline shift_;         ///< voxelize_shift.comp
     gpu::Pipeline skin_;          ///< skin.comp
     gpu::Profiler skin_profiler_; ///< the skinning pass ("skin"), recorded before the voxelize passes
     gpu::Profiler profiler_;
     gpu::Buffer fragments_;
+    /// The list before the last slab pass (its source), reused as the next one's new list.
+    gpu::Buffer spare_;
+    gpu::Buffer source_count_; ///< uint: the fragments a slab pass's source holds, copied on the GPU
     gpu::Buffer counters_;
     gpu::Buffer large_list_;
     gpu::Buffer velocities_;
@@ -224,6 +248,7 @@ class Voxelizer : public gpu::HostObject {
     VoxelizeMethod method_ = VoxelizeMethod::Raster; ///< the last recorded pass's (record())
     std::uint64_t large_capacity_ = 0;
     std::uint64_t capacity_ = 0;
+    std::uint64_t spare_capacity_ = 0;
     std::uint64_t fragment_count_ = 0;
 };
 
