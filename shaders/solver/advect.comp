@@ -8,10 +8,15 @@
 // kFieldTmp (each thread reads and writes only its own face there). kAdvectForces: no advection, the
 // forces alone.
 // The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
-// that mode's code: a CPU device executes every branch, taken or not.
+// that mode's code: a CPU device executes every branch, taken or not. Constant 1 (kNested) does the same for
+// the cascades' code.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 layout(constant_id = 0) const uint kMode = 0u;
+// Whether the solver has a coarser or finer cascade (SolverPush::nest may then be set): without one, the
+// compiler drops the cascades' code, whose inlined reads otherwise cost a grid on its own half again.
+layout(constant_id = 1) const bool kNested = true;
+#define GUST_NESTED_CONSTANT
 #include "solver_common.glsl"
 
 void main() {

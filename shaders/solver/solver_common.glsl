@@ -98,7 +98,17 @@ GpuEmitter load_emitter(uint i) { return EmittersRef(hot.emitters).v[i]; }
 
 // ---- Cascades (docs/solver.md "Cascades") ---------------------------------------------------------------
 // A cascade reads its neighbours' fields through their bindings (SolverBindings::outer, inner): their
-// `current` velocity buffer, dims, cell size and origin as of their last step or scroll.
+// `current` velocity buffer, dims, cell size and origin as of their last step or scroll. A shader that
+// defines GUST_NESTED_CONSTANT declares kNested, a specialization constant false for a solver without
+// neighbours; the others take SolverPush::nest alone.
+
+/// Whether this grid reads the next coarser (kNestOuter) or finer (kNestInner) cascade.
+bool nested(uint which) {
+#ifdef GUST_NESTED_CONSTANT
+    if (!kNested) return false;
+#endif
+    return (pc.nest & which) != 0u;
+}
 
 /// Component `axis` at world point x of the face field `faces` of a grid of `dims` cells of `h` m from
 /// `origin`: trilinear on the component's lattice, clamped to it (the caller keeps x inside the grid).
@@ -129,7 +139,7 @@ float cascade_weight(vec3 p, ivec3 dims) {
 /// Component `axis` of the wind beyond this grid at world point x: the coarser cascades' in turn, each
 /// blended into the next towards its border (the coarsest wholly inside its grid), then the ambient wind.
 float beyond_component(uint axis, vec3 x) {
-    if ((pc.nest & kNestOuter) == 0u) return hot.ambient[axis];
+    if (!nested(kNestOuter)) return hot.ambient[axis];
     float sum = 0.0, left = 1.0;
     uint64_t at = sb().b.outer;
     for (uint k = 0u; k < kMaxCascades && at != 0ul && left > 0.0; ++k) {
@@ -159,7 +169,7 @@ float beyond_component(uint axis, vec3 x) {
 /// step: 1 on the border, falling to 0 kCascadeBlendCells in (a relaxation zone, as nested weather models
 /// have), so that the border agrees with the coarser cascade where the answer blends into it.
 float border_relaxation(uint axis, ivec3 f) {
-    if ((pc.nest & kNestOuter) == 0u) return 0.0;
+    if (!nested(kNestOuter)) return 0.0;
     vec3 p = vec3(f) + vec3(0.5) - 0.5 * vec3(axis_unit(axis));
     vec3 inside = min(p, vec3(grid_dims()) - p);
     return clamp(1.0 - min(inside.x, min(inside.y, inside.z)) / kCascadeBlendCells, 0.0, 1.0);
@@ -169,7 +179,7 @@ float border_relaxation(uint axis, ivec3 f) {
 /// `u`, its wind averaged over the face (ratio^2 points on it).
 bool inner_face(uint axis, ivec3 f, out float u) {
     u = 0.0;
-    if ((pc.nest & kNestInner) == 0u) return false;
+    if (!nested(kNestInner)) return false;
     uint64_t at = sb().b.inner;
     BindingsRef r = BindingsRef(at);
     ivec3 dims = r.b.dims;

@@ -4,6 +4,7 @@
 #include "wind_solver_impl.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 
@@ -61,6 +62,39 @@ LevelDispatch tiles_for(glm::ivec3 dims) {
 
 std::uint64_t cells_of(glm::ivec3 dims) {
     return std::uint64_t(dims.x) * dims.y * dims.z;
+}
+
+/// A shader once per mode (SolverPush::mode) the solver uses, the mode its specialization constant 0 and
+/// `more` the constants after it: a compiler then keeps only that mode's code, where a CPU device would
+/// execute every mode's.
+Status create_modes(gpu::Context& ctx, std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
+                    const char* name, std::span<const std::uint32_t> modes,
+                    std::span<const std::uint32_t> more) {
+    for (const std::uint32_t mode : modes) {
+        std::array<std::uint32_t, 2> constants{mode, 0};
+        std::copy(more.begin(), more.end(), constants.begin() + 1);
+        auto pipeline = gpu::Pipeline::compute(ctx, name, code, sizeof(SolverPush),
+                                               std::span(constants).first(1 + more.size()));
+        if (!pipeline) return pipeline.status();
+        out[mode] = std::move(*pipeline);
+    }
+    return {};
+}
+
+/// advect.comp for the solver's advection, its constant 1 (kNested) saying whether it has a neighbouring
+/// cascade: a grid alone then carries none of the cascades' reads, which cost it half again in the pass.
+Status create_advect(gpu::Context& ctx, const SolverDesc& desc, bool nested,
+                     std::array<gpu::Pipeline, shaderio::kAdvectModes>& out) {
+    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectBackward,
+                                                         shaderio::kAdvectCorrect},
+                                   kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
+                                   kForcesMode[] = {shaderio::kAdvectForces};
+    const std::span<const std::uint32_t> modes =
+        desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
+        : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
+                                                      : std::span<const std::uint32_t>(kForcesMode);
+    const std::uint32_t more[] = {nested ? 1u : 0u};
+    return create_modes(ctx, out, words(advect_comp), "gust advect", modes, more);
 }
 
 } // namespace
@@ -126,37 +160,18 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
-    // advect.comp and smooth.comp once per mode (SolverPush::mode) the solver uses, the mode a
-    // specialization constant: a compiler then keeps only that mode's code, where a CPU device would
-    // execute every mode's.
-    auto create_modes = [&](std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
-                            const char* name, std::span<const std::uint32_t> modes) -> Status {
-        for (const std::uint32_t mode : modes) {
-            const std::uint32_t constants[] = {mode};
-            auto pipeline = gpu::Pipeline::compute(ctx, name, code, sizeof(SolverPush), constants);
-            if (!pipeline) return pipeline.status();
-            out[mode] = std::move(*pipeline);
-        }
-        return {};
-    };
-    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectBackward,
-                                                         shaderio::kAdvectCorrect},
-                                   kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
-                                   kForcesMode[] = {shaderio::kAdvectForces};
     static constexpr std::uint32_t kPcgModes[] = {shaderio::kSmoothFirst, shaderio::kSmoothDown,
                                                   shaderio::kSmoothUp, shaderio::kSmoothUpBeta},
                                    kMultigridModes[] = {shaderio::kSmoothDown, shaderio::kSmoothUp,
                                                         shaderio::kSmoothFirstPlain};
-    const std::span<const std::uint32_t> advect_modes =
-        desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
-        : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
-                                                      : std::span<const std::uint32_t>(kForcesMode);
     const std::span<const std::uint32_t> smooth_modes =
         desc.pressure == PressureSolver::MultigridPCG ? std::span<const std::uint32_t>(kPcgModes)
         : desc.pressure == PressureSolver::Multigrid  ? std::span<const std::uint32_t>(kMultigridModes)
                                                       : std::span<const std::uint32_t>();
-    if (Status s = create_modes(m.advect, words(advect_comp), "gust advect", advect_modes); !s) return s;
-    if (Status s = create_modes(m.smooth, words(smooth_comp), "gust smooth", smooth_modes); !s) return s;
+    // A solver starts alone; couple() specializes advect.comp again for a nest.
+    if (Status s = create_advect(ctx, desc, false, m.advect); !s) return s;
+    if (Status s = create_modes(ctx, m.smooth, words(smooth_comp), "gust smooth", smooth_modes, {}); !s)
+        return s;
     m.coarse_level = solver->levels_ - 1;
     while (m.coarse_level > 0 && cells_of(m.levels[m.coarse_level - 1].dims) <= shaderio::kCoarseCells)
         --m.coarse_level;
@@ -317,6 +332,7 @@ Status WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
         if (!previous) return previous.status();
         m.previous = std::move(*previous);
     }
+    if (Status s = create_advect(ctx_, desc_, outer || inner, m.advect); !s) return s;
     m.b.outer = outer ? outer->impl_->bindings.address() : 0;
     m.b.inner = inner ? inner->impl_->bindings.address() : 0;
     // Until the first keep, the finer cascade reads the current field alone.
