@@ -562,21 +562,7 @@ Result<VoxelizeStats> Voxelizer::voxelize_slabs(std::span<const GpuInstance> ins
     if (Status s = ensure_slab_pass(instances, grid); !s) return s;
     VoxelizeStats stats(ctx_.memory());
     stats.triangles = triangles_of(instances);
-    const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
-    bool skinned = false;
-    for (const GpuInstance& inst : instances)
-        skinned = skinned || !inst.mesh->staged_palette_.empty();
-    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        record_skinning(cmd, instances);
-        record_pass(cmd, instances, *methods, grid, &shift);
-    });
-    if (!recorded) return recorded;
-    VoxelizeCounters counters{};
-    if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
-    stats.ms = skinned ? skin_profiler_.read() : gpu::Timings(ctx_.memory());
-    for (const auto& pass : profiler_.read())
-        stats.ms.push_back(pass);
-    if (Status s = take_counters(counters, capacity, large_capacity, stats); !s) return s;
+    if (Status s = submit_pass(instances, *methods, grid, &shift, stats); !s) return s;
     if (!methods->empty()) stats.method = methods->back();
     return stats;
 }
@@ -669,26 +655,31 @@ Result<VoxelizeStats> Voxelizer::run(std::span<const GpuInstance> instances,
     stats.triangles = triangles_of(instances);
     for (;;) {
         if (Status s = ensure_pass(instances, grid); !s) return s;
-        const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
-        bool skinned = false;
-        for (const GpuInstance& inst : instances)
-            skinned = skinned || !inst.mesh->staged_palette_.empty();
-        Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-            record_skinning(cmd, instances);
-            record_pass(cmd, instances, methods, grid);
-        });
-        if (!recorded) return recorded;
-        VoxelizeCounters counters{};
-        if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
-        stats.ms = skinned ? skin_profiler_.read() : gpu::Timings(ctx_.memory());
-        for (const auto& pass : profiler_.read())
-            stats.ms.push_back(pass);
-        if (Status s = take_counters(counters, capacity, large_capacity, stats); !s) return s;
+        if (Status s = submit_pass(instances, methods, grid, nullptr, stats); !s) return s;
         if (!stats.truncated) break;
         stats.truncated = false;
         ++stats.retries;
     }
     return stats;
+}
+
+Status Voxelizer::submit_pass(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
+                              const GridDesc& grid, const glm::ivec3* slabs, VoxelizeStats& stats) {
+    const std::uint64_t capacity = capacity_, large_capacity = large_capacity_;
+    bool skinned = false;
+    for (const GpuInstance& inst : instances)
+        skinned = skinned || !inst.mesh->staged_palette_.empty();
+    Status recorded = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+        record_skinning(cmd, instances);
+        record_pass(cmd, instances, methods, grid, slabs);
+    });
+    if (!recorded) return recorded;
+    VoxelizeCounters counters{};
+    if (Status s = gpu::download(ctx_, counters_, &counters, sizeof(counters)); !s) return s;
+    stats.ms = skinned ? skin_profiler_.read() : gpu::Timings(ctx_.memory());
+    for (const auto& pass : profiler_.read())
+        stats.ms.push_back(pass);
+    return take_counters(counters, capacity, large_capacity, stats);
 }
 
 void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,

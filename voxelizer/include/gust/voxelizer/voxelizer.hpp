@@ -223,6 +223,10 @@ class Voxelizer : public gpu::HostObject {
     void record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> instances,
                      std::span<const VoxelizeMethod> methods, const GridDesc& grid,
                      const glm::ivec3* slabs = nullptr);
+    /// Records one pass (record_pass) with the skinning before it, submits it and waits, then its timings
+    /// and counters into `stats` (take_counters).
+    Status submit_pass(std::span<const GpuInstance> instances, std::span<const VoxelizeMethod> methods,
+                       const GridDesc& grid, const glm::ivec3* slabs, VoxelizeStats& stats);
     /// Counters into `stats`; grows what overflowed. `capacity` and `large_capacity` are the pass's.
     Status take_counters(const shaderio::VoxelizeCounters& counters, std::uint64_t capacity,
                          std::uint64_t large_capacity, VoxelizeStats& stats);
