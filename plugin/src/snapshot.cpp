@@ -68,29 +68,20 @@ float half_to_float(std::uint16_t h) {
 
 namespace {
 
-/// The velocity at `point` in one cascade's grid, and that cascade's share there (`weight`): 0 outside the
-/// grid (edges included inside), 1 for the coarsest, else rising from 0 at its border to 1
-/// kCascadeBlendCells cells in.
-glm::vec3 sample_level(const SnapshotLevel& level, const glm::vec4* cells, bool coarsest, glm::vec3 point,
-                       float& weight) {
+/// Cell units of `point` in a cascade's grid (as sample.comp), and whether the grid holds it (edges
+/// included).
+bool grid_point(const SnapshotLevel& level, glm::vec3 point, glm::vec3& p) {
+    const glm::vec3 size = glm::vec3(level.extent);
+    p = (point - level.origin) / level.cell_size;
+    return p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= size.x && p.y <= size.y && p.z <= size.z;
+}
+
+/// The cells read as the wind texture's sampler reads them at cell units p: texel centres at c + 0.5,
+/// trilinear, clamped to the edge.
+glm::vec4 trilinear(const SnapshotLevel& level, const glm::vec4* cells, glm::vec3 p) {
     const glm::ivec3 n = level.extent;
-    const glm::vec3 size = glm::vec3(n);
-    // Cell units, as sample.comp.
-    const glm::vec3 p = (point - level.origin) / level.cell_size;
-    weight = 0.0f;
-    if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= size.x && p.y <= size.y && p.z <= size.z))
-        return glm::vec3(0.0f);
-    const glm::vec3 inside = glm::min(p, size - p);
-    weight = coarsest ? 1.0f
-                      : std::clamp(std::min({inside.x, inside.y, inside.z}) / kCascadeBlendCells, 0.0f, 1.0f);
     const glm::ivec3 last = n - 1, low = glm::max(n - 2, glm::ivec3(0));
     const int row = n.x, slice = n.x * n.y;
-    // p >= 0 here, so truncation is floor.
-    const glm::ivec3 c = glm::min(glm::ivec3(p), last);
-    const glm::vec4& own = cells[c.x + row * c.y + slice * c.z];
-    // A cell without air: the solid's own velocity (query answers it there, not a blend).
-    if (own.w == 0.0f) return glm::vec3(own);
-    // The sampler: texel centres at c + 0.5, clamped to the edge.
     const auto lerp = [](const glm::vec4& a, const glm::vec4& b, float t) { return a + (b - a) * t; };
     const glm::vec3 q = glm::clamp(p - 0.5f, glm::vec3(0.0f), glm::vec3(last));
     const glm::ivec3 i0 = glm::min(glm::ivec3(q), low);
@@ -100,7 +91,33 @@ glm::vec3 sample_level(const SnapshotLevel& level, const glm::vec4* cells, bool 
     const glm::vec4 x00 = lerp(c000[0], c000[dx], t.x), x10 = lerp(c000[dy], c000[dy + dx], t.x);
     const glm::vec4 x01 = lerp(c000[dz], c000[dz + dx], t.x);
     const glm::vec4 x11 = lerp(c000[dz + dy], c000[dz + dy + dx], t.x);
-    return glm::vec3(lerp(lerp(x00, x10, t.y), lerp(x01, x11, t.y), t.z));
+    return lerp(lerp(x00, x10, t.y), lerp(x01, x11, t.y), t.z);
+}
+
+/// Cascade k's share of the answer at `point`, whose cell units in its grid are p (inside it): 1 for the
+/// coarsest, else rising from 0 at its border to 1 over cascade_blend_cells of the next coarser
+/// cascade's open fraction there.
+float level_weight(const SnapshotData& d, std::size_t k, glm::vec3 point, glm::vec3 p) {
+    if (k + 1 == d.levels.size()) return 1.0f;
+    const glm::vec3 inside = glm::min(p, glm::vec3(d.levels[k].extent) - p);
+    const float depth = std::min({inside.x, inside.y, inside.z});
+    if (depth >= kCascadeBlendCells) return 1.0f;
+    const SnapshotLevel& coarser = d.levels[k + 1];
+    glm::vec3 q;
+    grid_point(coarser, point, q);
+    const float open = trilinear(coarser, d.cells.data() + coarser.first, q).w;
+    return std::clamp(depth / cascade_blend_cells(open), 0.0f, 1.0f);
+}
+
+/// The velocity at cell units p of a cascade's grid (inside it).
+glm::vec3 sample_level(const SnapshotLevel& level, const glm::vec4* cells, glm::vec3 p) {
+    // p >= 0 here, so truncation is floor.
+    const glm::ivec3 n = level.extent;
+    const glm::ivec3 c = glm::min(glm::ivec3(p), n - 1);
+    const glm::vec4& own = cells[c.x + n.x * c.y + n.x * n.y * c.z];
+    // A cell without air: the solid's own velocity (query answers it there, not a blend).
+    if (own.w == 0.0f) return glm::vec3(own);
+    return glm::vec3(trilinear(level, cells, p));
 }
 
 } // namespace
@@ -112,10 +129,10 @@ void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::s
         glm::vec3 sum(0.0f);
         float left = 1.0f;
         for (std::size_t k = 0; k < d.levels.size() && left > 0.0f; ++k) {
-            float weight;
-            const glm::vec3 u = sample_level(d.levels[k], d.cells.data() + d.levels[k].first,
-                                             k + 1 == d.levels.size(), point, weight);
-            sum += left * weight * u;
+            glm::vec3 p;
+            if (!grid_point(d.levels[k], point, p)) continue;
+            const float weight = level_weight(d, k, point, p);
+            sum += left * weight * sample_level(d.levels[k], d.cells.data() + d.levels[k].first, p);
             left *= 1.0f - weight;
         }
         const glm::vec3 u = sum + left * d.ambient;

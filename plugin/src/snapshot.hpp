@@ -63,7 +63,7 @@ class SnapshotRing {
 /// The velocity at each point from `data`, as the wind texture's sampler would read it (trilinear on cell
 /// centres, clamped to the edge), with query's rules: in a cell without air the cell's own (its solid's)
 /// velocity; the finest cascade that holds the point, blended into the next coarser one over its last
-/// kCascadeBlendCells cells (as gust_wind.glsl does); beyond every cascade the ambient wind. Points are
+/// cascade_blend_cells cells (as gust_wind.glsl does); beyond every cascade the ambient wind. Points are
 /// finite; both spans the same size.
 void sample_snapshot(const SnapshotData& data, std::span<const Vec3> points, std::span<Vec3> velocities);
 

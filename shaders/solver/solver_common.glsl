@@ -128,12 +128,36 @@ float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint a
     return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
 }
 
+/// The blend's width in cells at world point x, by how open the next coarser cascade (SolverBindings at
+/// `coarser`) is there: its open fractions (1 − cell_solid) trilinear on its cell centres, as its wind
+/// texture's sampler reads them. kCascadeBlendCells in open air; 1 where its cells around x hold
+/// kCascadeSolidShare of solid or more, since a coarse grid resolves the solid it cuts coarsely: a floor
+/// laid under the ground, or a border beside a hill, then keeps the finer cascade's air by the solid.
+float cascade_blend_cells(uint64_t coarser, vec3 x) {
+    BindingsRef r = BindingsRef(coarser);
+    ivec3 dims = r.b.dims;
+    vec3 q = clamp((x - r.b.origin) / r.b.h - vec3(0.5), vec3(0.0), vec3(dims - ivec3(1)));
+    ivec3 i0 = min(ivec3(floor(q)), max(dims - ivec3(2), ivec3(0)));
+    ivec3 i1 = min(i0 + ivec3(1), dims - ivec3(1));
+    vec3 t = q - vec3(i0);
+    FloatsRef solid = FloatsRef(r.b.cell_solid);
+    float c00 = mix(solid.v[cell_index(dims, i0)], solid.v[cell_index(dims, ivec3(i1.x, i0.y, i0.z))], t.x);
+    float c10 = mix(solid.v[cell_index(dims, ivec3(i0.x, i1.y, i0.z))],
+                    solid.v[cell_index(dims, ivec3(i1.x, i1.y, i0.z))], t.x);
+    float c01 = mix(solid.v[cell_index(dims, ivec3(i0.x, i0.y, i1.z))],
+                    solid.v[cell_index(dims, ivec3(i1.x, i0.y, i1.z))], t.x);
+    float c11 = mix(solid.v[cell_index(dims, ivec3(i0.x, i1.y, i1.z))], solid.v[cell_index(dims, i1)], t.x);
+    float open = 1.0 - mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+    float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
+    return 1.0 + (kCascadeBlendCells - 1.0) * share;
+}
+
 /// How much a cascade's own answer counts at p (cell units of its grid of `dims` cells): 0 outside it,
-/// rising to 1 over its last kCascadeBlendCells cells, so that no seam shows where the next coarser
-/// cascade's answer takes over.
-float cascade_weight(vec3 p, ivec3 dims) {
+/// rising to 1 over its last `blend` cells (cascade_blend_cells), so that no seam shows where the next
+/// coarser cascade's answer takes over.
+float cascade_weight(vec3 p, ivec3 dims, float blend) {
     vec3 inside = min(p, vec3(dims) - p);
-    return clamp(min(inside.x, min(inside.y, inside.z)) / kCascadeBlendCells, 0.0, 1.0);
+    return clamp(min(inside.x, min(inside.y, inside.z)) / blend, 0.0, 1.0);
 }
 
 /// Component `axis` of the wind beyond this grid at world point x: the coarser cascades' in turn, each
@@ -150,7 +174,7 @@ float beyond_component(uint axis, vec3 x) {
         uint64_t next = r.b.outer;
         vec3 p = (x - origin) / h;
         bool inside = all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(dims)));
-        float w = !inside ? 0.0 : next == 0ul ? 1.0 : cascade_weight(p, dims);
+        float w = !inside ? 0.0 : next == 0ul ? 1.0 : cascade_weight(p, dims, cascade_blend_cells(next, x));
         if (w > 0.0) {
             // Between two of the coarser cascade's steps, in time as well as in space.
             float u = cascade_component(r.b.current, dims, h, origin, axis, x);

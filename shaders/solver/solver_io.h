@@ -33,9 +33,11 @@ GUST_CONST uint kBitsWords = kCellWords;
 GUST_CONST uint kMaxVoxelsPerCell = 8;
 GUST_CONST uint kMaxEmitters = 64;
 /// Cascades a nest holds at most, and the cells over which a cascade's answer blends into the next coarser
-/// one's towards its border (docs/solver.md "Cascades").
+/// one's towards its border (docs/solver.md "Cascades"): kCascadeBlendCells where the coarser cascade is
+/// open there, 1 where its cells around the point hold kCascadeSolidShare of solid or more.
 GUST_CONST uint kMaxCascades = 8;
 GUST_CONST float kCascadeBlendCells = 3.0f;
+GUST_CONST float kCascadeSolidShare = 0.3f;
 /// Fragment velocities are summed per cell as fixed point with this many steps per m/s, clamped to
 /// ±kMaxFragmentSpeed, so 32-bit integer atomics suffice (no float-atomic feature needed).
 GUST_CONST float kVelocityScale = 256.0f;

@@ -12,6 +12,7 @@ namespace gust {
 
 static_assert(kMaxCascades == shaderio::kMaxCascades);
 static_assert(kCascadeBlendCells == shaderio::kCascadeBlendCells);
+static_assert(kCascadeSolidShare == shaderio::kCascadeSolidShare);
 
 namespace {
 #include "gust_shaders/advect_comp.h"

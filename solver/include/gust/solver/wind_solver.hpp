@@ -2,6 +2,7 @@
 // its solid boundary (docs/design.md "Wind solver", docs/solver.md).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <gust/gpu/buffer.hpp>
@@ -44,8 +45,20 @@ inline constexpr float kMaxStep = 10.0f;
 inline constexpr float kMaxAmbientSpeed = 1e4f;
 /// The most cascades a nest holds (WindSolver::couple).
 inline constexpr std::uint32_t kMaxCascades = 8;
-/// Cells over which a cascade's answer blends into the next coarser one's, inward from its border.
+/// Cells over which a cascade's answer blends into the next coarser one's, inward from its border, where
+/// the coarser cascade is open; where its cells around a point (trilinear on their open fractions) hold
+/// kCascadeSolidShare of solid or more, over 1 cell (cascade_blend_cells).
 inline constexpr float kCascadeBlendCells = 3.0f;
+inline constexpr float kCascadeSolidShare = 0.3f;
+
+/// The blend's width in cells where the next coarser cascade's open fraction (trilinear on its cells) is
+/// `coarser_open`: a coarser grid resolves the solid it cuts coarsely, so near it the finer answers alone
+/// to within a cell of its border (docs/solver.md "Cascades").
+inline float cascade_blend_cells(float coarser_open) {
+    const float open =
+        std::clamp((coarser_open - (1.0f - kCascadeSolidShare)) / kCascadeSolidShare, 0.0f, 1.0f);
+    return 1.0f + (kCascadeBlendCells - 1.0f) * open;
+}
 /// The most emitters a solver takes.
 inline constexpr std::size_t kMaxEmitterCount = 64;
 /// An emitter's largest |strength|, m/s, and largest falloff exponent.
