@@ -167,6 +167,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
     if (cascades > 1 && !(coarsest <= kMaxCellSize))
         return invalid("domain.cascades: the coarsest cascade's cells would be " + std::to_string(coarsest) +
                        " m, more than 1000 m");
+    solver_desc.nested = cascades > 1;
 
     return guarded([&]() -> Outcome {
         // The System first, so that a failed allocation of either frees what came before.

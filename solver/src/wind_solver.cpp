@@ -169,8 +169,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         desc.pressure == PressureSolver::MultigridPCG ? std::span<const std::uint32_t>(kPcgModes)
         : desc.pressure == PressureSolver::Multigrid  ? std::span<const std::uint32_t>(kMultigridModes)
                                                       : std::span<const std::uint32_t>();
-    // A solver starts alone; couple() specializes advect.comp again for a nest.
-    if (Status s = create_advect(ctx, desc, false, m.advect); !s) return s;
+    if (Status s = create_advect(ctx, desc, desc.nested, m.advect); !s) return s;
+    m.advect_nested = desc.nested;
     if (Status s = create_modes(ctx, m.smooth, words(smooth_comp), "gust smooth", smooth_modes, {}); !s)
         return s;
     m.coarse_level = solver->levels_ - 1;
@@ -333,7 +333,10 @@ Status WindSolver::couple(const WindSolver* outer, const WindSolver* inner) {
         if (!previous) return previous.status();
         m.previous = std::move(*previous);
     }
-    if (Status s = create_advect(ctx_, desc_, outer || inner, m.advect); !s) return s;
+    if (const bool nested = outer || inner; nested != m.advect_nested) {
+        if (Status s = create_advect(ctx_, desc_, nested, m.advect); !s) return s;
+        m.advect_nested = nested;
+    }
     m.b.outer = outer ? outer->impl_->bindings.address() : 0;
     m.b.inner = inner ? inner->impl_->bindings.address() : 0;
     // Until the first keep, the finer cascade reads the current field alone.
@@ -360,7 +363,7 @@ void WindSolver::record_ambient_change(VkCommandBuffer cmd) {
     // "Ambient wind"). The field kept for the finer cascades too, so their blend in time sees it whole.
     Impl& m = *impl_;
     m.b.ambient_change = ambient_change_;
-    m.record_scroll_pass(ctx_, cmd, shaderio::kScrollAmbientChange, glm::ivec3(0), face_count());
+    m.record_single_pass(ctx_, cmd, m.scroll, shaderio::kScrollAmbientChange, glm::ivec3(0), face_count());
     ambient_change_ = glm::vec3(0.0f);
 }
 
@@ -460,7 +463,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
         m.b.origin = origin_;
         m.b.samples = out_buffer->address();
-        m.record_sample_pass(ctx_, cmd, shaderio::kSampleCells, cell_count());
+        m.record_single_pass(ctx_, cmd, m.sample, shaderio::kSampleCells, glm::ivec3(0), cell_count());
     });
     if (!s) return s;
     std::vector<glm::vec3> out(cell_count());
@@ -504,7 +507,7 @@ void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDe
     m.b.points = points;
     m.b.samples = samples;
     m.b.point_count = count;
-    m.record_sample_pass(ctx_, cmd, shaderio::kSamplePoints, count);
+    m.record_single_pass(ctx_, cmd, m.sample, shaderio::kSamplePoints, glm::ivec3(0), count);
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {
@@ -518,7 +521,7 @@ void WindSolver::record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels) {
     Impl& m = *impl_;
     m.b.origin = origin_;
     m.b.texels = texels.address();
-    m.record_sample_pass(ctx_, cmd, shaderio::kSampleTexels, cell_count());
+    m.record_single_pass(ctx_, cmd, m.sample, shaderio::kSampleTexels, glm::ivec3(0), cell_count());
     // The steps write the bound texels alone; the next pass's bindings carry them again.
     m.b.texels = m.bound_texels;
 }
@@ -532,7 +535,8 @@ void WindSolver::record_scroll(VkCommandBuffer cmd, glm::ivec3 cells) {
     if (cells == glm::ivec3(0)) return;
     Impl& m = *impl_;
     m.b.ambient = ambient_;
-    m.record_scroll_pass(ctx_, cmd, shaderio::kScrollMove, cells, std::max(face_count(), cell_count()));
+    m.record_single_pass(ctx_, cmd, m.scroll, shaderio::kScrollMove, cells,
+                         std::max(face_count(), cell_count()));
     m.swap ^= 1u;
     // φ was moved into the scratch array; the last step's vorticity would no longer line up, so the next
     // step's confinement starts from none.

@@ -25,6 +25,7 @@ struct WindSolver::Impl : gpu::HostObject {
     explicit Impl(std::pmr::memory_resource* memory) : levels(memory) {}
     /// advect.comp and smooth.comp specialized to each mode (shaderio::SolverPush::mode) the solver uses.
     std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
+    bool advect_nested = false; ///< advect is specialized for a nest (kNested)
     std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
     gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_link, fluid_finish,
         coarse_weights, diffuse, start, restrict_, coarse_solve, cg, jacobi, project, extend, finish, scroll,
@@ -65,10 +66,10 @@ struct WindSolver::Impl : gpu::HostObject {
         b.current = current_velocity().address();
         put_bindings(ctx, cmd);
     }
-    /// Records scroll.comp in `mode` (shaderio::kScroll*) moving by `shift` cells over `count` threads, after
-    /// the bindings `b` the caller set, and a barrier.
-    void record_scroll_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
-                            glm::ivec3 shift, std::uint64_t count) {
+    /// Records `pass` (scroll.comp or sample.comp) in `mode` (shaderio::kScroll*, kSample*) over `count`
+    /// threads, moving by `shift` cells (scroll.comp), after the bindings `b` the caller set, and a barrier.
+    void record_single_pass(const gpu::Context& ctx, VkCommandBuffer cmd, const gpu::Pipeline& pass,
+                            std::uint32_t mode, glm::ivec3 shift, std::uint64_t count) {
         put_bindings(ctx, cmd);
         shaderio::SolverPush push{};
         push.bindings = bindings.address();
@@ -77,23 +78,8 @@ struct WindSolver::Impl : gpu::HostObject {
         push.shift = shift;
         push.swap = swap;
         const shaderio::LevelDispatch g = detail::groups_for(count);
-        scroll.bind(cmd, &push, sizeof(push));
-        scroll.dispatch(cmd, g.x, g.y, g.z);
-        gpu::barrier(ctx, cmd);
-    }
-    /// Records sample.comp in `mode` (shaderio::kSample*) over `count` threads, after the bindings `b` the
-    /// caller set.
-    void record_sample_pass(const gpu::Context& ctx, VkCommandBuffer cmd, std::uint32_t mode,
-                            std::uint64_t count) {
-        put_bindings(ctx, cmd);
-        shaderio::SolverPush push{};
-        push.bindings = bindings.address();
-        push.nest = nest();
-        push.mode = mode;
-        push.swap = swap;
-        const shaderio::LevelDispatch g = detail::groups_for(count);
-        sample.bind(cmd, &push, sizeof(push));
-        sample.dispatch(cmd, g.x, g.y, g.z);
+        pass.bind(cmd, &push, sizeof(push));
+        pass.dispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx, cmd);
     }
     /// φ holds the last solve of this field's history, so the next solve may start from it (the warm

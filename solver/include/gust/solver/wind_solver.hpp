@@ -107,6 +107,9 @@ struct SolverDesc {
     /// Start each pressure solve from the last step's pressure, scaled to fit (docs/solver.md); false:
     /// from zero every step.
     bool warm_start = true;
+    /// The solver will have a neighbouring cascade (couple): its advection is built for the nest at
+    /// creation, so that couple need not build it again. couple rebuilds it when the nesting differs.
+    bool nested = false;
 };
 
 /// Where the solid boundary comes from: a tree over a voxel grid of cell_size / voxels_per_cell
