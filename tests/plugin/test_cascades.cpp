@@ -44,11 +44,9 @@ TEST(Cascades, badNestsAreRefusedWithTheirReason) {
     }
 }
 
-/// Three cascades of 16x8x16 cells (1 m, 4 m, 16 m) around (0, 4, 0), with the snapshot on, an ambient wind
-/// of `ambient` and a fan 20 m out, beyond the finest cascade (16 m wide) but inside the next (64 m), stepped
-/// 32 times.
-/// On the host's device when `host` is given.
-std::unique_ptr<System> fan_nest(Watch& watch, Vec3 ambient, const HostDevice* host = nullptr) {
+/// Three cascades of 16x8x16 cells (1 m, 4 m, 16 m) around (0, 4, 0) with the snapshot on, on the host's
+/// device when `host` is given; null (the test failed) when creation fails.
+std::unique_ptr<System> three_cascades(Watch& watch, const HostDevice* host) {
     SystemDesc desc = small_desc(watch);
     desc.host = host;
     desc.domain.cascades = 3;
@@ -57,7 +55,16 @@ std::unique_ptr<System> fan_nest(Watch& watch, Vec3 ambient, const HostDevice* h
     std::unique_ptr<System> system;
     const Outcome created = System::create(desc, system);
     EXPECT_TRUE(created) << created.message();
-    if (!created) return nullptr;
+    return created ? std::move(system) : nullptr;
+}
+
+/// Three cascades of 16x8x16 cells (1 m, 4 m, 16 m) around (0, 4, 0), with the snapshot on, an ambient wind
+/// of `ambient` and a fan 20 m out, beyond the finest cascade (16 m wide) but inside the next (64 m), stepped
+/// 32 times.
+/// On the host's device when `host` is given.
+std::unique_ptr<System> fan_nest(Watch& watch, Vec3 ambient, const HostDevice* host = nullptr) {
+    std::unique_ptr<System> system = three_cascades(watch, host);
+    if (!system) return nullptr;
     const WindEmitter fan{.type = WindEmitterType::Directional,
                           .position = {20.0f, 4.0f, 0.0f},
                           .direction = {0.0f, 0.0f, 1.0f},
@@ -410,14 +417,8 @@ TEST(Cascades, aFloorLaidUnderTheGroundKeepsTheFinestCascadesAirByTheGroundInEve
     HostVulkan host;
     ASSERT_TRUE(host.ok()) << host.error();
     Watch watch;
-    SystemDesc desc = small_desc(watch);
-    desc.host = &host.device();
-    desc.domain.cascades = 3;
-    desc.domain.ratio = 4;
-    desc.snapshot = true;
-    std::unique_ptr<System> system;
-    const Outcome created = System::create(desc, system);
-    ASSERT_TRUE(created) << created.message();
+    const std::unique_ptr<System> system = three_cascades(watch, &host.device());
+    ASSERT_TRUE(system);
     const Box ground({-200.0f, -100.0f, -200.0f}, {200.0f, 0.8f, 200.0f});
     const Box wall({-4.0f, 0.0f, -5.0f}, {-3.0f, 4.5f, 5.0f});
     for (const Box* box : {&ground, &wall}) {
