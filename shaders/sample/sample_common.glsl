@@ -36,13 +36,9 @@ vec3 wind_at(vec3 world) {
     if (left > 0.0) {                                                                                        \
         vec3 uvw = (frame.wind_world_to_texture[k] * vec4(world, 1.0)).xyz;                                  \
         vec3 cells = vec3(textureSize(wind_textures[k], 0));                                                 \
-        bool coarsest = k == GUST_CASCADES - 1;                                                              \
-        float w = gust_cascade_weight(uvw, cells, coarsest);                                                 \
-        if (w > 0.0 && w < 1.0) {                                                                            \
-            vec3 coarser_uvw = (frame.wind_world_to_texture[coarser] * vec4(world, 1.0)).xyz;                \
-            float open = textureLod(wind_textures[coarser], coarser_uvw, 0.0).a;                             \
-            w = gust_cascade_weight(uvw, cells, coarsest, gust_blend_cells(open));                           \
-        }                                                                                                    \
+        float w = k == GUST_CASCADES - 1 ? gust_cascade_weight(uvw, cells, true)                              \
+                                         : gust_cascade_weight(uvw, cells, wind_textures[coarser],           \
+                                                               frame.wind_world_to_texture[coarser], world); \
         if (w > 0.0) sum += left * w * textureLod(wind_textures[k], uvw, 0.0);                               \
         left *= 1.0 - w;                                                                                     \
     }

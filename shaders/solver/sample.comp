@@ -23,9 +23,7 @@ void main() {
         vec3 p = (PointsRef(sb().b.points).v[i] - grid_origin()) / grid_h();
         vec3 x = grid_origin() + p * grid_h();
         // Towards the border of a cascade with coarser ones beyond, the answer blends into theirs.
-        float own = !inside_grid(p) ? 0.0
-                    : !nested(kNestOuter) ? 1.0
-                    : cascade_weight(p, n, cascade_blend_cells(sb().b.outer, x));
+        float own = !inside_grid(p) ? 0.0 : !nested(kNestOuter) ? 1.0 : nested_weight(p, n, sb().b.outer, x);
         vec3 u = vec3(0.0);
         if (own > 0.0) {
             int cell = cell_index(n, clamp(ivec3(floor(p)), ivec3(0), n - 1));

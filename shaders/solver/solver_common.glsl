@@ -153,11 +153,18 @@ float cascade_blend_cells(uint64_t coarser, vec3 x) {
 }
 
 /// How much a cascade's own answer counts at p (cell units of its grid of `dims` cells): 0 outside it,
-/// rising to 1 over its last `blend` cells (cascade_blend_cells), so that no seam shows where the next
-/// coarser cascade's answer takes over.
+/// rising to 1 over its last `blend` cells, so that no seam shows where the next coarser cascade's answer
+/// takes over.
 float cascade_weight(vec3 p, ivec3 dims, float blend) {
     vec3 inside = min(p, vec3(dims) - p);
     return clamp(min(inside.x, min(inside.y, inside.z)) / blend, 0.0, 1.0);
+}
+
+/// cascade_weight at p (world point x) of a cascade whose next coarser one has the SolverBindings at
+/// `coarser`, over cascade_blend_cells: the coarser cascade's solids are read only inside the blend.
+float nested_weight(vec3 p, ivec3 dims, uint64_t coarser, vec3 x) {
+    float w = cascade_weight(p, dims, kCascadeBlendCells);
+    return w > 0.0 && w < 1.0 ? cascade_weight(p, dims, cascade_blend_cells(coarser, x)) : w;
 }
 
 /// Component `axis` of the wind beyond this grid at world point x: the coarser cascades' in turn, each
@@ -174,7 +181,7 @@ float beyond_component(uint axis, vec3 x) {
         uint64_t next = r.b.outer;
         vec3 p = (x - origin) / h;
         bool inside = all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(dims)));
-        float w = !inside ? 0.0 : next == 0ul ? 1.0 : cascade_weight(p, dims, cascade_blend_cells(next, x));
+        float w = !inside ? 0.0 : next == 0ul ? 1.0 : nested_weight(p, dims, next, x);
         if (w > 0.0) {
             // Between two of the coarser cascade's steps, in time as well as in space.
             float u = cascade_component(r.b.current, dims, h, origin, axis, x);

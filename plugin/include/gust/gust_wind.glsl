@@ -46,19 +46,22 @@ float gust_cascade_weight(vec3 uvw, vec3 cells, bool coarsest) {
     return gust_cascade_weight(uvw, cells, coarsest, GUST_BLEND_CELLS);
 }
 
+/// The share at texture coordinates `uvw` of a cascade of `cells` cells (not the coarsest) at world point
+/// `world`, with `coarser` the next coarser cascade: its open fraction is read only inside the blend.
+float gust_cascade_weight(vec3 uvw, vec3 cells, sampler3D coarser, mat4 coarser_world_to_texture, vec3 world) {
+    float w = gust_cascade_weight(uvw, cells, false);
+    if (w <= 0.0 || w >= 1.0) return w;
+    vec3 coarser_uvw = (coarser_world_to_texture * vec4(world, 1.0)).xyz;
+    return gust_cascade_weight(uvw, cells, false, gust_blend_cells(textureLod(coarser, coarser_uvw, 0.0).a));
+}
+
 /// Adds cascade `wind`'s share at world point `world` to `sum` (m/s), taken from what the finer cascades
-/// left (`left`: 1 before the finest), with `coarser` the next coarser cascade: its open fraction is read
-/// only where the point lies in the blend.
+/// left (`left`: 1 before the finest), with `coarser` the next coarser cascade.
 void gust_blend_cascade(sampler3D wind, mat4 world_to_texture, sampler3D coarser,
                         mat4 coarser_world_to_texture, vec3 world, inout vec3 sum, inout float left) {
     vec3 uvw = (world_to_texture * vec4(world, 1.0)).xyz;
-    vec3 cells = vec3(textureSize(wind, 0));
-    float w = gust_cascade_weight(uvw, cells, false);
+    float w = gust_cascade_weight(uvw, vec3(textureSize(wind, 0)), coarser, coarser_world_to_texture, world);
     if (w <= 0.0) return;
-    if (w < 1.0) {
-        vec3 coarser_uvw = (coarser_world_to_texture * vec4(world, 1.0)).xyz;
-        w = gust_cascade_weight(uvw, cells, false, gust_blend_cells(textureLod(coarser, coarser_uvw, 0.0).a));
-    }
     // An explicit level: no derivatives are needed, so it may run in any control flow or stage.
     sum += left * w * textureLod(wind, uvw, 0.0).xyz;
     left *= 1.0 - w;
