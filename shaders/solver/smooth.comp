@@ -8,7 +8,8 @@
 //     x_k = x_{k-1} + α p_{k-1} (k = pc.iterations; x_0 = s φ, the warm start; kSmoothFirstPlain is plain
 //     multigrid, where p is last iteration's z and α = 1), written to the other iterate, and its residual
 //     r = b − L x_k computed exactly (the last residual kept as r_old), with the convergence check in the
-//     workgroup that finishes last; then smoothing from zero against r.
+//     workgroup that finishes last; then smoothing from zero against r, unless the coarse solve holds
+//     level 0 (SolverBindings::coarse_level 0), which smooths it itself.
 //   kSmoothDown (a level between): smoothing from zero against the level's right-hand side (kCellPressure).
 //   kSmoothUp (upward): the level's downward values plus the coarser level's correction (prolong_cell from
 //     kCellPressureUp), smoothed against the right-hand side, into kCellPressureUp.
@@ -96,6 +97,9 @@ void main() {
     } else if (mine) {
         rhs = load_cell(kCellRhs, i);
     }
+    // A grid small enough for the coarse solve to hold level 0 is smoothed there, from zero: the first pass
+    // gives it the iterate and the residual only.
+    if (first && sb().b.coarse_level == 0u) return;
 
     // Load the tile and its halo: zero going down; going up, the downward values plus the correction.
     for (int e = int(gl_LocalInvocationIndex); e < kSpan * kSpan * kSpan; e += kSide * kSide * kSide) {

@@ -228,6 +228,7 @@ struct SolverBindings {
     uint tree_log2_branching;
     uint open_sides;          ///< bit s (−x,+x,−y,+y,−z,+z) set: the side is open (φ = 0)
     uint levels;              ///< multigrid levels in use
+    uint coarse_level;        ///< the first level coarse_solve.comp takes (0: the whole V-cycle)
     uint mask_words;          ///< words of a leaf layer in the tree's mask blocks
     uint mask_stride;         ///< words per tree mask block
     uint cell_words;          ///< words per part in cell_parts

@@ -281,6 +281,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     b.voxels_per_cell = desc.voxels_per_cell;
     b.cell_words = std::uint32_t(words_per_cell);
     b.levels = solver->levels_;
+    b.coarse_level = m.coarse_level;
     b.tolerance = desc.tolerance;
     b.vorticity_strength = desc.vorticity;
     b.smoothing = desc.smoothing;
