@@ -110,22 +110,28 @@ bool nested(uint which) {
     return (pc.nest & which) != 0u;
 }
 
-/// Component `axis` at world point x of the face field `faces` of a grid of `dims` cells of `h` m from
-/// `origin`: trilinear on the component's lattice, clamped to it (the caller keeps x inside the grid).
-float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint axis, vec3 x) {
-    ivec3 m = dims + axis_unit(axis);
-    vec3 q = clamp((x - origin) / h - vec3(0.5) + 0.5 * vec3(axis_unit(axis)), vec3(0.0), vec3(m - ivec3(1)));
+/// Trilinear at q (in lattice points) over a lattice of m points stored from `values` + `base` floats, x
+/// fastest, clamped to it: a face component's lattice (face_index) or the cells' (cell_index, base 0).
+float lattice_value(uint64_t values, int base, ivec3 m, vec3 q) {
+    q = clamp(q, vec3(0.0), vec3(m - ivec3(1)));
     ivec3 i0 = min(ivec3(floor(q)), max(m - ivec3(2), ivec3(0)));
     ivec3 i1 = min(i0 + ivec3(1), m - ivec3(1));
     vec3 t = q - vec3(i0);
-    FloatsRef u = FloatsRef(faces);
-    float c00 = mix(u.v[face_index(dims, axis, i0)], u.v[face_index(dims, axis, ivec3(i1.x, i0.y, i0.z))], t.x);
-    float c10 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i1.y, i0.z))],
-                    u.v[face_index(dims, axis, ivec3(i1.x, i1.y, i0.z))], t.x);
-    float c01 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i0.y, i1.z))],
-                    u.v[face_index(dims, axis, ivec3(i1.x, i0.y, i1.z))], t.x);
-    float c11 = mix(u.v[face_index(dims, axis, ivec3(i0.x, i1.y, i1.z))], u.v[face_index(dims, axis, i1)], t.x);
+    FloatsRef v = FloatsRef(values);
+    float c00 = mix(v.v[base + cell_index(m, i0)], v.v[base + cell_index(m, ivec3(i1.x, i0.y, i0.z))], t.x);
+    float c10 = mix(v.v[base + cell_index(m, ivec3(i0.x, i1.y, i0.z))],
+                    v.v[base + cell_index(m, ivec3(i1.x, i1.y, i0.z))], t.x);
+    float c01 = mix(v.v[base + cell_index(m, ivec3(i0.x, i0.y, i1.z))],
+                    v.v[base + cell_index(m, ivec3(i1.x, i0.y, i1.z))], t.x);
+    float c11 = mix(v.v[base + cell_index(m, ivec3(i0.x, i1.y, i1.z))], v.v[base + cell_index(m, i1)], t.x);
     return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+}
+
+/// Component `axis` at world point x of the face field `faces` of a grid of `dims` cells of `h` m from
+/// `origin`: trilinear on the component's lattice, clamped to it (the caller keeps x inside the grid).
+float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint axis, vec3 x) {
+    vec3 q = (x - origin) / h - vec3(0.5) + 0.5 * vec3(axis_unit(axis));
+    return lattice_value(faces, face_base(dims, axis), dims + axis_unit(axis), q);
 }
 
 /// The blend's width in cells at world point x, by how open the next coarser cascade (SolverBindings at
@@ -135,19 +141,7 @@ float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint a
 /// laid under the ground, or a border beside a hill, then keeps the finer cascade's air by the solid.
 float cascade_blend_cells(uint64_t coarser, vec3 x) {
     BindingsRef r = BindingsRef(coarser);
-    ivec3 dims = r.b.dims;
-    vec3 q = clamp((x - r.b.origin) / r.b.h - vec3(0.5), vec3(0.0), vec3(dims - ivec3(1)));
-    ivec3 i0 = min(ivec3(floor(q)), max(dims - ivec3(2), ivec3(0)));
-    ivec3 i1 = min(i0 + ivec3(1), dims - ivec3(1));
-    vec3 t = q - vec3(i0);
-    FloatsRef solid = FloatsRef(r.b.cell_solid);
-    float c00 = mix(solid.v[cell_index(dims, i0)], solid.v[cell_index(dims, ivec3(i1.x, i0.y, i0.z))], t.x);
-    float c10 = mix(solid.v[cell_index(dims, ivec3(i0.x, i1.y, i0.z))],
-                    solid.v[cell_index(dims, ivec3(i1.x, i1.y, i0.z))], t.x);
-    float c01 = mix(solid.v[cell_index(dims, ivec3(i0.x, i0.y, i1.z))],
-                    solid.v[cell_index(dims, ivec3(i1.x, i0.y, i1.z))], t.x);
-    float c11 = mix(solid.v[cell_index(dims, ivec3(i0.x, i1.y, i1.z))], solid.v[cell_index(dims, i1)], t.x);
-    float open = 1.0 - mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+    float open = 1.0 - lattice_value(r.b.cell_solid, 0, r.b.dims, (x - r.b.origin) / r.b.h - vec3(0.5));
     float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
     return 1.0 + (kCascadeBlendCells - 1.0) * share;
 }
