@@ -18,40 +18,26 @@ vec3 wind_at(vec3 world) {
     float left = 1.0;
     gust_blend_cascade(wind_textures[0], frame.wind_world_to_texture[0], wind_textures[1],
                        frame.wind_world_to_texture[1], world, sum, left);
-    if (left > 0.0)
-        gust_blend_cascade(wind_textures[1], frame.wind_world_to_texture[1], wind_textures[2],
-                           frame.wind_world_to_texture[2], world, sum, left);
-    if (left > 0.0)
-        gust_blend_cascade(wind_textures[2], frame.wind_world_to_texture[2], wind_textures[3],
-                           frame.wind_world_to_texture[3], world, sum, left);
-    if (left > 0.0)
-        gust_blend_cascade(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
+    gust_blend_cascade(wind_textures[1], frame.wind_world_to_texture[1], wind_textures[2],
+                       frame.wind_world_to_texture[2], world, sum, left);
+    gust_blend_cascade(wind_textures[2], frame.wind_world_to_texture[2], wind_textures[3],
+                       frame.wind_world_to_texture[3], world, sum, left);
+    gust_blend_cascade(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
     return sum + left * frame.ambient.xyz;
 }
 
-/// Cascade k's share of the wind and the air fraction (rgb: m/s, a: gust's 1 − solid fraction) at
-/// `world`, blended as wind_at blends the wind (`coarser`: the next coarser slot, read in the blend only;
-/// the coarsest slot's own).
-#define SAMPLE_BLEND_TEXEL(k, coarser)                                                                       \
-    if (left > 0.0) {                                                                                        \
-        vec3 uvw = (frame.wind_world_to_texture[k] * vec4(world, 1.0)).xyz;                                  \
-        vec3 cells = vec3(textureSize(wind_textures[k], 0));                                                 \
-        float w = k == GUST_CASCADES - 1 ? gust_cascade_weight(uvw, cells, true)                              \
-                                         : gust_cascade_weight(uvw, cells, wind_textures[coarser],           \
-                                                               frame.wind_world_to_texture[coarser], world); \
-        if (w > 0.0) sum += left * w * textureLod(wind_textures[k], uvw, 0.0);                               \
-        left *= 1.0 - w;                                                                                     \
-    }
-
-/// The wind (rgb, m/s) and the air fraction (a) at a world point in one pass over the cascades: the
-/// ambient wind and open air beyond the coarsest.
+/// The wind (rgb, m/s) and the air fraction (a) at a world point in one pass over the cascades, as wind_at:
+/// the ambient wind and open air beyond the coarsest.
 vec4 wind_and_air_at(vec3 world) {
     vec4 sum = vec4(0.0);
     float left = 1.0;
-    SAMPLE_BLEND_TEXEL(0, 1)
-    SAMPLE_BLEND_TEXEL(1, 2)
-    SAMPLE_BLEND_TEXEL(2, 3)
-    SAMPLE_BLEND_TEXEL(3, 3)
+    gust_blend_texel(wind_textures[0], frame.wind_world_to_texture[0], wind_textures[1],
+                     frame.wind_world_to_texture[1], world, sum, left);
+    gust_blend_texel(wind_textures[1], frame.wind_world_to_texture[1], wind_textures[2],
+                     frame.wind_world_to_texture[2], world, sum, left);
+    gust_blend_texel(wind_textures[2], frame.wind_world_to_texture[2], wind_textures[3],
+                     frame.wind_world_to_texture[3], world, sum, left);
+    gust_blend_texel(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
     return sum + left * vec4(frame.ambient.xyz, 1.0);
 }
 

@@ -48,23 +48,48 @@ float gust_cascade_weight(vec3 uvw, vec3 cells, bool coarsest) {
 
 /// The share at texture coordinates `uvw` of a cascade of `cells` cells (not the coarsest) at world point
 /// `world`, with `coarser` the next coarser cascade: its open fraction is read only inside the blend.
-float gust_cascade_weight(vec3 uvw, vec3 cells, sampler3D coarser, mat4 coarser_world_to_texture, vec3 world) {
+float gust_cascade_weight(vec3 uvw, vec3 cells, sampler3D coarser, mat4 coarser_world_to_texture,
+                          vec3 world) {
     float w = gust_cascade_weight(uvw, cells, false);
     if (w <= 0.0 || w >= 1.0) return w;
     vec3 coarser_uvw = (coarser_world_to_texture * vec4(world, 1.0)).xyz;
     return gust_cascade_weight(uvw, cells, false, gust_blend_cells(textureLod(coarser, coarser_uvw, 0.0).a));
 }
 
-/// Adds cascade `wind`'s share at world point `world` to `sum` (m/s), taken from what the finer cascades
-/// left (`left`: 1 before the finest), with `coarser` the next coarser cascade.
-void gust_blend_cascade(sampler3D wind, mat4 world_to_texture, sampler3D coarser,
-                        mat4 coarser_world_to_texture, vec3 world, inout vec3 sum, inout float left) {
+/// Adds cascade `wind`'s whole texel at world point `world` to `sum`, the wind (xyz, m/s) and the open
+/// fraction (w: 1 − the solid fraction), its share taken from what the finer cascades left (`left`: 1 before
+/// the finest), with `coarser` the next coarser cascade. Once the finer cascades took everything, nothing
+/// is read.
+void gust_blend_texel(sampler3D wind, mat4 world_to_texture, sampler3D coarser, mat4 coarser_world_to_texture,
+                      vec3 world, inout vec4 sum, inout float left) {
+    if (left <= 0.0) return;
     vec3 uvw = (world_to_texture * vec4(world, 1.0)).xyz;
     float w = gust_cascade_weight(uvw, vec3(textureSize(wind, 0)), coarser, coarser_world_to_texture, world);
     if (w <= 0.0) return;
     // An explicit level: no derivatives are needed, so it may run in any control flow or stage.
-    sum += left * w * textureLod(wind, uvw, 0.0).xyz;
+    sum += left * w * textureLod(wind, uvw, 0.0);
     left *= 1.0 - w;
+}
+
+/// gust_blend_texel for the coarsest cascade (`coarsest` true); after it, add left · (ambient, 1). With
+/// `coarsest` false it blends a cascade as if the next coarser one were open everywhere (GUST_BLEND_CELLS
+/// wide): pass the coarser cascade, as above, to answer as gust does.
+void gust_blend_texel(sampler3D wind, mat4 world_to_texture, bool coarsest, vec3 world, inout vec4 sum,
+                      inout float left) {
+    if (left <= 0.0) return;
+    vec3 uvw = (world_to_texture * vec4(world, 1.0)).xyz;
+    float w = gust_cascade_weight(uvw, vec3(textureSize(wind, 0)), coarsest);
+    if (w <= 0.0) return;
+    sum += left * w * textureLod(wind, uvw, 0.0);
+    left *= 1.0 - w;
+}
+
+/// Adds cascade `wind`'s share of the wind at world point `world` to `sum` (m/s), as gust_blend_texel.
+void gust_blend_cascade(sampler3D wind, mat4 world_to_texture, sampler3D coarser,
+                        mat4 coarser_world_to_texture, vec3 world, inout vec3 sum, inout float left) {
+    vec4 texel_sum = vec4(sum, 0.0);
+    gust_blend_texel(wind, world_to_texture, coarser, coarser_world_to_texture, world, texel_sum, left);
+    sum = texel_sum.xyz;
 }
 
 /// Adds the coarsest cascade's share (`coarsest` true) as above; after it, add left · ambient. With
@@ -72,12 +97,9 @@ void gust_blend_cascade(sampler3D wind, mat4 world_to_texture, sampler3D coarser
 /// wide): pass the coarser cascade, as above, to answer as gust does.
 void gust_blend_cascade(sampler3D wind, mat4 world_to_texture, bool coarsest, vec3 world, inout vec3 sum,
                         inout float left) {
-    vec3 uvw = (world_to_texture * vec4(world, 1.0)).xyz;
-    float w = gust_cascade_weight(uvw, vec3(textureSize(wind, 0)), coarsest);
-    if (w > 0.0) {
-        sum += left * w * textureLod(wind, uvw, 0.0).xyz;
-        left *= 1.0 - w;
-    }
+    vec4 texel_sum = vec4(sum, 0.0);
+    gust_blend_texel(wind, world_to_texture, coarsest, world, texel_sum, left);
+    sum = texel_sum.xyz;
 }
 
 #ifdef GUST_CASCADES
