@@ -7,6 +7,7 @@
 #include <array>
 #include <bit>
 #include <cstring>
+#include <optional>
 
 namespace gust {
 
@@ -66,16 +67,15 @@ std::uint64_t cells_of(glm::ivec3 dims) {
 }
 
 /// A shader once per mode (SolverPush::mode) the solver uses, the mode its specialization constant 0 and
-/// `more` the constants after it: a compiler then keeps only that mode's code, where a CPU device would
-/// execute every mode's.
+/// `constant1`, when given, its constant 1: a compiler then keeps only that mode's code, where a CPU device
+/// would execute every mode's.
 Status create_modes(gpu::Context& ctx, std::span<gpu::Pipeline> out, std::span<const std::uint32_t> code,
                     const char* name, std::span<const std::uint32_t> modes,
-                    std::span<const std::uint32_t> more) {
+                    std::optional<std::uint32_t> constant1 = std::nullopt) {
     for (const std::uint32_t mode : modes) {
-        std::array<std::uint32_t, 2> constants{mode, 0};
-        std::copy(more.begin(), more.end(), constants.begin() + 1);
+        const std::array<std::uint32_t, 2> constants{mode, constant1.value_or(0u)};
         auto pipeline = gpu::Pipeline::compute(ctx, name, code, sizeof(SolverPush),
-                                               std::span(constants).first(1 + more.size()));
+                                               std::span(constants).first(constant1 ? 2 : 1));
         if (!pipeline) return pipeline.status();
         out[mode] = std::move(*pipeline);
     }
@@ -94,8 +94,7 @@ Status create_advect(gpu::Context& ctx, const SolverDesc& desc, bool nested,
         desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
         : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
                                                       : std::span<const std::uint32_t>(kForcesMode);
-    const std::uint32_t more[] = {nested ? 1u : 0u};
-    return create_modes(ctx, out, words(advect_comp), "gust advect", modes, more);
+    return create_modes(ctx, out, words(advect_comp), "gust advect", modes, nested ? 1u : 0u);
 }
 
 } // namespace
@@ -171,8 +170,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
                                                       : std::span<const std::uint32_t>();
     if (Status s = create_advect(ctx, desc, desc.nested, m.advect); !s) return s;
     m.advect_nested = desc.nested;
-    if (Status s = create_modes(ctx, m.smooth, words(smooth_comp), "gust smooth", smooth_modes, {}); !s)
-        return s;
+    if (Status s = create_modes(ctx, m.smooth, words(smooth_comp), "gust smooth", smooth_modes); !s) return s;
     m.coarse_level = solver->levels_ - 1;
     while (m.coarse_level > 0 && cells_of(m.levels[m.coarse_level - 1].dims) <= shaderio::kCoarseCells)
         --m.coarse_level;
