@@ -9,25 +9,11 @@ layout(set = 0, binding = 1) uniform sampler3D wind_textures[GUST_CASCADES]; // 
 layout(set = 0, binding = 2, std430) readonly buffer Seeds { FoliageSeed seeds[]; };
 layout(set = 0, binding = 3, std430) buffer States { FoliageState states[]; };
 
-/// gust's wind at a world point (m/s): the finest cascade that holds it, blended into the coarser ones as
-/// gust's own answers are; beyond the coarsest, the ambient wind. gust_wind's sum, cascade by cascade, but
-/// a coarser cascade is read only while the finer ones leave it a share: in the middle of the finest
-/// cascade (the village, its grass) that is one texture read instead of four.
-vec3 wind_at(vec3 world) {
-    vec3 sum = vec3(0.0);
-    float left = 1.0;
-    gust_blend_cascade(wind_textures[0], frame.wind_world_to_texture[0], wind_textures[1],
-                       frame.wind_world_to_texture[1], world, sum, left);
-    gust_blend_cascade(wind_textures[1], frame.wind_world_to_texture[1], wind_textures[2],
-                       frame.wind_world_to_texture[2], world, sum, left);
-    gust_blend_cascade(wind_textures[2], frame.wind_world_to_texture[2], wind_textures[3],
-                       frame.wind_world_to_texture[3], world, sum, left);
-    gust_blend_cascade(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
-    return sum + left * frame.ambient.xyz;
-}
-
-/// The wind (rgb, m/s) and the air fraction (a) at a world point in one pass over the cascades, as wind_at:
-/// the ambient wind and open air beyond the coarsest.
+/// The wind (rgb, m/s) and the air fraction (a) at a world point: the finest cascade that holds it, blended
+/// into the coarser ones as gust's own answers are; beyond the coarsest, the ambient wind and open air.
+/// gust_wind's sum, cascade by cascade, but a coarser cascade is read only while the finer ones leave it a
+/// share: in the middle of the finest cascade (the village, its grass) that is one texture read instead of
+/// four.
 vec4 wind_and_air_at(vec3 world) {
     vec4 sum = vec4(0.0);
     float left = 1.0;
@@ -40,6 +26,9 @@ vec4 wind_and_air_at(vec3 world) {
     gust_blend_texel(wind_textures[3], frame.wind_world_to_texture[3], true, world, sum, left);
     return sum + left * vec4(frame.ambient.xyz, 1.0);
 }
+
+/// gust's wind at a world point (m/s).
+vec3 wind_at(vec3 world) { return wind_and_air_at(world).xyz; }
 
 /// Sun and sky on a surface of albedo `albedo` with normal `n`, faded into haze with distance.
 vec3 shade(vec3 albedo, vec3 n, vec3 world) {
