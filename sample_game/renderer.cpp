@@ -13,6 +13,7 @@
 #include <gust_shaders/lines_vert.h>
 #include <gust_shaders/mesh_frag.h>
 #include <gust_shaders/mesh_vert.h>
+#include <gust_shaders/slice_comp.h>
 #include <gust_shaders/slice_frag.h>
 #include <gust_shaders/slice_vert.h>
 #include <gust_shaders/voxels_frag.h>
@@ -33,6 +34,8 @@ static_assert(sizeof(io::DrawPush) == 96);
 static_assert(sizeof(io::FrameUniforms) == (2 + io::kWindCascades) * 64 + 8 * 16);
 static_assert(sizeof(io::VoxelFace) == 8);
 static_assert(sizeof(io::FoliageSeed) == 32 && sizeof(io::FoliageState) == 16);
+/// The descriptor set's bindings (sample_common.glsl, slice.comp, slice.frag).
+constexpr std::uint32_t kBindings = 7;
 
 template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
     return code;
@@ -87,24 +90,27 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
 
     const VkShaderStageFlags all =
         VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-    VkDescriptorSetLayoutBinding bindings[5] = {
+    VkDescriptorSetLayoutBinding bindings[kBindings] = {
         {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, all, nullptr},
         {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, io::kWindCascades, all, nullptr},
         {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
         {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, all, nullptr},
+        {5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, all, nullptr},
+        {6, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, all, nullptr},
     };
     VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    set_info.bindingCount = 5;
+    set_info.bindingCount = kBindings;
     set_info.pBindings = bindings;
     check(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout_),
           "vkCreateDescriptorSetLayout");
-    VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, io::kWindCascades},
-                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3}};
+    VkDescriptorPoolSize sizes[4] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, io::kWindCascades + 1},
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3},
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1}};
     VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     pool_info.maxSets = 1;
-    pool_info.poolSizeCount = 3;
+    pool_info.poolSizeCount = 4;
     pool_info.pPoolSizes = sizes;
     check(vkCreateDescriptorPool(device, &pool_info, nullptr, &pool_), "vkCreateDescriptorPool");
     VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -130,24 +136,25 @@ Renderer::Renderer(VulkanHost& vk, const World& world, VkFormat colour_format, V
     VkShaderModule arrows_v = vk_.create_shader(spirv(arrows_vert));
     VkShaderModule slice_v = vk_.create_shader(spirv(slice_vert)),
                    slice_f = vk_.create_shader(spirv(slice_frag));
-    VkShaderModule foliage = vk_.create_shader(spirv(foliage_comp));
+    VkShaderModule foliage = vk_.create_shader(spirv(foliage_comp)),
+                   slice_fill = vk_.create_shader(spirv(slice_comp));
     mesh_ = graphics(mesh_v, mesh_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, true, false, true, false);
     grass_ = graphics(grass_v, grass_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
     voxels_ = graphics(voxels_v, voxels_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, true, false);
     lines_ = graphics(lines_v, lines_f, VK_PRIMITIVE_TOPOLOGY_LINE_LIST, false, true, false, false);
     arrows_ = graphics(arrows_v, lines_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST, false, false, false, false);
     slice_ = graphics(slice_v, slice_f, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, false, false, false, true);
-    VkComputePipelineCreateInfo compute{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    compute.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-    compute.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    compute.stage.module = foliage;
-    compute.stage.pName = "main";
-    compute.layout = layout_;
-    check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &compute, nullptr, &foliage_),
-          "vkCreateComputePipelines");
+    foliage_ = compute(foliage);
+    slice_fill_ = compute(slice_fill);
     for (VkShaderModule m : {mesh_v, mesh_f, grass_v, grass_f, voxels_v, voxels_f, lines_v, lines_f, arrows_v,
-                             slice_v, slice_f, foliage})
+                             slice_v, slice_f, foliage, slice_fill})
         vkDestroyShaderModule(device, m, nullptr);
+    VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    sampler.magFilter = sampler.minFilter = VK_FILTER_LINEAR;
+    sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    sampler.addressModeU = sampler.addressModeV = sampler.addressModeW =
+        VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    check(vkCreateSampler(device, &sampler, nullptr, &slice_sampler_), "vkCreateSampler");
 
     uniforms_ = vk_.create_buffer(sizeof(io::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true);
     const std::vector<FoliageSeed>& seeds = world.foliage();
@@ -188,12 +195,27 @@ Renderer::~Renderer() {
     }
     for (Buffer* b : {&uniforms_, &seeds_, &states_, &lines_buffer_, &faces_})
         vk_.destroy(*b);
-    for (VkPipeline p : {mesh_, grass_, voxels_, lines_, arrows_, slice_, foliage_})
+    vk_.destroy(slice_image_);
+    vkDestroySampler(device, slice_sampler_, nullptr);
+    for (VkPipeline p : {mesh_, grass_, voxels_, lines_, arrows_, slice_, foliage_, slice_fill_})
         vkDestroyPipeline(device, p, nullptr);
     vkDestroyPipelineLayout(device, layout_, nullptr);
     vkDestroyDescriptorPool(device, pool_, nullptr);
     vkDestroyDescriptorSetLayout(device, set_layout_, nullptr);
     vkDestroyRenderPass(device, pass_, nullptr);
+}
+
+VkPipeline Renderer::compute(VkShaderModule shader) {
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = shader;
+    info.stage.pName = "main";
+    info.layout = layout_;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    check(vkCreateComputePipelines(vk_.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline),
+          "vkCreateComputePipelines");
+    return pipeline;
 }
 
 VkPipeline Renderer::graphics(VkShaderModule vert, VkShaderModule frag, VkPrimitiveTopology topology,
@@ -283,8 +305,10 @@ void Renderer::write_descriptors() {
         wind[k] = {t.sampler, t.view, t.layout};
     }
     VkDescriptorBufferInfo faces{faces_.buffer, 0, VK_WHOLE_SIZE};
-    VkWriteDescriptorSet writes[5]{};
-    for (std::uint32_t i = 0; i < 5; ++i) {
+    VkDescriptorImageInfo slice_out{VK_NULL_HANDLE, slice_image_.view, VK_IMAGE_LAYOUT_GENERAL};
+    VkDescriptorImageInfo slice_in{slice_sampler_, slice_image_.view, VK_IMAGE_LAYOUT_GENERAL};
+    VkWriteDescriptorSet writes[kBindings]{};
+    for (std::uint32_t i = 0; i < kBindings; ++i) {
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         writes[i].dstSet = set_;
         writes[i].dstBinding = i;
@@ -301,7 +325,11 @@ void Renderer::write_descriptors() {
     writes[3].pBufferInfo = &states;
     writes[4].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[4].pBufferInfo = &faces;
-    vkUpdateDescriptorSets(vk_.device(), 5, writes, 0, nullptr);
+    writes[5].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    writes[5].pImageInfo = &slice_out;
+    writes[6].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    writes[6].pImageInfo = &slice_in;
+    vkUpdateDescriptorSets(vk_.device(), kBindings, writes, 0, nullptr);
 }
 
 void Renderer::set_wind(std::span<const gust::WindTexture> textures, const gust::WindDomain& domain) {
@@ -309,6 +337,27 @@ void Renderer::set_wind(std::span<const gust::WindTexture> textures, const gust:
         throw std::runtime_error("the sample's shaders read 1 to 4 wind cascades");
     wind_ = textures;
     domain_ = domain;
+    // The slice's texels tile the coarsest cascade, each the finest cell or, where that would pass
+    // kSliceTexelsMax along a side, a power of two of them (which divides the coarsest cell, so the
+    // texels still tile it exactly).
+    const std::uint32_t finest_per_coarsest = static_cast<std::uint32_t>(
+        std::lround(std::pow(static_cast<float>(domain.ratio), static_cast<float>(textures.size() - 1))));
+    std::uint32_t finest_per_texel = 1;
+    while (std::max(domain.cells[0], domain.cells[2]) * finest_per_coarsest / finest_per_texel >
+           io::kSliceTexelsMax)
+        finest_per_texel *= 2;
+    vk_.destroy(slice_image_);
+    slice_image_ =
+        vk_.create_image(VK_FORMAT_R16G16B16A16_SFLOAT,
+                         {domain.cells[0] * finest_per_coarsest / finest_per_texel,
+                          domain.cells[2] * finest_per_coarsest / finest_per_texel, 1},
+                         VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+    // GENERAL for good: slice.comp writes it and slice.frag samples it every frame the slice shows.
+    vk_.submit_now([&](VkCommandBuffer cmd) {
+        transition(cmd, slice_image_.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                   VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                   VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+    });
     write_descriptors();
 }
 
@@ -434,6 +483,7 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
 
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout_, 0, 1, &set_, 0, nullptr);
+    bool computed = false;
     if (view.dt > 0.0f && foliage_count_ > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, foliage_);
         const io::FoliagePush push{view.dt, foliage_count_, kFoliageDrag, 0.0f};
@@ -442,11 +492,22 @@ void Renderer::begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent,
                                VK_SHADER_STAGE_COMPUTE_BIT,
                            0, sizeof(push), &push);
         vkCmdDispatch(cmd, (foliage_count_ + io::kFoliageGroupSize - 1) / io::kFoliageGroupSize, 1, 1);
+        computed = true;
+    }
+    if (views.slice) {
+        // Every cascade's blend once per texel here, rather than once per fragment in slice.frag.
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, slice_fill_);
+        vkCmdDispatch(cmd, (slice_image_.extent.width + io::kSliceGroupSize - 1) / io::kSliceGroupSize,
+                      (slice_image_.extent.height + io::kSliceGroupSize - 1) / io::kSliceGroupSize, 1);
+        computed = true;
+    }
+    if (computed) {
         VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
         barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
         barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
-                             0, 1, &barrier, 0, nullptr, 0, nullptr);
+        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                             VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0,
+                             1, &barrier, 0, nullptr, 0, nullptr);
     }
 
     VkClearValue clears[2]{};

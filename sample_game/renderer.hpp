@@ -73,6 +73,7 @@ class Renderer {
     void begin(VkCommandBuffer cmd, VkImageView target, VkExtent2D extent, const FrameView& view,
                const Views& views);
     VkFramebuffer framebuffer(VkImageView target, VkExtent2D extent);
+    VkPipeline compute(VkShaderModule shader);
     VkPipeline graphics(VkShaderModule vert, VkShaderModule frag, VkPrimitiveTopology topology,
                         bool mesh_input, bool line_input, bool depth_write, bool blend);
     void write_descriptors();
@@ -85,7 +86,7 @@ class Renderer {
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     VkPipeline mesh_ = VK_NULL_HANDLE, grass_ = VK_NULL_HANDLE, voxels_ = VK_NULL_HANDLE,
                lines_ = VK_NULL_HANDLE, arrows_ = VK_NULL_HANDLE, slice_ = VK_NULL_HANDLE,
-               foliage_ = VK_NULL_HANDLE;
+               foliage_ = VK_NULL_HANDLE, slice_fill_ = VK_NULL_HANDLE;
     Buffer uniforms_, seeds_, states_, lines_buffer_;
     std::uint32_t line_count_ = 0;
     std::uint32_t foliage_count_ = 0, grass_count_ = 0;
@@ -95,6 +96,8 @@ class Renderer {
     std::uint32_t face_count_ = 0;
     gust::VoxelGridInfo voxel_grid_{};
     std::span<const gust::WindTexture> wind_;
+    Image slice_image_; ///< the T view's wind and air over the coarsest cascade (slice.comp)
+    VkSampler slice_sampler_ = VK_NULL_HANDLE;
     gust::WindDomain domain_{};
     struct MeshBuffers {
         Buffer vertices, indices;

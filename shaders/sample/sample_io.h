@@ -11,6 +11,10 @@ GUST_CONST uint kFoliageGroupSize = 64;
 GUST_CONST uint kBladeVertices = 3;
 /// Vertices of one wind arrow: a shaft of two triangles and a head.
 GUST_CONST uint kArrowVertices = 9;
+/// Workgroup edge of the slice's fill (slice.comp): kSliceGroupSize² texels a group.
+GUST_CONST uint kSliceGroupSize = 8;
+/// Most texels along each side of the slice's image.
+GUST_CONST uint kSliceTexelsMax = 1024;
 
 /// Wind textures the shaders read, finest first (GUST_CASCADES in sample_common.glsl): a System with fewer
 /// cascades has the slots past its coarsest bound to its coarsest, which leaves gust_wind's answer as it
