@@ -252,19 +252,23 @@ Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, Frame
     if (!world) return device_failure(world.status());
     WindStats wind = solver_->stats_from(bytes + ReadbackLayout::wind());
     wind.ms = solver_->timings(slot.frame);
+    answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
+    stats_from(*world, wind, work, stats);
     if (slot.cascade >= 0) {
         // A coarser cascade's pools grow as the finest one's do; its stats stay its own, but a diverged
-        // solve there is said.
+        // solve there is said, and its passes' times join the frame's under "cascade_".
         const Cascade& c = coarser_[std::size_t(slot.cascade)];
-        if (auto coarse = c.world->collect(bytes + ReadbackLayout::cascade_world()); !coarse)
-            return device_failure(coarse.status());
+        auto coarse = c.world->collect(bytes + ReadbackLayout::cascade_world());
+        if (!coarse) return device_failure(coarse.status());
         if (c.solver->stats_from(bytes + ReadbackLayout::cascade_wind()).diverged)
             log(LogLevel::Warning, "cascade " + std::to_string(slot.cascade + 1) +
                                        ": the pressure solve diverged and was stopped, so its wind was not "
                                        "projected (docs/solver.md, \"Stability\")");
+        for (const auto& [pass, ms] : coarse->ms)
+            stats.ms.emplace_back("cascade_", ms).first.append(pass);
+        for (const auto& [pass, ms] : c.solver->timings(slot.frame))
+            stats.ms.emplace_back("cascade_wind_", ms).first.append(pass);
     }
-    answers = reinterpret_cast<const glm::vec3*>(bytes + ReadbackLayout::answers());
-    stats_from(*world, wind, work, stats);
     return {};
 }
 

@@ -122,6 +122,34 @@ Vec3 fan_nest_origin(int k) {
     return {-8.0f * h, 4.0f - 4.0f * h, -8.0f * h};
 }
 
+/// A frame's GPU time is every pass's: a coarser cascade's passes join the stats under "cascade_" in the
+/// frames it steps, and only in those.
+TEST(Cascades, aCoarserCascadesPassesAreTimedInTheFramesItSteps) {
+    Watch watch;
+    std::unique_ptr<System> system = three_cascades(watch, nullptr);
+    ASSERT_TRUE(system);
+    ASSERT_TRUE(system->set_ambient(kNestAmbient));
+    int with = 0, without = 0;
+    for (int f = 0; f < 8; ++f) {
+        ASSERT_TRUE(system->step(0.1f));
+        bool finest = false, coarser = false;
+        for (const auto& [pass, ms] : system->stats().ms) {
+            EXPECT_TRUE(std::isfinite(ms) && ms >= 0.0) << pass << " " << ms;
+            finest |= pass == "wind_pressure";
+            if (pass == "cascade_wind_pressure") {
+                coarser = true;
+                EXPECT_GT(ms, 0.0) << "frame " << f;
+            }
+        }
+        EXPECT_TRUE(finest) << "the finest cascade steps every frame, frame " << f;
+        ++(coarser ? with : without);
+    }
+    // The two coarser cascades take their first steps in frames 0 and 1; the second steps again every 4th.
+    EXPECT_GE(with, 3);
+    EXPECT_GE(without, 3);
+    EXPECT_EQ(watch.errors, 0) << watch.last;
+}
+
 TEST_F(FanNest, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
     const Vec3 points[] = {{20.0f, 4.0f, 0.0f}, {0.0f, 4.0f, 0.0f}, {120.0f, 4.0f, 0.0f}};
     std::array<Vec3, 3> wind{};

@@ -339,7 +339,8 @@ struct FrameStats {
     /// Tree nodes per level 1..depth−1, then leaf bricks (the root is level 0), in the System's host memory.
     using Counts = std::pmr::vector<std::uint64_t>;
     Counts nodes_per_level;
-    /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate).
+    /// GPU milliseconds per pass, in the System's host memory (Hooks::allocate). In a frame where a coarser
+    /// cascade steps, its passes follow, named with the prefix "cascade_".
     using Timings = std::pmr::vector<std::pair<std::pmr::string, double>>;
     Timings ms;
 };
