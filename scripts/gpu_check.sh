@@ -2,7 +2,8 @@
 # The GPU check (docs/gpu-check.md): runs on a lent GPU machine, from the repository's root, what
 # scripts/pack_gpu_check.sh packed here, compiling nothing: the test suites with the validation layer, the
 # solver bench (32x16x32, 64^3 and 128^3, to 1e-3 and at 2 V-cycles a frame), the voxelize bench (the
-# instanced dragon at 512^3), the tree bench and the sample game headless at --quality high for 300 frames.
+# instanced dragon at 512^3), the tree bench, the cascades bench (finest grid 64x32x64 cells of 0.5 m, up to
+# 4 cascades of ratio 4) and the sample game headless at --quality high for 300 frames.
 # The benches write their blocks into a copy of docs/results.md (`-gpu` blocks on a GPU). Everything goes
 # to $OUT (default out/gpu-check): results.md, gpu_check.log, tests.log, sample.log and summary.txt.
 #
@@ -179,20 +180,23 @@ if [[ "$small" == 1 ]]; then
     solver_args=(--sizes 16 --repeat 1 --solve-max-cells 1 --frame-cycles 2 --tolerance 1e-3 --budget 5)
     voxelize_args=(--quick --res "32,64" --repeat 1)
     tree_args=(--quick --repeat 1 --frames 2)
+    cascades_args=(--frames 8)
     sample_args=(--quality low --frames 3 --cells "16,8,16")
 else
     solver_args=(--sizes 32x16x32 64 128 --repeat 5 --budget 20 --solve-max-cells 2097152 --frame-cycles 2
         --tolerance 1e-3)
     voxelize_args=(--res 512 --repeat 3)
     tree_args=(--repeat 5)
+    cascades_args=(--cells 64,32,64 --cell-size 0.5)
     sample_args=(--quality high --frames 300)
 fi
 
-# Caps: 170 + 110 + 70 + 50 + 60 s; each step keeps the later ones' caps in reserve.
-step tests 170 290 "$tests_log" bash -c "run_tests $((160 * scale))"
-step solver 110 180 "" env -C "$work" build/bench/gust_bench_solver "${solver_args[@]}" --write docs/results.md
-step voxelize 70 110 "" env -C "$work" build/bench/gust_bench_voxelize "${voxelize_args[@]}" --write docs/results.md
-step tree 50 60 "" env -C "$work" build/bench/gust_bench_tree "${tree_args[@]}" --write docs/results.md
+# Caps: 160 + 100 + 60 + 50 + 40 + 60 s; each step keeps the later ones' caps in reserve.
+step tests 160 310 "$tests_log" bash -c "run_tests $((150 * scale))"
+step solver 100 210 "" env -C "$work" build/bench/gust_bench_solver "${solver_args[@]}" --write docs/results.md
+step voxelize 60 150 "" env -C "$work" build/bench/gust_bench_voxelize "${voxelize_args[@]}" --write docs/results.md
+step tree 50 100 "" env -C "$work" build/bench/gust_bench_tree "${tree_args[@]}" --write docs/results.md
+step cascades 40 60 "" env -C "$work" build/bench/gust_bench_cascades "${cascades_args[@]}" --write docs/results.md
 rm -rf "$work/sample"
 step sample 60 0 "$out/sample.log" "$bin/sample_game/gust_sample" --headless --no-video --png-every 100000 \
     --out "$work/sample" "${sample_args[@]}"

@@ -32,6 +32,7 @@ binaries=(
     bench/gust_bench_solver
     bench/gust_bench_voxelize
     bench/gust_bench_tree
+    bench/gust_bench_cascades
     cli/gust
     sample_game/gust_sample
 )
