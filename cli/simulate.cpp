@@ -132,6 +132,7 @@ nlohmann::ordered_json stats_line(const FrameStats& st, double t) {
         ms[std::string(pass)] = value;
     line["ms"] = ms;
     line["dispatches"] = st.dispatches;
+    line["stages"] = st.stages;
     line["submissions"] = st.submissions;
     line["waits"] = st.waits;
     line["divergence_before"] = st.divergence_before;

@@ -450,6 +450,7 @@ void Game::write_stats(std::ofstream& stats, std::uint64_t frame, double frame_m
     line["converged"] = s.converged;
     line["diverged"] = s.diverged;
     line["dispatches"] = s.dispatches;
+    line["stages"] = s.stages;
     line["submissions"] = s.submissions;
     line["waits"] = s.waits;
     nlohmann::json ms = nlohmann::json::object();

@@ -168,6 +168,7 @@ void barrier(const Context& ctx, VkCommandBuffer cmd) {
     dep.memoryBarrierCount = 1;
     dep.pMemoryBarriers = &mb;
     ctx.vk().vkCmdPipelineBarrier2(cmd, &dep);
+    ctx.count_barrier();
 }
 
 void compute_barrier(const Context& ctx, VkCommandBuffer cmd) {
@@ -181,6 +182,7 @@ void compute_barrier(const Context& ctx, VkCommandBuffer cmd) {
     dep.memoryBarrierCount = 1;
     dep.pMemoryBarriers = &mb;
     ctx.vk().vkCmdPipelineBarrier2(cmd, &dep);
+    ctx.count_barrier();
 }
 
 } // namespace gust::gpu

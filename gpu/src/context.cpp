@@ -203,6 +203,7 @@ Status Context::begin_one_time(VkCommandBuffer& cmd) {
         cmd = VK_NULL_HANDLE;
         return Status::failure(std::string("vkBeginCommandBuffer failed: ") + to_string(r));
     }
+    count_barrier();
     if (!owns_device_) barrier(*this, cmd);
     return {};
 }

@@ -67,6 +67,7 @@ void Image::transition(VkCommandBuffer cmd, VkImageLayout layout) {
     dep.imageMemoryBarrierCount = 1;
     dep.pImageMemoryBarriers = &b;
     ctx_->vk().vkCmdPipelineBarrier2(cmd, &dep);
+    ctx_->count_barrier();
     layout_ = layout;
 }
 

@@ -162,7 +162,7 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         if (!created) return device_failure(created.status());
         slot.snapshot = std::move(*created);
     }
-    const std::uint64_t dispatched = ctx_->work().dispatches;
+    const gpu::WorkCounts before = ctx_->work();
 
     // Inputs: whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
     // comes before this frame's work; then the meshes posed from bones are skinned into their positions.
@@ -213,7 +213,7 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         std::memcpy(slot.points.mapped(), in.points.data(), point_bytes);
         solver_->record_sample(cmd, slot.points.address(),
                                slot.readback.address() + ReadbackLayout::answers(),
-                               std::uint32_t(in.points.size()));
+                               std::uint32_t(in.points.size()), PointSample::Wind);
     }
     // Readback: the counters reach the host once the frame completes; the host's later commands (its
     // shaders sampling the wind texture) see every write of this frame.
@@ -228,10 +228,12 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
     dependency.memoryBarrierCount = 1;
     dependency.pMemoryBarriers = &barrier;
     ctx_->vk().vkCmdPipelineBarrier2(cmd, &dependency);
+    ctx_->count_barrier();
 
     slot.used = true;
     slot.frame = ctx_->recording_frame();
-    slot.dispatches = ctx_->work().dispatches - dispatched;
+    slot.dispatches = ctx_->work().dispatches - before.dispatches;
+    slot.stages = ctx_->work().stages - before.stages;
     ++recorded_;
     time_ += double(in.dt);
     slot.snapshot_recorded = snapshot_ != nullptr;
@@ -298,6 +300,7 @@ void Frame::publish_snapshot(const FrameSlot& slot) {
 void Frame::stats_from(const WorldFrame& world, const WindStats& wind, const gpu::WorkCounts& work,
                        FrameStats& st) const {
     st.dispatches = work.dispatches;
+    st.stages = work.stages;
     st.submissions = std::uint32_t(work.submissions);
     st.waits = std::uint32_t(work.waits);
     const TreeStats& tree = world.tree;

@@ -52,6 +52,7 @@ struct FrameSlot {
     bool used = false;               ///< a recorded frame's results wait here
     std::uint64_t frame = 0;         ///< the frame they belong to (gpu::Context::begin_frame)
     std::uint64_t dispatches = 0;    ///< dispatches and draws the frame recorded
+    std::uint64_t stages = 0;        ///< its dependent stages (gpu::WorkCounts::stages)
     /// The coarser cascade (index into Frame's, from 0 for cascade 1) the frame also stepped; -1: none.
     int cascade = -1;
     /// SystemDesc::snapshot: every cascade's wind texels (8 bytes a cell, finest first), and where each

@@ -19,6 +19,10 @@ static_assert(GUST_ERROR_NOT_READY == static_cast<int>(gust::ErrorCode::NotReady
 static_assert(GUST_ERROR_IO == static_cast<int>(gust::ErrorCode::IoError));
 static_assert(GUST_ERROR_UNSUPPORTED == static_cast<int>(gust::ErrorCode::Unsupported));
 static_assert(GUST_ERROR_BUSY == static_cast<int>(gust::ErrorCode::Busy));
+static_assert(GUST_ERROR_NOT_ENABLED == static_cast<int>(gust::ErrorCode::NotEnabled));
+
+static_assert(GUST_WIND_READING_WIND == static_cast<int>(gust::WindReading::Wind));
+static_assert(GUST_WIND_READING_SOLVER == static_cast<int>(gust::WindReading::Solver));
 
 static_assert(GUST_LOG_INFO == static_cast<int>(gust::LogLevel::Info));
 static_assert(GUST_LOG_WARNING == static_cast<int>(gust::LogLevel::Warning));

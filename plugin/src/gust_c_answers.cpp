@@ -6,9 +6,12 @@ using namespace gust::capi;
 
 extern "C" {
 
-gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,
-                              gust_vec3* velocities) {
-    return on_system(system, "gust_system_query", [&](gust::System& s) -> gust::Outcome {
+namespace {
+gust_result query(const char* function, gust_system system, const gust_vec3* points, size_t count,
+                  gust_vec3* velocities, gust_wind_reading reading) {
+    return on_system(system, function, [&](gust::System& s) -> gust::Outcome {
+        if (reading != GUST_WIND_READING_WIND && reading != GUST_WIND_READING_SOLVER)
+            return invalid("reading " + std::to_string(int(reading)) + " is not a gust_wind_reading");
         if (count > 0 && !points) return invalid("points is NULL but count is " + std::to_string(count));
         if (count > 0 && !velocities)
             return invalid("velocities is NULL but count is " + std::to_string(count));
@@ -16,10 +19,21 @@ gust_result gust_system_query(gust_system system, const gust_vec3* points, size_
             return invalid(std::to_string(count) + " points, more than GUST_MAX_QUERY_POINTS");
         const std::vector<gust::Vec3> in = to_cpp(points, count);
         std::vector<gust::Vec3> out(count);
-        gust::Outcome outcome = s.query(in, out);
+        gust::Outcome outcome = s.query(in, out, gust::WindReading(reading));
         if (outcome) to_c(out, velocities);
         return outcome;
     });
+}
+} // namespace
+
+gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,
+                              gust_vec3* velocities) {
+    return query("gust_system_query", system, points, count, velocities, GUST_WIND_READING_WIND);
+}
+
+gust_result gust_system_query_reading(gust_system system, const gust_vec3* points, size_t count,
+                                      gust_vec3* velocities, gust_wind_reading reading) {
+    return query("gust_system_query_reading", system, points, count, velocities, reading);
 }
 
 gust_result gust_system_query_async(gust_system system, const gust_vec3* points, size_t count,

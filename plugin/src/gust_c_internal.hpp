@@ -465,8 +465,9 @@ inline gust_wind_texture to_c(const gust::WindTexture& t) {
 inline gust_frame_stats to_c(const gust::FrameStats& f) {
     const auto& [frame, fragments, voxels, nodes, refined, coarsened, pool_bytes, fragment_bytes, dense_bytes,
                  divergence_before, divergence_after, residual, cycles, converged, diverged, sealed_cells,
-                 rejected_triangles, dispatches, submissions, waits, cut_cells, fluid_cells, free_node_blocks,
-                 free_mask_blocks, exhausted, pool_growths, static_rebuilt, nodes_per_level, ms] = f;
+                 rejected_triangles, dispatches, stages, submissions, waits, cut_cells, fluid_cells,
+                 free_node_blocks, free_mask_blocks, exhausted, pool_growths, static_rebuilt, nodes_per_level,
+                 ms] = f;
     return {.frame = frame,
             .fragments = fragments,
             .voxels = voxels,
@@ -483,6 +484,7 @@ inline gust_frame_stats to_c(const gust::FrameStats& f) {
             .sealed_cells = sealed_cells,
             .rejected_triangles = rejected_triangles,
             .dispatches = dispatches,
+            .stages = stages,
             .submissions = submissions,
             .waits = waits,
             .cut_cells = cut_cells,

@@ -109,17 +109,6 @@ float level_weight(const SnapshotData& d, std::size_t k, glm::vec3 point, glm::v
     return std::clamp(depth / cascade_blend_cells(open), 0.0f, 1.0f);
 }
 
-/// The velocity at cell units p of a cascade's grid (inside it).
-glm::vec3 sample_level(const SnapshotLevel& level, const glm::vec4* cells, glm::vec3 p) {
-    // p >= 0 here, so truncation is floor.
-    const glm::ivec3 n = level.extent;
-    const glm::ivec3 c = glm::min(glm::ivec3(p), n - 1);
-    const glm::vec4& own = cells[c.x + n.x * c.y + n.x * n.y * c.z];
-    // A cell without air: the solid's own velocity (query answers it there, not a blend).
-    if (own.w == 0.0f) return glm::vec3(own);
-    return glm::vec3(trilinear(level, cells, p));
-}
-
 } // namespace
 
 void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::span<Vec3> velocities) {
@@ -132,7 +121,7 @@ void sample_snapshot(const SnapshotData& d, std::span<const Vec3> points, std::s
             glm::vec3 p;
             if (!grid_point(d.levels[k], point, p)) continue;
             const float weight = level_weight(d, k, point, p);
-            sum += left * weight * sample_level(d.levels[k], d.cells.data() + d.levels[k].first, p);
+            sum += left * weight * glm::vec3(trilinear(d.levels[k], d.cells.data() + d.levels[k].first, p));
             left *= 1.0f - weight;
         }
         const glm::vec3 u = sum + left * d.ambient;

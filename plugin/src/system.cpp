@@ -416,8 +416,10 @@ Outcome System::step(float dt) {
         if (!ran) return device_failure(ran);
         m.ctx->retire(n);
         const gpu::WorkCounts& after = m.ctx->work();
-        return m.collect(m.blocking, {after.dispatches - before.dispatches,
-                                      after.submissions - before.submissions, after.waits - before.waits});
+        return m.collect(m.blocking, {.dispatches = after.dispatches - before.dispatches,
+                                      .submissions = after.submissions - before.submissions,
+                                      .waits = after.waits - before.waits,
+                                      .stages = after.stages - before.stages});
     }));
 }
 
@@ -435,7 +437,8 @@ Outcome System::step(float dt, VkCommandBuffer commands) {
         const std::uint64_t n = m.frame->recorded();
         FrameSlot& slot = m.slots[n % m.slots.size()];
         if (slot.used)
-            if (Outcome o = m.collect(slot, {slot.dispatches, 0, 0}); !o) return o;
+            if (Outcome o = m.collect(slot, {.dispatches = slot.dispatches, .stages = slot.stages}); !o)
+                return o;
         if (n >= m.slots.size()) m.ctx->retire(n - m.slots.size());
         m.ctx->begin_frame(n);
         return m.record(commands, dt, slot);

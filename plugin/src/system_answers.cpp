@@ -22,13 +22,15 @@ Outcome check_points(std::span<const Vec3> points) {
 }
 } // namespace
 
-Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
+Outcome System::query(std::span<const Vec3> points, std::span<Vec3> velocities, WindReading reading) {
     const WriterCall call(*impl_);
     if (!call) return WriterCall::busy("query");
-    return impl_->query(points, velocities);
+    return impl_->query(points, velocities, reading);
 }
 
-Outcome System::Impl::query(std::span<const Vec3> points, std::span<Vec3> velocities) {
+Outcome System::Impl::query(std::span<const Vec3> points, std::span<Vec3> velocities, WindReading reading) {
+    if (reading != WindReading::Wind && reading != WindReading::Solver)
+        return invalid("reading " + std::to_string(int(reading)) + " is not a WindReading");
     if (velocities.size() != points.size())
         return invalid("velocities holds " + std::to_string(velocities.size()) + " entries for " +
                        std::to_string(points.size()) + " points");
@@ -37,7 +39,8 @@ Outcome System::Impl::query(std::span<const Vec3> points, std::span<Vec3> veloci
         std::pmr::vector<glm::vec3> at(points.size(), &memory);
         for (std::size_t i = 0; i < points.size(); ++i)
             at[i] = to_glm(points[i]);
-        auto answers = solver->sample(at);
+        auto answers =
+            solver->sample(at, reading == WindReading::Wind ? PointSample::Wind : PointSample::Field);
         if (!answers) return device_failure(answers.status());
         for (std::size_t i = 0; i < points.size(); ++i)
             velocities[i] = to_vec3((*answers)[i]);
@@ -93,7 +96,7 @@ Outcome System::wind_at(const Vec3& point, WindSample& sample) {
                             {point.x, point.y, point.z - h},
                             {point.x, point.y, point.z + h}};
     Vec3 v[7];
-    if (Outcome o = impl_->query(points, v); !o) return o;
+    if (Outcome o = impl_->query(points, v, WindReading::Wind); !o) return o;
     glm::vec3 mean(0.0f);
     for (int i = 1; i < 7; ++i)
         mean += to_glm(v[i]) / 6.0f;
@@ -136,7 +139,7 @@ Outcome System::sample(std::span<const Vec3> points, std::span<Vec3> velocities,
     for (std::size_t i = 0; i < points.size(); ++i)
         if (!finite(points[i])) return invalid("point " + std::to_string(i) + " is not finite");
     if (!impl_->snapshot)
-        return Outcome(ErrorCode::NotReady,
+        return Outcome(ErrorCode::NotEnabled,
                        "the snapshot is off: create the System with SystemDesc::snapshot");
     int held = 0;
     const SnapshotData* data = impl_->snapshot->acquire(held);

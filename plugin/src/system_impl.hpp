@@ -184,7 +184,7 @@ struct System::Impl {
     Outcome refuse_after_failure() const;
 
     /// query() without the writer flag (wind_at's points).
-    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities);
+    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities, WindReading reading);
 
     /// create_instance() and create_moving_instance(): `previous` (or null) is the transform one step before.
     Outcome add_instance(MeshId mesh, const Mat4& transform, const Mat4* previous, bool moving,

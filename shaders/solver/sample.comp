@@ -1,9 +1,11 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Reading the field for engines. pc.mode kSamplePoints: per point, the velocity there: inside a solid (a
-// voxel that is not its cell's air, or a cell without air) the solid's own velocity, in the air trilinear on
-// the faces (extended into the solid, so no wall's zeros mix in) plus the omni emitters' wind; outside the
-// grid the wind beyond it (the ambient wind, or the coarser cascades', blended in over the last cells).
+// Reading the field. pc.mode kSampleWind: per point, the wind as engines read it (texel_wind: the cascades'
+// texels, trilinear and blended as gust_wind.glsl). kSamplePoints: per point, the solver's own field there
+// (WindReading::Solver): inside a solid (a voxel that is not its cell's air, or a cell without air) the
+// solid's own velocity, in the air trilinear on the faces (extended into the solid, so no wall's zeros mix
+// in) plus the omni emitters' wind; outside the grid the wind beyond it (the ambient wind, or the coarser
+// cascades', blended in over the last cells).
 // kSampleTexels: per cell, a texel of the wind texture (store_texel; a step's finish.comp writes the bound
 // texels, so this serves the first fill and tests). kSampleCells: per cell, the velocity at its centre
 // (cell_output) as three floats into `samples`.
@@ -18,7 +20,10 @@ void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = grid_dims();
-    if (pc.mode == kSamplePoints) {
+    if (pc.mode == kSampleWind) {
+        if (i >= int(sb().b.point_count)) return;
+        SamplesRef(sb().b.samples).v[i] = texel_wind(PointsRef(sb().b.points).v[i]);
+    } else if (pc.mode == kSamplePoints) {
         if (i >= int(sb().b.point_count)) return;
         vec3 p = (PointsRef(sb().b.points).v[i] - grid_origin()) / grid_h();
         vec3 x = grid_origin() + p * grid_h();

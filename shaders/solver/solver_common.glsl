@@ -531,19 +531,98 @@ vec3 solid_velocity_at(vec3 p, int cell, uint flags) {
     return (flags & kCellMoving) != 0u ? motion_velocity(IVec4Ref(hot.cell_motion).v[cell]) : vec3(0.0);
 }
 
-/// Velocity at cell i's centre as reported: where the centre lies in the cell's air, the air's (its faces'
-/// means, a closed face left out: cell_air_velocity; and the omni emitters' wind), else the solid's own
-/// (in_solid: a cell without air, or a cut cell's centre beyond its wall, which reported the other side's
+/// Whether cell i's centre touches its air: the cell has air, and one of the voxels whose closed box holds
+/// the centre is in it. With an even count of voxels a side the centre is the corner of the 8 middle voxels,
+/// so a surface voxel on one side of it does not make a centre in the open air solid (issue 42: cells 28 %
+/// solid, their centre 0.37 m from a sphere, reported 0 m/s when the corner's +x+y+z voxel held surface).
+bool centre_in_air(int i, uint flags) {
+    if ((flags & kCellNoAir) != 0u) return false;
+    if ((flags & kCellCut) == 0u) return true;
+    int v = int(hot.voxels_per_cell);
+    int lo = (v - 1) / 2, hi = v / 2;
+    CellBits air = air_of(i, flags);
+    for (int z = lo; z <= hi; ++z)
+        for (int y = lo; y <= hi; ++y)
+            for (int x = lo; x <= hi; ++x)
+                if (bits_get(air, uint(x + v * (y + v * z)))) return true;
+    return false;
+}
+
+/// Velocity at cell i's centre as reported: where the centre touches the cell's air (centre_in_air), the
+/// air's (its faces' means, a closed face left out: cell_air_velocity; and the omni emitters' wind), else the
+/// solid's own (a cell without air, or a cut cell's centre beyond its wall, which reported the other side's
 /// wind).
 vec3 cell_output(int i) {
     uint flags = flags_at(i);
     ivec3 c = cell_from_index(grid_dims(), i);
     vec3 centre = vec3(c) + 0.5;
-    if (in_solid(centre, i, flags)) return solid_velocity_at(centre, i, flags);
+    if (!centre_in_air(i, flags)) return solid_velocity_at(centre, i, flags);
     return cell_air_velocity(kFieldVelocity, c) + omni_velocity(centre);
 }
 
 layout(buffer_reference, scalar) writeonly buffer TexelsRef { uvec2 v[]; };
+layout(buffer_reference, scalar) readonly buffer TexelsIn { uvec2 v[]; };
+
+/// Texel c of the cascade whose texels are at `texels`: velocity xyz (m/s) and open fraction.
+vec4 texel_at(uint64_t texels, ivec3 dims, ivec3 c) {
+    uvec2 t = TexelsIn(texels).v[cell_index(dims, c)];
+    return vec4(unpackHalf2x16(t.x), unpackHalf2x16(t.y));
+}
+
+/// The texels of a cascade of `dims` cells read at p (its cell units) as its wind texture's sampler reads
+/// them: trilinear on the cell centres, clamped to the edge.
+vec4 texels_trilinear(uint64_t texels, ivec3 dims, vec3 p) {
+    vec3 q = clamp(p - vec3(0.5), vec3(0.0), vec3(dims - ivec3(1)));
+    ivec3 i0 = min(ivec3(floor(q)), max(dims - ivec3(2), ivec3(0)));
+    ivec3 i1 = min(i0 + ivec3(1), dims - ivec3(1));
+    vec3 t = q - vec3(i0);
+    vec4 c00 = mix(texel_at(texels, dims, i0), texel_at(texels, dims, ivec3(i1.x, i0.y, i0.z)), t.x);
+    vec4 c10 = mix(texel_at(texels, dims, ivec3(i0.x, i1.y, i0.z)),
+                   texel_at(texels, dims, ivec3(i1.x, i1.y, i0.z)), t.x);
+    vec4 c01 = mix(texel_at(texels, dims, ivec3(i0.x, i0.y, i1.z)),
+                   texel_at(texels, dims, ivec3(i1.x, i0.y, i1.z)), t.x);
+    vec4 c11 = mix(texel_at(texels, dims, ivec3(i0.x, i1.y, i1.z)), texel_at(texels, dims, i1), t.x);
+    return mix(mix(c00, c10, t.y), mix(c01, c11, t.y), t.z);
+}
+
+/// The wind at world point x as the engine's shaders read it (gust_wind.glsl's gust_wind): from this
+/// cascade's texels and each coarser one's, finest first, each trilinear on its cell centres and blended into
+/// the next coarser one over its last cells (kCascadeBlendCells, 1 where the coarser one's texels read
+/// kCascadeSolidShare of solid or more), beyond the coarsest the ambient wind. A cascade without bound texels
+/// is passed over. One definition of the wind at a point (issue 42): System::query, the texture and the
+/// snapshot all answer it.
+vec3 texel_wind(vec3 x) {
+    vec3 sum = vec3(0.0);
+    float left = 1.0;
+    uint64_t at = pc.bindings;
+    for (uint k = 0u; k < kMaxCascades && at != 0ul && left > 0.0; ++k) {
+        BindingsRef r = BindingsRef(at);
+        ivec3 dims = r.b.dims;
+        uint64_t texels = r.b.texels, next = r.b.outer;
+        vec3 p = (x - r.b.origin) / r.b.h;
+        bool inside = all(greaterThanEqual(p, vec3(0.0))) && all(lessThanEqual(p, vec3(dims)));
+        if (inside && texels != 0ul) {
+            float w = 1.0;
+            if (next != 0ul) {
+                w = cascade_weight(p, dims, kCascadeBlendCells);
+                if (w > 0.0 && w < 1.0) {
+                    BindingsRef c = BindingsRef(next);
+                    float open = c.b.texels == 0ul
+                                     ? 1.0
+                                     : texels_trilinear(c.b.texels, c.b.dims, (x - c.b.origin) / c.b.h).w;
+                    float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
+                    w = cascade_weight(p, dims, 1.0 + (kCascadeBlendCells - 1.0) * share);
+                }
+            }
+            if (w > 0.0) {
+                sum += left * w * texels_trilinear(texels, dims, p).xyz;
+                left *= 1.0 - w;
+            }
+        }
+        at = next;
+    }
+    return sum + left * hot.ambient;
+}
 /// Cell i's texel of the wind texture: cell_output and 1 − solid fraction, as four half floats.
 void store_texel(int i) {
     vec3 u = cell_output(i);

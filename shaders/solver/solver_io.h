@@ -315,6 +315,7 @@ GUST_CONST uint kJacobiCheck = 1u; ///< the residual's maximum and the convergen
 GUST_CONST uint kSamplePoints = 0u; ///< per query point, the velocity there
 GUST_CONST uint kSampleTexels = 1u; ///< per cell, its texel of the wind texture (finish.comp's, when bound)
 GUST_CONST uint kSampleCells = 2u;  ///< per cell, the velocity at its centre
+GUST_CONST uint kSampleWind = 3u;   ///< per query point, the wind as engines read it (the cascades' texels)
 
 // scroll.comp's modes.
 GUST_CONST uint kScrollMove = 0u; ///< the field moved by SolverPush::shift cells

@@ -470,7 +470,7 @@ Result<std::vector<glm::vec3>> WindSolver::read_cell_velocity() {
     return out;
 }
 
-Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points) {
+Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3> points, PointSample what) {
     std::pmr::vector<glm::vec3> out(points.size(), ctx_.memory());
     if (points.empty()) return out;
     for (std::size_t i = 0; i < points.size(); ++i)
@@ -491,7 +491,7 @@ Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3
     }
     std::memcpy(m.points.mapped(), points.data(), bytes);
     Status s = ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-        record_sample(cmd, m.points.address(), m.samples.address(), std::uint32_t(points.size()));
+        record_sample(cmd, m.points.address(), m.samples.address(), std::uint32_t(points.size()), what);
     });
     if (!s) return s;
     std::memcpy(out.data(), m.samples.mapped(), bytes);
@@ -499,14 +499,16 @@ Result<std::pmr::vector<glm::vec3>> WindSolver::sample(std::span<const glm::vec3
 }
 
 void WindSolver::record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDeviceAddress samples,
-                               std::uint32_t count) {
+                               std::uint32_t count, PointSample what) {
     Impl& m = *impl_;
     m.b.origin = origin_;
     m.b.ambient = ambient_;
     m.b.points = points;
     m.b.samples = samples;
     m.b.point_count = count;
-    m.record_single_pass(ctx_, cmd, m.sample, shaderio::kSamplePoints, glm::ivec3(0), count);
+    m.record_single_pass(ctx_, cmd, m.sample,
+                         what == PointSample::Wind ? shaderio::kSampleWind : shaderio::kSamplePoints,
+                         glm::ivec3(0), count);
 }
 
 Status WindSolver::check_texels(const gpu::Buffer& texels) const {

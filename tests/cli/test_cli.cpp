@@ -808,6 +808,7 @@ TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
                                 "dense_bytes",
                                 "ms",
                                 "dispatches",
+                                "stages",
                                 "submissions",
                                 "waits",
                                 "divergence_before",
@@ -830,6 +831,9 @@ TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
         EXPECT_EQ(j["submissions"], 1) << line;
         EXPECT_EQ(j["waits"], 1) << line;
         EXPECT_GT(j["dispatches"].get<int>(), 10) << line;
+        // Barriers separate most passes, but not all: two dispatches may share a stage.
+        EXPECT_GT(j["stages"].get<int>(), 5) << line;
+        EXPECT_LE(j["stages"].get<int>(), j["dispatches"].get<int>()) << line;
         EXPECT_EQ(j["static_rebuilt"], frames == 0) << line;
     }
     fs::remove_all(dir);

@@ -43,6 +43,8 @@ static const char* result_name(gust_result r) {
         return "GUST_ERROR_UNSUPPORTED";
     case GUST_ERROR_BUSY:
         return "GUST_ERROR_BUSY";
+    case GUST_ERROR_NOT_ENABLED:
+        return "GUST_ERROR_NOT_ENABLED";
     }
     return "(not a gust_result)";
 }
@@ -467,8 +469,10 @@ static void rejects_bad_frame_inputs(gust_system system) {
     CHECK_RESULT(system, gust_system_set_ambient(system, vec3(NAN, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_set_focus(system, vec3(0.0f, INFINITY, 0.0f)),
                  GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(NAN, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
-    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(1e30f, 0.0f, 0.0f)), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(NAN, 0.0f, 0.0f)),
+                 GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_shift_origin(system, vec3(1e30f, 0.0f, 0.0f)),
+                 GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_shift_origin(system, vec3(0.0f, 0.0f, 0.0f)), GUST_OK);
 
     gust_wind_emitter emitters[GUST_MAX_EMITTERS + 1];
@@ -675,6 +679,20 @@ static void simulates_a_small_world(void) {
     /* Upwind of everything the air moves with the ambient wind (the projection carries the inflow through).
      */
     CHECK(velocities[0].x > 0.0f);
+    /* The default reading is the wind (GUST_WIND_READING_WIND); the solver's own field answers the ambient
+     * wind outside the domain too; a reading that is none is refused. */
+    gust_vec3 read[kPoints];
+    CHECK_RESULT(system, gust_system_query_reading(system, kProbes, kPoints, read, GUST_WIND_READING_WIND),
+                 GUST_OK);
+    for (int i = 0; i < kPoints; ++i)
+        CHECK(equal3(read[i], velocities[i]));
+    CHECK_RESULT(system, gust_system_query_reading(system, kProbes, kPoints, read, GUST_WIND_READING_SOLVER),
+                 GUST_OK);
+    for (int i = kInside; i < kPoints; ++i)
+        CHECK(equal3(read[i], kAmbient));
+    CHECK(read[0].x > 0.0f);
+    CHECK_RESULT(system, gust_system_query_reading(system, kProbes, kPoints, read, (gust_wind_reading)7),
+                 GUST_ERROR_INVALID_ARGUMENT);
 
     /* The wrong size is refused without losing the answer; the answer comes once, then the ticket is dead. */
     CHECK_RESULT(system, gust_system_fetch(system, query, fetched, kPoints - 1), GUST_ERROR_INVALID_ARGUMENT);
@@ -1175,6 +1193,13 @@ static void samples_the_snapshot(void) {
     CHECK_FREE_RESULT(gust_system_sample(system, points, 2, NULL, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_FREE_RESULT(gust_system_sample(NULL, points, 2, out, NULL), GUST_ERROR_INVALID_HANDLE);
     CHECK_FREE_RESULT(gust_system_sample(system, NULL, 0, NULL, NULL), GUST_OK);
+    CHECK_RESULT(system, gust_system_destroy(system), GUST_OK);
+    /* With the snapshot off no step will ever publish one: a wrong setup, not an answer to wait for. */
+    desc.snapshot = false;
+    CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
+    CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+    CHECK_FREE_RESULT(gust_system_sample(system, points, 2, out, NULL), GUST_ERROR_NOT_ENABLED);
+    CHECK(strstr(gust_last_create_error(), "snapshot") != NULL);
     CHECK_RESULT(system, gust_system_destroy(system), GUST_OK);
     CHECK(atomic_load(&counts.errors) == 0);
 }

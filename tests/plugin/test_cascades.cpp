@@ -154,7 +154,9 @@ TEST_F(FanNest, aQueryBeyondTheFinestCascadeAnswersFromTheCoarserOnes) {
     const Vec3 points[] = {{20.0f, 4.0f, 0.0f}, {0.0f, 4.0f, 0.0f}, {120.0f, 4.0f, 0.0f}};
     std::array<Vec3, 3> wind{};
     ASSERT_TRUE(system_->query(points, wind));
-    EXPECT_GT(wind[0].z - kNestAmbient.z, 2.0f) << "the fan blows in the second cascade";
+    // The fan's core, between the second cascade's cell centres 2 m away on every axis (its cells are 4 m):
+    // the cells' means of the jet read lower than its faces (WindReading::Solver) do.
+    EXPECT_GT(wind[0].z - kNestAmbient.z, 1.2f) << "the fan blows in the second cascade";
     EXPECT_LT(std::abs(wind[1].z - kNestAmbient.z), 0.5f * (wind[0].z - kNestAmbient.z))
         << "the finest cascade lies beside the fan";
     EXPECT_LT(std::abs(wind[2].z - kNestAmbient.z), 0.5f)
@@ -168,8 +170,8 @@ TEST_F(FanNest, theSnapshotAnswersFromEveryCascadeAsQueriesDo) {
     std::vector<Vec3> sampled(points.size()), queried(points.size());
     ASSERT_TRUE(system->query(points, queried));
     ASSERT_TRUE(system->sample(points, sampled));
-    // The snapshot interpolates cell centres where query interpolates faces, and holds half floats.
-    expect_near_each(points, sampled, queried, [](float speed) { return 0.25f + 0.1f * speed; });
+    // One wind at a point: both read the same half-float texels, blended alike (docs/api.md).
+    expect_near_each(points, sampled, queried, [](float speed) { return 1e-4f * std::max(1.0f, speed); });
     float fan = 0.0f;
     for (std::size_t i = 0; i < points.size(); ++i) {
         const Vec3& s = sampled[i];
@@ -513,9 +515,11 @@ TEST(Cascades, aFloorLaidUnderTheGroundKeepsTheFinestCascadesAirByTheGroundInEve
 TEST(Cascades, theFinestCascadeReadsTheCoarserWindBlendedInTimeBetweenItsSteps) {
     // Two cascades of ratio 4: the coarser steps every fourth frame. A fan 15 m upwind, beyond the finest
     // cascade (8 m), blows ever harder across the wind that carries its jet into the finest, so the coarser
-    // cascade's field changes at each of its steps; in the fan's jet just outside the finest cascade, and
-    // inside it past its blend zone (where its own field answers alone), the answer must rise frame by frame,
-    // not in a staircase of the coarser steps.
+    // cascade's field changes at each of its steps; inside the finest cascade past its blend zone (where its
+    // own field answers alone), the answer must rise frame by frame, not in a staircase of the coarser steps:
+    // the finest cascade's border reads the coarser wind blended in time. Beyond the finest cascade the
+    // answer is the coarser cascade's texture, which changes at its steps (docs/api.md "One wind at a
+    // point").
     Watch watch;
     SystemDesc desc = small_desc(watch);
     desc.domain.cascades = 2;
@@ -523,8 +527,8 @@ TEST(Cascades, theFinestCascadeReadsTheCoarserWindBlendedInTimeBetweenItsSteps) 
     std::unique_ptr<System> system;
     ASSERT_TRUE(System::create(desc, system));
     ASSERT_TRUE(system->set_ambient({4.0f, 0.0f, 0.0f}));
-    const Vec3 points[] = {{-9.0f, 4.0f, 0.5f}, {-4.5f, 4.0f, 0.5f}};
-    std::vector<std::array<Vec3, 2>> winds;
+    const Vec3 point[] = {{-4.5f, 4.0f, 0.5f}};
+    std::vector<float> winds;
     for (int f = 0; f < 32; ++f) {
         const WindEmitter fan{.type = WindEmitterType::Directional,
                               .position = {-15.0f, 4.0f, 0.0f},
@@ -533,22 +537,20 @@ TEST(Cascades, theFinestCascadeReadsTheCoarserWindBlendedInTimeBetweenItsSteps) 
                               .strength = 0.25f * float(f)};
         ASSERT_TRUE(system->set_emitters({&fan, 1}));
         ASSERT_TRUE(system->step(0.1f));
-        std::array<Vec3, 2> wind{};
-        ASSERT_TRUE(system->query(points, wind));
-        winds.push_back(wind);
+        Vec3 wind[1];
+        ASSERT_TRUE(system->query(point, wind));
+        winds.push_back(wind[0].z);
     }
-    for (std::size_t p = 0; p < 2; ++p) {
-        // After the start: the largest change in one frame, against the largest over a coarser period.
-        float step = 0.0f, period = 0.0f;
-        for (std::size_t f = 12; f < winds.size(); ++f) {
-            step = std::max(step, std::abs(winds[f][p].z - winds[f - 1][p].z));
-            period = std::max(period, std::abs(winds[f][p].z - winds[f - 4][p].z));
-        }
-        EXPECT_GT(period, 0.1f) << "point " << p << ": the wind rises";
-        // A staircase puts a whole period's change into one frame (step = period); read in between, each
-        // frame takes about a quarter of it.
-        EXPECT_LT(step, 0.5f * period) << "point " << p;
+    // After the start: the largest change in one frame, against the largest over a coarser period.
+    float step = 0.0f, period = 0.0f;
+    for (std::size_t f = 12; f < winds.size(); ++f) {
+        step = std::max(step, std::abs(winds[f] - winds[f - 1]));
+        period = std::max(period, std::abs(winds[f] - winds[f - 4]));
     }
+    EXPECT_GT(period, 0.1f) << "the wind rises";
+    // A staircase puts a whole period's change into one frame (step = period); read in between, each frame
+    // takes about a quarter of it.
+    EXPECT_LT(step, 0.5f * period);
     EXPECT_EQ(watch.errors, 0) << watch.last;
 }
 

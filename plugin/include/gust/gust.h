@@ -37,7 +37,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 8
+#define GUST_VERSION_MINOR 9
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -61,6 +61,8 @@ typedef enum gust_result {
     GUST_ERROR_IO = 7,                 ///< a file could not be written
     GUST_ERROR_UNSUPPORTED = 8,        ///< built without the optional part this call needs (OpenVDB)
     GUST_ERROR_BUSY = 9,               ///< another thread is inside a writer call of this system
+    GUST_ERROR_NOT_ENABLED =
+        10, ///< the system was created without the gust_system_desc option this call needs
 } gust_result;
 
 /// The wind subsystem (opaque). Create one per world; a destroyed handle is never reused.
@@ -140,6 +142,12 @@ typedef struct gust_wind_domain {
 } gust_wind_domain;
 
 /// How the wind carries itself along (gust::WindAdvection).
+/// What gust_system_query_reading reads at a point (gust::WindReading).
+typedef enum gust_wind_reading {
+    GUST_WIND_READING_WIND = 0,   ///< the wind at a point, as the textures and gust_system_sample give it
+    GUST_WIND_READING_SOLVER = 1, ///< the solver's own field, resolved below a cell
+} gust_wind_reading;
+
 typedef enum gust_advection {
     GUST_ADVECTION_MACCORMACK = 0,      ///< second order, clamped (the default)
     GUST_ADVECTION_SEMI_LAGRANGIAN = 1, ///< first order: cheaper, smooths the flow next to obstacles
@@ -277,6 +285,7 @@ typedef struct gust_frame_stats {
     uint32_t sealed_cells;       ///< cells whose air is sealed inside solids (solid for the wind)
     uint32_t rejected_triangles; ///< triangles with non-finite vertices after transform this frame
     uint64_t dispatches;         ///< GPU dispatches and draws the step recorded (indirect ones included)
+    uint64_t stages;             ///< its dependent stages: dispatches and draws after an execution barrier
     uint32_t submissions;        ///< queue submissions the step made (host commands: 0)
     uint32_t waits;              ///< times the step waited for the GPU (host commands: 0)
     uint32_t cut_cells;          ///< wind cells holding solid voxels
@@ -436,15 +445,22 @@ gust_result gust_system_step(gust_system system, float dt);
 /// (docs/api.md "Submission").
 gust_result gust_system_step_commands(gust_system system, float dt, VkCommandBuffer commands);
 
-/// Wind velocity (m/s) at `count` points into `velocities` (count entries, caller-owned); points outside
-/// the domain get the ambient wind. Blocks for a GPU round trip.
+/// Wind velocity (m/s) at `count` points into `velocities` (count entries, caller-owned), as the wind
+/// textures and gust_system_sample give it (GUST_WIND_READING_WIND); points outside the domain get the
+/// ambient wind. Blocks for a GPU round trip.
 gust_result gust_system_query(gust_system system, const gust_vec3* points, size_t count,
                               gust_vec3* velocities);
+
+/// gust_system_query reading `reading` (gust::WindReading): GUST_WIND_READING_SOLVER reads the solver's
+/// own field below a cell, for tools and physics checks.
+gust_result gust_system_query_reading(gust_system system, const gust_vec3* points, size_t count,
+                                      gust_vec3* velocities, gust_wind_reading reading);
 
 /// Reader call (any thread, while another steps): wind velocity (m/s) at `count` points from the latest
 /// snapshot published to CPU memory (gust_system_desc::snapshot), without the GPU; gust::System::sample
 /// says how it matches gust_system_query. `*frame` (may be NULL) receives the step it answered from.
-/// GUST_ERROR_NOT_READY when the snapshot is off or nothing is published yet.
+/// GUST_ERROR_NOT_READY when nothing is published yet (try again after a step); GUST_ERROR_NOT_ENABLED when
+/// the system was created with the snapshot off (gust_system_desc::snapshot), which no step changes.
 gust_result gust_system_sample(gust_system system, const gust_vec3* points, size_t count,
                                gust_vec3* velocities, uint64_t* frame);
 

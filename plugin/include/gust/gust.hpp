@@ -34,7 +34,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 8;
+inline constexpr std::uint32_t kVersionMinor = 9;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -53,6 +53,7 @@ enum class ErrorCode : std::int32_t {
     IoError = 7,           ///< a file could not be written
     Unsupported = 8,       ///< built without the optional part this call needs (OpenVDB)
     Busy = 9,              ///< another thread is inside a writer call of this System (header comment)
+    NotEnabled = 10,       ///< the System was created without the SystemDesc option this call needs
 };
 
 /// The outcome of a call: a code and, when not Ok, a message naming the argument and the reason.
@@ -147,10 +148,11 @@ struct WindDomain {
     /// the next step); longer keeps the tree steady under surfaces that come and go, at the cost of nodes.
     std::uint32_t hysteresis = 8;
     /// Nested grids around the focus (docs/solver.md "Cascades"), 1..8: cascade k has `cells` cells of
-    /// cell_size · ratio^k, the finest first. 1: one grid with the ambient wind beyond it. Queries, wind_at
+    /// cell_size · ratio^k, the finest first. 1: one grid with the ambient wind beyond it. Queries, wind_at,
     /// query_async and sample answer from the finest cascade that holds the point, blended into the next over
     /// its last cells; each cascade has its own wind texture (wind_textures; gust_wind.glsl blends them as
-    /// the answers do) and its own grids in export_vdb; the debug views hold the finest cascade.
+    /// the answers do, from the same texels) and its own grids in export_vdb; the debug views hold the finest
+    /// cascade.
     std::uint32_t cascades = 1;
     std::uint32_t ratio = 4; ///< cell size from one cascade to the next coarser: 2 or 4
 };
@@ -323,6 +325,10 @@ struct FrameStats {
     std::uint32_t rejected_triangles = 0; ///< non-finite vertices after transform this frame
     /// The step's GPU work: dispatches and draws recorded (indirect ones counted even when emptied).
     std::uint64_t dispatches = 0;
+    /// Its dependent stages: dispatches and draws that wait for the GPU work recorded before them (the first
+    /// after each execution barrier). On a GPU a small grid's frame costs about its stages times the time a
+    /// barrier takes to drain and launch again, whatever its dispatches (docs/solver.md "Few passes").
+    std::uint64_t stages = 0;
     std::uint32_t submissions = 0; ///< queue submissions the step made (HostCommands: 0, the host submits)
     std::uint32_t waits = 0;       ///< times the step waited for the GPU (HostCommands: 0)
     std::uint32_t cut_cells = 0;   ///< wind cells holding solid voxels
@@ -351,6 +357,18 @@ struct SnapshotInfo {
     Vec3 origin{};                ///< the (finest cascade's) domain's min corner then, m
     float cell_size = 0.0f;       ///< m
     std::uint32_t extent[3] = {}; ///< cells per axis
+};
+
+/// What query reads at a point (docs/api.md "One wind at a point"; C: gust_wind_reading).
+enum class WindReading : std::int32_t {
+    /// The wind at a point, as the wind textures, sample and gust_wind.glsl give it: each cascade's cells
+    /// trilinear, blended across the cascades. query's default, and all query_async and wind_at answer.
+    Wind = 0,
+    /// The solver's own field, resolved below a cell, for tools and physics checks: in the air trilinear on
+    /// the faces (closed ones extended from the air), in a solid voxel its solid's velocity, beyond the
+    /// finest cascade the coarser cascades' faces blended in time between their steps. It differs from Wind
+    /// within a cell of a solid and in shear layers, not elsewhere.
+    Solver = 1,
 };
 
 /// Ticket of an asynchronous query (0 is never valid).
@@ -467,9 +485,14 @@ class System {
     /// replaces or frees are kept until then. After an error `commands` may hold part of a frame: reset it.
     Outcome step(float dt, VkCommandBuffer commands);
 
-    /// Wind velocity at each point (m/s), sampled from the current field; points outside the domain
-    /// get the ambient wind. `velocities` must hold points.size() entries. Blocks for a GPU round trip.
-    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities);
+    /// Wind velocity at each point (m/s) from the last step, as the wind textures read it (docs/api.md "One
+    /// wind at a point"): each cascade's texels trilinear on its cell centres (clamped to the edge), blended
+    /// into the next coarser cascade over its last cells as gust_wind.glsl blends them; points beyond the
+    /// coarsest cascade get the ambient wind. A cell with air holds its air's velocity, one without air its
+    /// solid's. WindReading::Solver reads the solver's field below a cell instead. `velocities` must hold
+    /// points.size() entries. Blocks for a GPU round trip.
+    Outcome query(std::span<const Vec3> points, std::span<Vec3> velocities,
+                  WindReading reading = WindReading::Wind);
     /// Queues the points; the answer is ready after the next step() (frame N's question is answered
     /// with frame N+1's field; HostCommands: once that frame completed, frames_in_flight steps later) and
     /// is fetched with fetch(). Points are copied.
@@ -478,15 +501,15 @@ class System {
     Outcome fetch(QueryId id, std::span<Vec3> velocities);
     /// Reader call (any thread, any number at once, also while another thread steps): the wind at each
     /// point from the latest published snapshot (SystemDesc::snapshot), on the CPU, without waiting for the
-    /// GPU. As the wind texture's sampler reads it (trilinear on cell centres, clamped to the edge), with
-    /// query's rules: outside the domain (beyond its faces) the ambient wind of that step, in a cell with no
-    /// air its solid's velocity. It differs from query by half-float rounding at cell centres, and between
-    /// centres by the interpolation (query blends the faces) and in cut cells (query resolves solid voxels).
+    /// GPU. The same wind as query and the wind textures (docs/api.md "One wind at a point"), read from the
+    /// same half-float texels: it equals query of the same step within float rounding.
     /// The snapshot is the last step's (OwnQueue: as soon as step() returns; HostCommands: the frame
     /// recorded frames_in_flight steps ago, once collected). It is held for the duration of the call
     /// only: two calls may answer from different steps (`info` says which). A step whose free copies are
-    /// all still held by slower readers is not published (the previous stays). NotReady when the snapshot is
-    /// off or no step has been published yet; InvalidArgument for a size mismatch or a non-finite point.
+    /// all still held by slower readers is not published (the previous stays). NotReady when no step has been
+    /// published yet (try again after a step); NotEnabled when the System was created with the snapshot off
+    /// (SystemDesc::snapshot), which no step changes; InvalidArgument for a size mismatch or a non-finite
+    /// point.
     Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities) const;
     Outcome sample(std::span<const Vec3> points, std::span<Vec3> velocities, SnapshotInfo& info) const;
     /// Reader call: a copy of the last collected step's statistics (stats() is a writer call). `out`'s

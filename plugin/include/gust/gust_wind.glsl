@@ -12,8 +12,8 @@
 //
 // world_to_texture[k] is cascade k's WindTexture::world_to_texture, and ambient the System's ambient wind.
 // Without GUST_CASCADES, call gust_blend_cascade for each cascade, finest first. The textures are read as
-// their sampler reads them (trilinear on cell centres), so in a cell without air the answer mixes the
-// solid's velocity with its neighbours' air, where System::sample answers the solid's alone.
+// their sampler reads them (trilinear on cell centres): the same wind System::query and System::sample
+// answer from the same texels (docs/api.md "One wind at a point").
 #ifndef GUST_WIND_GLSL
 #define GUST_WIND_GLSL
 

@@ -131,6 +131,10 @@ struct WorkCounts {
     std::uint64_t dispatches = 0;  ///< dispatches and draws recorded, indirect ones included
     std::uint64_t submissions = 0; ///< queue submissions
     std::uint64_t waits = 0;       ///< times the host waited for the GPU
+    /// Dependent stages: dispatches and draws recorded after an execution barrier, or first in a command
+    /// buffer gust began. Each waits for the GPU work before it to drain, so on a GPU a frame of small
+    /// grids costs about its stages times the drain and launch latency, whatever its dispatches.
+    std::uint64_t stages = 0;
 };
 
 /// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
@@ -169,11 +173,17 @@ class Context : public HostObject {
     /// empty for an adopted device.
     const std::pmr::vector<std::pmr::string>& device_names() const { return device_names_; }
 
-    /// Dispatches, draws, submissions and waits so far (Pipeline counts the first two, submit_and_wait the
-    /// others).
+    /// Dispatches, draws, stages, submissions and waits so far (Pipeline counts dispatches and draws, the
+    /// barriers of buffer.hpp and Image mark where a stage ends, submit_and_wait counts the others).
     const WorkCounts& work() const { return work_; }
-    /// Internal: a dispatch or draw was recorded.
-    void count_dispatch() { ++work_.dispatches; }
+    /// Internal: a dispatch or draw was recorded; the first after a barrier starts a stage.
+    void count_dispatch() const {
+        ++work_.dispatches;
+        if (barrier_recorded_) ++work_.stages;
+        barrier_recorded_ = false;
+    }
+    /// Internal: an execution barrier was recorded (or a command buffer begun): the next dispatch waits.
+    void count_barrier() const { barrier_recorded_ = true; }
 
     /// Waits until nothing runs on gust's resources: the whole device when gust owns it, else the queue it
     /// was given (HostDevice::queue_mutex held), where the host submits what gust recorded for it.
@@ -296,7 +306,9 @@ class Context : public HostObject {
     std::uint64_t recording_frame_ = 0;
     std::size_t live_buffers_ = 0; ///< Buffers holding a release slot
     std::pmr::vector<Released> released_;
-    WorkCounts work_;
+    // Counters of what was recorded, not state: the const recording helpers (buffer.hpp) count too.
+    mutable WorkCounts work_;
+    mutable bool barrier_recorded_ = true;
     std::atomic<std::uint32_t> validation_messages_{0};
     mutable std::mutex message_mutex_;
     std::pmr::string last_message_;

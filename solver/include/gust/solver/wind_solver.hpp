@@ -68,6 +68,18 @@ inline constexpr float kMaxEmitterFalloff = 64.0f;
 /// Wind-source profiles (see emitter_velocity in shaders/solver/solver_math.h).
 enum class EmitterType { Directional, Omni, Vortex, CapsuleMotor, ConeMotor };
 
+/// What WindSolver::sample answers at a point.
+enum class PointSample {
+    /// The solver's own field: inside a solid the solid's velocity, in the air trilinear on the faces plus
+    /// the omni emitters' wind, beyond the grid the coarser cascades' faces or the ambient wind.
+    Field,
+    /// The wind as engines read it (the System's query, its texture and its snapshot): this cascade's
+    /// texels (bind_texels) and each coarser one's, trilinear on their cell centres and blended as
+    /// gust_wind.glsl blends them, beyond the coarsest the ambient wind. A cascade without bound texels is
+    /// passed over.
+    Wind,
+};
+
 /// A wind source. The air within reach is sped up along the emitter's flow towards `strength` with a
 /// response time (SolverDesc::emitter_response); air already faster that way is left alone.
 struct Emitter {
@@ -219,9 +231,10 @@ class WindSolver : public gpu::HostObject {
     /// V-cycles (Jacobi: blocks) the next step records.
     std::uint32_t cycles_per_step() const;
 
-    /// Velocity (m/s, world) at each world point: inside a solid the solid's own, in the air trilinear on
-    /// the faces, the ambient wind outside the grid. Points must be finite. Blocks.
-    Result<std::pmr::vector<glm::vec3>> sample(std::span<const glm::vec3> points);
+    /// Velocity (m/s, world) at each world point, read as `what` says (PointSample). Points must be finite.
+    /// Blocks.
+    Result<std::pmr::vector<glm::vec3>> sample(std::span<const glm::vec3> points,
+                                               PointSample what = PointSample::Field);
     /// Writes each cell's texel into `texels` (8 bytes per cell, index x + X·(y + Y·z)): the velocity at
     /// the cell's centre (m/s) and 1 − its solid fraction, as four half floats; then records `then`
     /// into the same submission, after a barrier. Blocks. The texels bound by bind_texels stay bound:
@@ -271,7 +284,7 @@ class WindSolver : public gpu::HostObject {
     void record_texels(VkCommandBuffer cmd, const gpu::Buffer& texels);
     /// sample() recorded: `count` vec3 points at device address `points` (finite), velocities to `samples`.
     void record_sample(VkCommandBuffer cmd, VkDeviceAddress points, VkDeviceAddress samples,
-                       std::uint32_t count);
+                       std::uint32_t count, PointSample what = PointSample::Field);
 
     const SolverDesc& desc() const { return desc_; }
     glm::vec3 origin() const { return origin_; }
