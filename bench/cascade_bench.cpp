@@ -41,7 +41,7 @@ struct Nest {
     std::uint32_t cascades = 1, ratio = 4;
     std::unique_ptr<gust::System> system;
     gust::InstanceId mover = 0;
-    double wall_ms = 0.0, gpu_ms = 0.0, dispatches = 0.0;
+    double wall_ms = 0.0, gpu_ms = 0.0, dispatches = 0.0, stages = 0.0;
 };
 
 gust::Mat4 translation(float x, float y, float z) {
@@ -89,6 +89,7 @@ gust::Outcome step(Nest& nest, int frame, bool timed) {
     if (!timed) return {};
     nest.wall_ms += gust::bench::ms_since(start);
     nest.dispatches += double(nest.system->stats().dispatches);
+    nest.stages += double(nest.system->stats().stages);
     for (const auto& [pass, ms] : nest.system->stats().ms)
         nest.gpu_ms += ms;
     return {};
@@ -152,9 +153,10 @@ int main(int argc, char** argv) {
         << " untimed ones; the columns are means over the timed frames, which hold whole schedules of the "
            "coarser cascades (cascade k steps every ratio^k frames). GPU ms is the sum of the frame's timed "
            "passes (FrameStats::ms, the coarser cascade's `cascade_` passes included).\n\n";
-    out << "| Cascades | Ratio | Outer extent m | Dispatches a frame | x one cascade | Wall ms a frame | x "
-           "one cascade | GPU ms a frame | x one cascade |\n";
-    out << "|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    out << "| Cascades | Ratio | Outer extent m | Dispatches a frame | Stages a frame | x one cascade | Wall "
+           "ms "
+           "a frame | x one cascade | GPU ms a frame | x one cascade |\n";
+    out << "|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     const double base_d = nests[0].dispatches / frames, base_ms = nests[0].wall_ms / frames,
                  base_gpu = nests[0].gpu_ms / frames;
     for (const Nest& n : nests) {
@@ -162,8 +164,9 @@ int main(int argc, char** argv) {
         const double extent = grid.extent() * std::pow(double(n.ratio), double(n.cascades - 1));
         out << "| " << n.cascades << " | " << n.ratio << " | " << gust::bench::fmt_ms(extent) << " | "
             << gust::bench::fmt_ms(d) << " | " << gust::bench::fmt_ratio(d / base_d) << " | "
-            << gust::bench::fmt_ms(ms) << " | " << gust::bench::fmt_ratio(ms / base_ms) << " | "
-            << gust::bench::fmt_ms(gpu) << " | " << gust::bench::fmt_ratio(gpu / base_gpu) << " |\n";
+            << gust::bench::fmt_ms(n.stages / frames) << " | " << gust::bench::fmt_ms(ms) << " | "
+            << gust::bench::fmt_ratio(ms / base_ms) << " | " << gust::bench::fmt_ms(gpu) << " | "
+            << gust::bench::fmt_ratio(gpu / base_gpu) << " |\n";
     }
     const Nest& four = nests[3];
     const double ratio = (four.wall_ms / frames) / base_ms, four_gpu = four.gpu_ms / frames;

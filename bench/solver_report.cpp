@@ -128,15 +128,16 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
     out << "| Grid | Cells | Levels | Cut cells | Moving fragments | Frames | World ms |";
     for (const char* pass : kPasses)
         out << " `" << pass << "` ms |";
-    out << " Frame GPU ms | Wall ms | V-cycles | Dispatches | Converged |\n|--:|--:|--:|--:|--:|--:|--:|";
+    out << " Frame GPU ms | Wall ms | V-cycles | Dispatches | Stages | Converged "
+           "|\n|--:|--:|--:|--:|--:|--:|--:|";
     for (std::size_t i = 0; i < std::size(kPasses); ++i)
         out << "--:|";
-    out << "--:|--:|--:|--:|---|\n";
+    out << "--:|--:|--:|--:|--:|---|\n";
     for (const StepRow& row : rows) {
         out << "| " << size_name(row.cells) << " | " << grouped(cell_count(row.cells)) << " | ";
         if (!row.error.empty()) {
             out << failed_cell(notes, size_name(row.cells) + " frames", row.error) << " |";
-            for (std::size_t i = 0; i < std::size(kPasses) + 9; ++i)
+            for (std::size_t i = 0; i < std::size(kPasses) + 10; ++i)
                 out << " |";
             out << "\n";
             continue;
@@ -151,7 +152,8 @@ void render_steps(std::ostringstream& out, const std::vector<StepRow>& rows, con
         for (const char* pass : kPasses)
             out << " " << fmt_ms(row.pass(pass)) << " |";
         out << " " << fmt_ms(row.total()) << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | "
-            << grouped(last.dispatches) << " | " << converged << " of " << row.steps.size() << " |\n";
+            << grouped(last.dispatches) << " | " << grouped(last.stages) << " | " << converged << " of "
+            << row.steps.size() << " |\n";
     }
     out << "\n";
 }
@@ -170,15 +172,15 @@ void render_budget(std::ostringstream& out, const std::vector<StepRow>& rows, co
            "divergence is max |residual| / max |divergence before projection| after the last cycle; "
            "divergence after / before is the largest divergence left by the projection over the largest "
            "before it.\n\n";
-    out << "| Grid | Frames | `pressure` ms | Frame GPU ms | Wall ms | V-cycles | Dispatches | Submissions | "
-           "Waits | Residual / divergence | Divergence after / before "
-           "|\n|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+    out << "| Grid | Frames | `pressure` ms | Frame GPU ms | Wall ms | V-cycles | Dispatches | Stages | "
+           "Submissions | Waits | Residual / divergence | Divergence after / before "
+           "|\n|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
            "--:|\n";
     for (const StepRow& row : rows) {
         out << "| " << size_name(row.cells) << " | ";
         if (!row.error.empty()) {
             out << failed_cell(notes, size_name(row.cells) + " at the frame budget", row.error)
-                << " | | | | | | | | | |\n";
+                << " | | | | | | | | | | |\n";
             continue;
         }
         const gust::FrameStats& last = row.steps.back().stats;
@@ -189,7 +191,7 @@ void render_budget(std::ostringstream& out, const std::vector<StepRow>& rows, co
         };
         out << row.steps.size() << " | " << fmt_ms(row.pass("pressure")) << " | " << fmt_ms(row.total())
             << " | " << fmt_ms(row.wall()) << " | " << row.cycles() << " | " << grouped(last.dispatches)
-            << " | " << last.submissions << " | " << last.waits << " | "
+            << " | " << grouped(last.stages) << " | " << last.submissions << " | " << last.waits << " | "
             << fmt_sci(ratio([](const gust::FrameStats& f) { return f.residual; })) << " | "
             << fmt_sci(ratio([](const gust::FrameStats& f) { return f.divergence_after; })) << " |\n";
     }
