@@ -141,13 +141,16 @@ typedef struct gust_wind_domain {
     uint32_t ratio;           ///< cell size from one cascade to the next coarser: 2 or 4 (default 4)
 } gust_wind_domain;
 
-/// How the wind carries itself along (gust::WindAdvection).
 /// What gust_system_query_reading reads at a point (gust::WindReading).
 typedef enum gust_wind_reading {
     GUST_WIND_READING_WIND = 0,   ///< the wind at a point, as the textures and gust_system_sample give it
     GUST_WIND_READING_SOLVER = 1, ///< the solver's own field, resolved below a cell
+    /// Not a reading: keeps the type 32 bits wide, so any value a caller passes is one the library may
+    /// read and refuse (GUST_ERROR_INVALID_ARGUMENT), as Vulkan's *_MAX_ENUM values do.
+    GUST_WIND_READING_MAX_ENUM = 0x7fffffff,
 } gust_wind_reading;
 
+/// How the wind carries itself along (gust::WindAdvection).
 typedef enum gust_advection {
     GUST_ADVECTION_MACCORMACK = 0,      ///< second order, clamped (the default)
     GUST_ADVECTION_SEMI_LAGRANGIAN = 1, ///< first order: cheaper, smooths the flow next to obstacles
