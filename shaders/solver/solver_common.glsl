@@ -134,6 +134,13 @@ float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint a
     return lattice_value(faces, face_base(dims, axis), dims + axis_unit(axis), q);
 }
 
+/// The blend's width in cells where the next coarser cascade reads open fraction `open` there:
+/// kCascadeBlendCells in open air, 1 at kCascadeSolidShare of solid or more.
+float blend_cells_for(float open) {
+    float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
+    return 1.0 + (kCascadeBlendCells - 1.0) * share;
+}
+
 /// The blend's width in cells at world point x, by how open the next coarser cascade (SolverBindings at
 /// `coarser`) is there: its open fractions (1 − cell_solid) trilinear on its cell centres, as its wind
 /// texture's sampler reads them. kCascadeBlendCells in open air; 1 where its cells around x hold
@@ -141,9 +148,8 @@ float cascade_component(uint64_t faces, ivec3 dims, float h, vec3 origin, uint a
 /// laid under the ground, or a border beside a hill, then keeps the finer cascade's air by the solid.
 float cascade_blend_cells(uint64_t coarser, vec3 x) {
     BindingsRef r = BindingsRef(coarser);
-    float open = 1.0 - lattice_value(r.b.cell_solid, 0, r.b.dims, (x - r.b.origin) / r.b.h - vec3(0.5));
-    float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
-    return 1.0 + (kCascadeBlendCells - 1.0) * share;
+    vec3 q = (x - r.b.origin) / r.b.h - vec3(0.5);
+    return blend_cells_for(1.0 - lattice_value(r.b.cell_solid, 0, r.b.dims, q));
 }
 
 /// How much a cascade's own answer counts at p (cell units of its grid of `dims` cells): 0 outside it,
@@ -610,8 +616,7 @@ vec3 texel_wind(vec3 x) {
                     float open = c.b.texels == 0ul
                                      ? 1.0
                                      : texels_trilinear(c.b.texels, c.b.dims, (x - c.b.origin) / c.b.h).w;
-                    float share = clamp((open - (1.0 - kCascadeSolidShare)) / kCascadeSolidShare, 0.0, 1.0);
-                    w = cascade_weight(p, dims, 1.0 + (kCascadeBlendCells - 1.0) * share);
+                    w = cascade_weight(p, dims, blend_cells_for(open));
                 }
             }
             if (w > 0.0) {
