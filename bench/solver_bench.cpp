@@ -95,9 +95,10 @@ gust::Status bench_frames(FrameScene& scene, int repeat, double budget_s, StepRo
 }
 
 /// The frame table's row of `desc`'s grid at `cycles_per_step` (WindSettings): the static boxes' fragments
-/// from a System holding them alone, then bench_frames on the whole scene.
+/// from a System holding them alone, then bench_frames on the whole scene; with `timeline`, one frame more
+/// with its dispatches timed apart.
 gust::Status run_frames(const gust::SolverDesc& desc, const Options& options, std::uint32_t cycles_per_step,
-                        StepRow& row) {
+                        StepRow& row, bool timeline = false) {
     row.cells = desc.cells;
     row.levels = std::uint32_t(gust::detail::build_levels(desc.cells, desc.cell_size).size());
     {
@@ -108,7 +109,13 @@ gust::Status run_frames(const gust::SolverDesc& desc, const Options& options, st
     }
     auto frames = FrameScene::create(desc, options, cycles_per_step);
     if (!frames) return frames.status();
-    return bench_frames(**frames, options.repeat, options.budget_s, row);
+    if (gust::Status s = bench_frames(**frames, options.repeat, options.budget_s, row); !s || !timeline)
+        return s;
+    if (gust::Status s = (*frames)->time_dispatches(true); !s) return s;
+    auto wall = (*frames)->advance(kWarmupSteps + std::int64_t(row.steps.size()));
+    if (!wall) return wall.status();
+    row.timeline = (*frames)->stats().ms;
+    return {};
 }
 
 /// One step from `start`, timed around step().
@@ -357,7 +364,7 @@ int main(int argc, char** argv) {
         desc.cells = cells;
         desc.max_cycles = options.frame_cycles;
         StepRow row;
-        if (gust::Status s = run_frames(desc, options, options.frame_cycles, row); !s)
+        if (gust::Status s = run_frames(desc, options, options.frame_cycles, row, true); !s)
             row.error = s.message();
         budget_rows.push_back(std::move(row));
     }

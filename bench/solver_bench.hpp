@@ -114,6 +114,9 @@ struct StepRow {
         return double(s.stats.fragments - static_fragments);
     }
     std::vector<StepSample> steps;
+    /// The frame-budget table's rows: one more frame after the timed ones, each dispatch timed apart
+    /// (System::set_dispatch_timing), in recording order.
+    gust::FrameStats::Timings timeline;
     std::string error;
     /// Medians over the timed frames: GPU ms of the wind's pass `name` (FrameStats::ms "wind_<name>"), of
     /// the voxelizer's and the tree's passes, of all passes, wall ms, V-cycles.

@@ -198,6 +198,41 @@ void render_budget(std::ostringstream& out, const std::vector<StepRow>& rows, co
     out << "\n";
 }
 
+/// Where each frame-budget row's GPU time goes: one frame more, every dispatch timed apart
+/// (System::set_dispatch_timing), consecutive dispatches of one pipeline on one line.
+void render_timeline(std::ostringstream& out, const std::vector<StepRow>& rows) {
+    const auto timed =
+        std::find_if(rows.begin(), rows.end(), [](const StepRow& r) { return !r.timeline.empty(); });
+    if (timed == rows.end()) return;
+    out << "### Where a frame's GPU time goes\n\n";
+    out << "Each frame-budget row's scene for one frame more with every dispatch and draw timed apart "
+           "(`System::set_dispatch_timing`): each time runs from the end of all the work before the dispatch "
+           "to "
+           "its own end, so the times add up to the frame (and a dispatch that overlaps the one before it "
+           "shows only what it adds). Consecutive dispatches of one pipeline are summed on one line, with "
+           "their "
+           "count. Timestamps between dispatches cost a little themselves, so the total exceeds the frame "
+           "table's.\n\n";
+    for (const StepRow& row : rows) {
+        if (row.timeline.empty()) continue;
+        out << "**" << size_name(row.cells)
+            << "**\n\n| # | Pipeline | Dispatches | GPU us | Share |\n"
+               "|--:|---|--:|--:|--:|\n";
+        const double total = summed(row.timeline);
+        std::size_t line = 0;
+        for (std::size_t i = 0; i < row.timeline.size();) {
+            std::size_t j = i;
+            double ms = 0.0;
+            for (; j < row.timeline.size() && row.timeline[j].first == row.timeline[i].first; ++j)
+                ms += row.timeline[j].second;
+            out << "| " << ++line << " | " << row.timeline[i].first << " | " << j - i << " | "
+                << fmt_ms(ms * 1000.0) << " | " << fmt_ms(total > 0.0 ? 100.0 * ms / total : 0.0) << " % |\n";
+            i = j;
+        }
+        out << "| | **frame** | " << row.timeline.size() << " | " << fmt_ms(total * 1000.0) << " | |\n\n";
+    }
+}
+
 void render_solves(std::ostringstream& out, const std::vector<SolveRow>& rows,
                    const std::vector<StepRow>& steps, const Options& options,
                    std::vector<std::string>& notes) {
@@ -387,6 +422,7 @@ std::string render(const std::vector<StepRow>& steps, const std::vector<SolveRow
     render_steps(out, steps, desc, options, notes);
     render_solves(out, solves, steps, options, notes);
     render_budget(out, budget_rows, options, notes);
+    render_timeline(out, budget_rows);
     render_bytes(out, steps, desc, bandwidth, options);
     if (!notes.empty()) {
         out << "Notes:\n\n";

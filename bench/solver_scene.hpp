@@ -279,6 +279,11 @@ class FrameScene {
 
     const gust::FrameStats& stats() const { return system_->stats(); }
 
+    /// System::set_dispatch_timing: the frames from the next on give one entry a dispatch in stats().ms.
+    gust::Status time_dispatches(bool on) {
+        return checked(system_->set_dispatch_timing(on), "set_dispatch_timing");
+    }
+
   private:
     explicit FrameScene(const gust::SolverDesc& desc) : layout_(desc) {}
 

@@ -1,4 +1,5 @@
 #include <gust/gpu/pipeline.hpp>
+#include <gust/gpu/profiler.hpp>
 #include <memory_resource>
 #include <utility>
 #include <vector>
@@ -50,6 +51,7 @@ Result<Pipeline> Pipeline::compute(Context& ctx, const char* name, std::span<con
                                    std::span<const std::uint32_t> constants) {
     Pipeline p;
     p.ctx_ = &ctx;
+    p.name_ = name;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
     if (Status s = p.create_layout(push_constant_bytes); !s) return s;
     ctx.name(VK_OBJECT_TYPE_PIPELINE_LAYOUT, std::uint64_t(p.layout_), name);
@@ -76,6 +78,7 @@ Result<Pipeline> Pipeline::compute(Context& ctx, const char* name, std::span<con
 Result<Pipeline> Pipeline::graphics(Context& ctx, const char* name, const GraphicsPipelineDesc& desc) {
     Pipeline p;
     p.ctx_ = &ctx;
+    p.name_ = name;
     p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
     if (Status s = p.create_layout(desc.push_constant_bytes); !s) return s;
     ctx.name(VK_OBJECT_TYPE_PIPELINE_LAYOUT, std::uint64_t(p.layout_), name);
@@ -154,19 +157,24 @@ void Pipeline::bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) 
     if (bytes) ctx_->vk().vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_ALL, 0, bytes, push);
 }
 
-void Pipeline::dispatch(VkCommandBuffer cmd, std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
-    ctx_->vk().vkCmdDispatch(cmd, x, y, z);
+template <class Record> void Pipeline::timed(VkCommandBuffer cmd, Record record) const {
+    Profiler* profiler = ctx_->dispatch_profiler();
+    if (profiler) profiler->begin(cmd, name_);
+    record();
+    if (profiler) profiler->end(cmd);
     ctx_->count_dispatch();
+}
+
+void Pipeline::dispatch(VkCommandBuffer cmd, std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+    timed(cmd, [&] { ctx_->vk().vkCmdDispatch(cmd, x, y, z); });
 }
 
 void Pipeline::dispatch_indirect(VkCommandBuffer cmd, VkBuffer arguments, VkDeviceSize offset) const {
-    ctx_->vk().vkCmdDispatchIndirect(cmd, arguments, offset);
-    ctx_->count_dispatch();
+    timed(cmd, [&] { ctx_->vk().vkCmdDispatchIndirect(cmd, arguments, offset); });
 }
 
 void Pipeline::draw(VkCommandBuffer cmd, std::uint32_t vertices) const {
-    ctx_->vk().vkCmdDraw(cmd, vertices, 1, 0, 0);
-    ctx_->count_dispatch();
+    timed(cmd, [&] { ctx_->vk().vkCmdDraw(cmd, vertices, 1, 0, 0); });
 }
 
 void Pipeline::release() {
@@ -192,6 +200,7 @@ Pipeline& Pipeline::operator=(Pipeline&& other) noexcept {
         pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
         layout_ = std::exchange(other.layout_, VK_NULL_HANDLE);
         bind_point_ = other.bind_point_;
+        name_ = other.name_;
     }
     return *this;
 }

@@ -163,6 +163,15 @@ Outcome Frame::record(VkCommandBuffer cmd, const FrameInputs& in, FrameSlot& slo
         slot.snapshot = std::move(*created);
     }
     const gpu::WorkCounts before = ctx_->work();
+    if (dispatch_profiler_) {
+        dispatch_profiler_->reset(cmd);
+        ctx_->time_dispatches(&*dispatch_profiler_);
+    }
+    // Whatever way the recording ends, the Context stops timing with it.
+    const struct StopTiming {
+        gpu::Context* ctx;
+        ~StopTiming() { ctx->time_dispatches(nullptr); }
+    } stop_timing{ctx_};
 
     // Inputs: whatever the host submitted before (its draws sampling the wind texture, gust's last frame)
     // comes before this frame's work; then the meshes posed from bones are skinned into their positions.
@@ -271,6 +280,22 @@ Outcome Frame::collect(const FrameSlot& slot, const gpu::WorkCounts& work, Frame
         for (const auto& [pass, ms] : c.solver->timings(slot.frame))
             stats.ms.emplace_back("cascade_wind_", ms).first.append(pass);
     }
+    if (dispatch_profiler_) {
+        const gpu::Timings timed = dispatch_profiler_->read_frame(slot.frame);
+        stats.ms.assign(timed.begin(), timed.end());
+    }
+    return {};
+}
+
+Outcome Frame::time_dispatches(bool on) {
+    if (!on) {
+        dispatch_profiler_.reset();
+        return {};
+    }
+    if (dispatch_profiler_) return {};
+    auto created = gpu::Profiler::create(*ctx_, kTimedDispatches);
+    if (!created) return device_failure(created.status());
+    dispatch_profiler_.emplace(std::move(*created));
     return {};
 }
 

@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <gust/gpu/context.hpp>
 #include <gust/gpu/image.hpp>
+#include <gust/gpu/profiler.hpp>
 #include <gust/gust.hpp>
 #include <gust/solver/wind_solver.hpp>
 #include <gust/voxelizer/voxel_world.hpp>
 #include <memory_resource>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -136,6 +138,9 @@ class Frame {
     /// SystemDesc::snapshot: publishes a completed frame's texels (after collect) for System::sample.
     void publish_snapshot(const FrameSlot& slot);
 
+    /// System::set_dispatch_timing: from the next frame recorded, every dispatch and draw is timed apart and
+    /// collect puts those times into FrameStats::ms in place of the passes'.
+    Outcome time_dispatches(bool on);
     /// Every cascade's wind texture, finest first.
     std::span<const WindTexture> textures() const { return published_; }
     /// Frames recorded so far.
@@ -171,6 +176,10 @@ class Frame {
     std::uint64_t recorded_ = 0;
     double time_ = 0.0; ///< s: the finest cascade's time, the sum of the frames' dt
     SnapshotRing* snapshot_ = nullptr;
+    /// Dispatches and draws timed a frame at most: more than the largest frame records (about 200, the
+    /// first frame of 4 cascades); the rest go untimed.
+    static constexpr std::uint32_t kTimedDispatches = 512;
+    std::optional<gpu::Profiler> dispatch_profiler_; ///< time_dispatches(true)
 };
 
 } // namespace gust::detail

@@ -152,6 +152,11 @@ gust_result gust_system_stats_pass(gust_system system, uint32_t index, const cha
     });
 }
 
+gust_result gust_system_set_dispatch_timing(gust_system system, bool on) {
+    return on_system(system, "gust_system_set_dispatch_timing",
+                     [&](gust::System& s) { return s.set_dispatch_timing(on); });
+}
+
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin) {
     return on_system(system, "gust_system_domain_origin", [&](gust::System& s) -> gust::Outcome {
         if (!origin) return invalid("origin (the output) is NULL");

@@ -118,6 +118,12 @@ const FrameStats& System::stats() const {
     return impl_->stats;
 }
 
+Outcome System::set_dispatch_timing(bool on) {
+    const WriterCall call(*impl_);
+    if (!call) return WriterCall::busy("set_dispatch_timing");
+    return impl_->frame->time_dispatches(on);
+}
+
 Outcome System::read_stats(FrameStats& out) const {
     return guarded([&]() -> Outcome {
         const std::lock_guard lock(impl_->stats_mutex);

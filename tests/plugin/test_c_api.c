@@ -532,6 +532,32 @@ static void rejects_bad_queries(gust_system system) {
     CHECK_RESULT(system, gust_system_debug_tree_nodes(system, NULL, 2, &count), GUST_ERROR_INVALID_ARGUMENT);
 }
 
+/* Dispatch timing: the next step's passes are its dispatches, one each, named after their pipelines;
+ * off again, the step after gives the `passes` passes it gave before. */
+static void times_each_dispatch(gust_system system, uint32_t passes) {
+    CHECK_RESULT(system, gust_system_set_dispatch_timing(system, true), GUST_OK);
+    CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+    gust_frame_stats stats;
+    CHECK_RESULT(system, gust_system_stats(system, &stats), GUST_OK);
+    uint32_t timed = 0;
+    CHECK_RESULT(system, gust_system_stats_pass_count(system, &timed), GUST_OK);
+    CHECK(timed == stats.dispatches && timed > passes);
+    int advected = 0;
+    for (uint32_t i = 0; i < timed; ++i) {
+        const char* name = NULL;
+        double ms = -1.0;
+        CHECK_RESULT(system, gust_system_stats_pass(system, i, &name, &ms), GUST_OK);
+        CHECK(name && strncmp(name, "gust ", 5) == 0);
+        CHECK(isfinite(ms) && ms >= 0.0);
+        advected += name && strstr(name, "advect") != NULL;
+    }
+    CHECK(advected >= 1);
+    CHECK_RESULT(system, gust_system_set_dispatch_timing(system, false), GUST_OK);
+    CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+    CHECK_RESULT(system, gust_system_stats_pass_count(system, &timed), GUST_OK);
+    CHECK(timed == passes);
+}
+
 static int equal3(gust_vec3 a, gust_vec3 b) {
     return a.x == b.x && a.y == b.y && a.z == b.z;
 }
@@ -804,6 +830,7 @@ static void simulates_a_small_world(void) {
     rejects_bad_queries(system);
     /* Still stepping after all that. */
     CHECK_RESULT(system, gust_system_step(system, 0.05f), GUST_OK);
+    times_each_dispatch(system, passes);
 
     CHECK_RESULT(system, gust_system_destroy(system), GUST_OK);
     CHECK(counts.allocations > 0);

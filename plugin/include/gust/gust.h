@@ -503,6 +503,11 @@ gust_result gust_system_stats_pass_count(gust_system system, uint32_t* count);
 /// the next step) and `*ms` (GPU milliseconds); either output may be NULL.
 gust_result gust_system_stats_pass(gust_system system, uint32_t index, const char** name, double* ms);
 
+/// On: the frames recorded from the next step on time every dispatch and draw apart, and the statistics'
+/// passes (gust_system_stats_pass) are those dispatches, named after their pipelines
+/// (gust::System::set_dispatch_timing). Off by default.
+gust_result gust_system_set_dispatch_timing(gust_system system, bool on);
+
 /// `*origin` receives the domain's min corner (world m) after the last step.
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
 

@@ -530,6 +530,12 @@ class System {
     /// Writer call (read_stats from other threads): the last step's statistics (HostCommands: those of the
     /// frame recorded frames_in_flight steps ago).
     const FrameStats& stats() const;
+    /// Where a frame's GPU time goes, for profiling: on, the frames recorded from the next step on time every
+    /// dispatch and draw apart, and their FrameStats::ms holds one entry per dispatch in recording order,
+    /// named after its pipeline ("gust wind advect", ...), instead of one per pass. Each entry runs from the
+    /// end of all the work before it to its own end, so the entries add up to the frame. Off by default;
+    /// off again, the next frames give passes. Empty without timestamps (DeviceInfo).
+    Outcome set_dispatch_timing(bool on);
     /// The domain's min corner (world, m) after the last step.
     Vec3 domain_origin() const;
     /// The Vulkan device the System runs on (VkPhysicalDeviceProperties::deviceName), valid while it lives.

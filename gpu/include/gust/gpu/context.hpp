@@ -19,6 +19,8 @@
 
 namespace gust::gpu {
 
+class Profiler;
+
 /// How serious a message from the driver or the validation layer is.
 enum class Severity { Info, Warning, Error };
 
@@ -182,6 +184,13 @@ class Context : public HostObject {
         if (barrier_recorded_) ++work_.stages;
         barrier_recorded_ = false;
     }
+    /// Times every dispatch and draw recorded from now on apart in `profiler`, under its pipeline's name
+    /// (null: stops). The caller resets the profiler in the recording first. Each time runs from the end of
+    /// all the work recorded before the dispatch to the end of the dispatch, so work that overlaps counts
+    /// once and the times add up to the whole (System::set_dispatch_timing).
+    void time_dispatches(Profiler* profiler) { dispatch_profiler_ = profiler; }
+    /// The profiler of time_dispatches, or null.
+    Profiler* dispatch_profiler() const { return dispatch_profiler_; }
     /// Internal: an execution barrier was recorded (or a command buffer begun): the next dispatch waits.
     void count_barrier() const { barrier_recorded_ = true; }
 
@@ -309,6 +318,7 @@ class Context : public HostObject {
     // Counters of what was recorded, not state: the const recording helpers (buffer.hpp) count too.
     mutable WorkCounts work_;
     mutable bool barrier_recorded_ = true;
+    Profiler* dispatch_profiler_ = nullptr;
     std::atomic<std::uint32_t> validation_messages_{0};
     mutable std::mutex message_mutex_;
     std::pmr::string last_message_;

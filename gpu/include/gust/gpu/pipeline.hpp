@@ -37,7 +37,8 @@ class Pipeline {
 
     /// Binds the pipeline and pushes `bytes` of constants (all stages).
     void bind(VkCommandBuffer cmd, const void* push, std::uint32_t bytes) const;
-    /// vkCmdDispatch, counted in the Context's work (every dispatch of gust goes through these three).
+    /// vkCmdDispatch, counted in the Context's work (every dispatch of gust goes through these three) and
+    /// timed under the pipeline's name while the Context times dispatches (Context::time_dispatches).
     void dispatch(VkCommandBuffer cmd, std::uint32_t x, std::uint32_t y = 1, std::uint32_t z = 1) const;
     /// vkCmdDispatchIndirect, counted alike (an emptied one still costs its dispatch).
     void dispatch_indirect(VkCommandBuffer cmd, VkBuffer arguments, VkDeviceSize offset) const;
@@ -51,7 +52,10 @@ class Pipeline {
     VkPipeline pipeline_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     VkPipelineBindPoint bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+    const char* name_ = ""; ///< the literal it was created with (Context::time_dispatches)
     void release();
+    /// Times the work recorded by `record` apart when the Context times dispatches.
+    template <class Record> void timed(VkCommandBuffer cmd, Record record) const;
     Status create_layout(std::uint32_t push_constant_bytes);
 };
 
