@@ -31,3 +31,25 @@ uvec3 fragment_voxel(uint i) {
 }
 
 uint fragment_count() { return min(WordsRef(tb.fragment_count).v[0], tb.fragment_capacity); }
+
+// The "last workgroup" pattern (as the solver's reductions, solver_common.glsl): every group counts itself
+// done with an atomic after a memory barrier, and the group that counts last sees the others' atomics and
+// writes, read through a coherent reference.
+layout(buffer_reference, scalar) coherent buffer CoherentStateRef { TreeState s; };
+
+uint group_total() { return gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z; }
+
+shared bool group_is_last;
+/// Called by every thread of the dispatch: true in every thread of the group that finished last.
+bool last_group() {
+    memoryBarrierBuffer();
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        uint seen = atomicAdd(state().s.groups_done, 1u);
+        group_is_last = seen + 1u == group_total();
+        if (group_is_last) state().s.groups_done = 0u;
+    }
+    barrier();
+    memoryBarrierBuffer();
+    return group_is_last;
+}

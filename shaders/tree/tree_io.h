@@ -51,6 +51,7 @@ struct TreeState {
     uint leaves_next;                  ///< leaves whose dynamic words this frame set
     uint static_voxels;                ///< voxels set in static words (since the last rebuild)
     uint dynamic_voxels;               ///< voxels set in dynamic words this frame and not in static ones
+    uint groups_done;                  ///< workgroups of the current tree_visit done (its last one plans)
     uint blocks_per_level[kMaxLevels]; ///< live blocks whose owner is at each level
     TreeDispatch fragments_dispatch;   ///< over this frame's fragments
     TreeDispatch requests_dispatch;    ///< over the current level's requests
@@ -66,6 +67,15 @@ GUST_INLINE TreeDispatch dispatch_for(uint items) {
     d.y = (groups + 65534u) / 65535u;
     d.z = 1u;
     d.items = items;
+    return d;
+}
+
+/// dispatch_for, but at least one workgroup: a pass whose last workgroup finishes the work of the pass
+/// (tree_visit plans the allocation) runs even over no items.
+GUST_INLINE TreeDispatch dispatch_at_least_one(uint items) {
+    TreeDispatch d = dispatch_for(items);
+    d.x = max(d.x, 1u);
+    d.y = max(d.y, 1u);
     return d;
 }
 
@@ -132,7 +142,7 @@ GUST_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::TreePush) == 24, "push constants must match the GLSL layout");
 static_assert(sizeof(gust::shaderio::TreeBindings) == 13 * 8 + 8 * 4);
-static_assert(sizeof(gust::shaderio::TreeState) == (16 + 10 + 16) * 4);
+static_assert(sizeof(gust::shaderio::TreeState) == (17 + 10 + 16) * 4);
 #endif
 
 #endif

@@ -8,14 +8,12 @@
 namespace gust {
 
 namespace {
-#include "gust_shaders/tree_advance_comp.h"
 #include "gust_shaders/tree_alloc_comp.h"
 #include "gust_shaders/tree_begin_comp.h"
 #include "gust_shaders/tree_clear_comp.h"
 #include "gust_shaders/tree_coarsen_comp.h"
 #include "gust_shaders/tree_fragments_comp.h"
 #include "gust_shaders/tree_leaf_comp.h"
-#include "gust_shaders/tree_plan_comp.h"
 #include "gust_shaders/tree_visit_comp.h"
 
 using shaderio::BlockRecord;
@@ -83,9 +81,7 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
                             {&tree->fragments_, "gust tree_fragments", words(tree_fragments_comp)},
                             {&tree->clear_, "gust tree_clear", words(tree_clear_comp)},
                             {&tree->visit_, "gust tree_visit", words(tree_visit_comp)},
-                            {&tree->plan_, "gust tree_plan", words(tree_plan_comp)},
                             {&tree->alloc_, "gust tree_alloc", words(tree_alloc_comp)},
-                            {&tree->advance_, "gust tree_advance", words(tree_advance_comp)},
                             {&tree->leaf_, "gust tree_leaf", words(tree_leaf_comp)},
                             {&tree->coarsen_, "gust tree_coarsen", words(tree_coarsen_comp)}};
     for (const Stage& stage : stages) {
@@ -233,12 +229,12 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
         gpu::barrier(ctx_, cmd);
     };
     once(fragments_);
+    // Two stages a level: each fragment steps down to its node, marks it and queues it (the last workgroup
+    // plans the blocks), then the blocks are handed out.
     for (std::uint32_t level = 0; level < levels_; ++level) {
         push.level = level;
         indirect(visit_, offsetof(TreeState, fragments_dispatch));
-        once(plan_);
         indirect(alloc_, offsetof(TreeState, requests_dispatch));
-        if (level + 1 < levels_) indirect(advance_, offsetof(TreeState, fragments_dispatch));
     }
     indirect(leaf_, offsetof(TreeState, fragments_dispatch));
 }
@@ -315,7 +311,9 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     gpu::barrier(ctx_, cmd);
     clear_.bind(cmd, &push, sizeof(push));
     clear_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
-    gpu::barrier(ctx_, cmd);
+    // An insertion's passes up to the leaf pass (behind their barriers) touch no live leaf's words, so
+    // they run beside the clearing; only the coarsening, which frees leaves, waits for it.
+    if (!rebuild_static && !dynamic) gpu::barrier(ctx_, cmd);
     profiler_.end(cmd);
     if (rebuild_static) {
         profiler_.begin(cmd, "tree_static");
