@@ -354,9 +354,9 @@ void render_bytes(std::ostringstream& out, const std::vector<StepRow>& rows, con
            "with the sums b*q and q*q) plus, per iteration, the passes `WindSolver` records: the first "
            "smoothing at level 0 (the iterate x + alpha*p, its residual and the convergence check, then "
         << 2 * gust::SolverDesc{}.smoothing
-        << " half-sweeps in 8^3 tiles), per level down to the coarse solve a restriction (which computes the "
-           "finer level's residual) and the next level's smoothing, the coarse solve of every level of at "
-           "most "
+        << " half-sweeps in 8^3 tiles), per level down to the coarse solve the next level's smoothing, which "
+           "first restricts its right-hand side from the finer level's residual (computed there), the coarse "
+           "solve (which restricts its own) of every level of at most "
         << grouped(gust::shaderio::kCoarseCells) << " cells in one workgroup ("
         << 2 * gust::detail::kCoarseSweeps
         << " half-sweeps on the coarsest), per level up the prolongation with its smoothing (at level 0 "

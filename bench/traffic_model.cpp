@@ -72,8 +72,9 @@ Traffic faces_traffic(const Workload& w) {
     return t;
 }
 
-/// The "advect" pass: semi-Lagrangian, or MacCormack's forward (which keeps the range it blended),
-/// backward and clamped correction; the pass that writes the velocity (the only one, or MacCormack's last)
+/// The "advect" pass: semi-Lagrangian, or MacCormack's forward (which keeps the range it blended), then
+/// backward with the clamped correction in one dispatch; the pass that writes the velocity (the only one,
+/// or MacCormack's second)
 /// also adds the emitters, the ambient domain faces and vorticity confinement from the last step's
 /// vorticity (the two cells' forces, made by solid_cells).
 Traffic advect_traffic(const Workload& w) {
@@ -86,17 +87,18 @@ Traffic advect_traffic(const Workload& w) {
         t.add(F * (trace + 8 * 4 + confine + 4), 8 * F + 16 * C); // velocity -> tmp
         return t;
     }
-    t.add(F * (trace + 8 * 4 + 3 * 4), 16 * F);        // velocity -> tmp, low and high
-    t.add(F * (trace + 8 * 4 + 4), 12 * F);            // tmp -> back, tracing with the velocity
-    t.add(F * (5 * 4 + confine + 4), 24 * F + 16 * C); // tmp, velocity, back, low, high -> tmp
+    t.add(F * (trace + 8 * 4 + 3 * 4), 16 * F); // velocity -> scratch, low and high
+    // scratch traced back with the velocity, corrected from scratch, velocity, low and high -> tmp
+    t.add(F * (trace + 8 * 4 + 4 * 4 + confine + 4), 20 * F + 16 * C);
     return t;
 }
 
 /// The "pressure" pass with the default MGPCG (wind_solver.cpp, record_step): start.comp, then per
 /// iteration smooth.comp's first pass at level 0 (the iterate, its residual and the check, then smoothing),
-/// restrict.comp and the downward smoothing per level above the coarse solve, coarse_solve.comp (every
-/// coarser level in one workgroup), the upward smoothing per level (at level 0 with the sums for beta),
-/// and cg.comp (the new direction and the sum of p·Lp).
+/// the downward smoothing per level above the coarse solve (each restricting its right-hand side from the
+/// finer level first), coarse_solve.comp (every coarser level in one workgroup, restricting its first), the
+/// upward smoothing per level (at level 0 with the sums for beta), and cg.comp (the new direction and the sum
+/// of p·Lp).
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), W = Workload::weight(0) * F;
@@ -113,12 +115,13 @@ Traffic pressure_traffic(const Workload& w) {
     // and the last residual read; x, r_old, r and z stored.
     cycle.add(C * (6 + 7 * 2 + 2 + 4) * 4, W + 32 * C);
     for (std::size_t l = 0; l < coarse; ++l) {
-        // restrict: a coarse cell computes its children's residuals (six weights, seven φ and b each).
+        // The restriction, in the next level's smoothing (or the coarse solve's, which counts the dispatch):
+        // a coarse cell computes its children's residuals (six weights, seven φ and b each) and stores b.
         cycle.add(w.cells(l) * 14 * 4 + 4 * w.cells(l + 1),
-                  Workload::weight(l) * w.faces(l) + 8 * w.cells(l) + 4 * w.cells(l + 1));
-        // downward smoothing from zero at the levels between: six weights and b read, z stored.
+                  Workload::weight(l) * w.faces(l) + 8 * w.cells(l) + 4 * w.cells(l + 1), 0);
+        // downward smoothing from zero at the levels between: six weights read, z stored.
         if (l + 1 < coarse)
-            cycle.add(w.cells(l + 1) * 8 * 4, Workload::weight(l + 1) * w.faces(l + 1) + 8 * w.cells(l + 1));
+            cycle.add(w.cells(l + 1) * 7 * 4, Workload::weight(l + 1) * w.faces(l + 1) + 4 * w.cells(l + 1));
     }
     // coarse_solve: the first level's right-hand side and the weights of each relaxed cell (half the cells
     // per half-sweep, down and up at every level but the coarsest, kCoarseSweeps on it) from memory, the

@@ -2,11 +2,11 @@
 #extension GL_GOOGLE_include_directive : require
 // Per face, the velocity's next field into kFieldTmp. Mode (kMode) kAdvectSemiLagrangian: semi-Lagrangian
 // advection, then the emitters (closing pc.param of the gap), the ambient wind on the domain's faces and
-// vorticity confinement (forced_face), all in this one pass. MacCormack: kAdvectForward the forward pass
-// (kFieldTmp, and the range it blended into kFieldLow and kFieldHigh), kAdvectBackward the backward pass
-// (kFieldTmp -> kFieldBack), kAdvectCorrect the clamped correction and the same forces, in place in
-// kFieldTmp (each thread reads and writes only its own face there). kAdvectForces: no advection, the
-// forces alone.
+// vorticity confinement (forced_face), all in this one pass. MacCormack in two passes: kAdvectForward the
+// forward pass (kFieldScratch, and the range it blended into kFieldLow and kFieldHigh), kAdvectCorrect the
+// backward pass, the clamped correction and the same forces into kFieldTmp (maccormack_face: a face's
+// backward value serves only its own correction, so it needs no pass of its own). kAdvectForces: no
+// advection, the forces alone.
 // The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not. Constant 1 (kNested) does the same for
 // the cascades' code.
@@ -33,14 +33,12 @@ void main() {
             forced_face(advect_face(kFieldVelocity, axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
     else if (kMode == kAdvectForward) {
         vec2 range;
-        store_face(kFieldTmp, i, advect_face_range(axis, f, pc.dt, range));
+        store_face(kFieldScratch, i, advect_face_range(axis, f, pc.dt, range));
         store_face(kFieldLow, i, range.x);
         store_face(kFieldHigh, i, range.y);
-    } else if (kMode == kAdvectBackward)
-        store_face(kFieldBack, i, advect_face(kFieldTmp, axis, f, -pc.dt));
-    else if (kMode == kAdvectForces)
+    } else if (kMode == kAdvectForces)
         store_face(kFieldTmp, i,
                    forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
     else
-        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f), axis, f, pc.param, pc.dt, epsilon));
+        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
 }

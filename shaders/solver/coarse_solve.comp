@@ -3,9 +3,10 @@
 // One workgroup solves every level from pc.level down to the coarsest in shared memory, with a V-cycle of
 // its own (SolverBindings::smoothing red-black sweeps before and after each coarser level's correction,
 // pc.iterations sweeps on the coarsest): levels of at most kCoarseCells cells (16^3) cost this one
-// dispatch together, where a dispatch per sweep and level cost microseconds whatever its size. The
-// first level's right-hand side is read from memory; its correction goes to kCellPressureUp for the finer
-// level's upward pass. With pc.level 0 (a grid that small) and pc.mode kCoarseBeta it is the whole V-cycle
+// dispatch together, where a dispatch per sweep and level cost microseconds whatever its size. Below level
+// 0 the first level's right-hand side is restricted here from the finer level's residual (the dispatch
+// before this one smoothed it) into memory, where the solve reads it; its correction goes to
+// kCellPressureUp for the finer level's upward pass. With pc.level 0 (a grid that small) and pc.mode kCoarseBeta it is the whole V-cycle
 // of a conjugate-gradient iteration, and also turns the sums z·r and z·r_old into β.
 #include "solver_io.h"
 
@@ -54,6 +55,13 @@ void main() {
     GridLevel last = load_level(levels - 1u);
     uint total = last.cells + cells_of(last) - coarse_base;
     for (uint e = gl_LocalInvocationIndex; e < total; e += gl_WorkGroupSize.x) coarse_phi[e] = 0.0;
+    if (top > 0u) {
+        GridLevel fine = load_level(top - 1u);
+        for (uint i = gl_LocalInvocationIndex; i < cells_of(first); i += gl_WorkGroupSize.x)
+            store_cell(kCellRhs, int(first.cells + i), restrict_cell(fine, cell_from_index(first.dims, int(i))));
+        // The sweeps read those right-hand sides back from memory in other invocations of this workgroup.
+        memoryBarrierBuffer();
+    }
     barrier();
 
     for (uint l = top; l + 1u < levels; ++l) {

@@ -10,7 +10,10 @@
 //     r = b − L x_k computed exactly (the last residual kept as r_old), with the convergence check in the
 //     workgroup that finishes last; then smoothing from zero against r, unless the coarse solve holds
 //     level 0 (SolverBindings::coarse_level 0), which smooths it itself.
-//   kSmoothDown (a level between): smoothing from zero against the level's right-hand side (kCellPressure).
+//   kSmoothDown (a level between): the level's right-hand side restricted from the finer level's residual
+//     (restrict_cell, stored as kCellRhs for the upward pass), then smoothing from zero against it: the
+//     restriction needs the finer level's smoothing done, which the dispatch before this one is, so it
+//     costs no dispatch of its own.
 //   kSmoothUp (upward): the level's downward values plus the coarser level's correction (prolong_cell from
 //     kCellPressureUp), smoothed against the right-hand side, into kCellPressureUp.
 //   kSmoothUpBeta (level 0 upward, conjugate gradients): as kSmoothUp, then the sums z·r and z·r_old,
@@ -94,6 +97,9 @@ void main() {
         if (group_max_end(bits) && bits > state().s.residual_scratch) atomicMax(state().s.residual_scratch, bits);
         // The iterate just written is x_k; in absolute terms kCellSolutionB is buffer B on even iterations.
         if (last_group() && gl_LocalInvocationIndex == 0u) convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
+    } else if (mine && mode == kSmoothDown) {
+        rhs = restrict_cell(load_level(l - 1u), c);
+        store_cell(kCellRhs, i, rhs);
     } else if (mine) {
         rhs = load_cell(kCellRhs, i);
     }

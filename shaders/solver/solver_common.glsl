@@ -238,7 +238,7 @@ uint64_t face_field(uint field) {
     bool swapped = (pc.swap & 1u) != 0u;
     if (field == kFieldVelocity) return swapped ? hot.velocity_tmp : hot.velocity;
     if (field == kFieldTmp) return swapped ? hot.velocity : hot.velocity_tmp;
-    if (field == kFieldBack) return hot.velocity_back;
+    if (field == kFieldScratch) return hot.velocity_back;
     if (field == kFieldSolid) return hot.solid_velocity;
     return hot.velocity_back + uint64_t(field - kFieldSolid) * uint64_t(hot.level0_faces) * 4ul;
 }

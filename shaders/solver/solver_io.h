@@ -152,10 +152,10 @@ GUST_INLINE uint fluid_node(uint cell, uint cells) {
 
 GUST_CONST uint kFieldVelocity = 0u; ///< face fields for load_face(): the velocity (SolverPush::swap)
 GUST_CONST uint kFieldTmp = 1u;      ///< the other velocity buffer: a pass writes the next field here
-GUST_CONST uint kFieldBack = 2u;     ///< MacCormack's backward pass
+GUST_CONST uint kFieldScratch = 2u;  ///< MacCormack's forward pass; the viscosity's iterations
 GUST_CONST uint kFieldSolid = 3u;
 GUST_CONST uint kFieldLow = 4u;  ///< MacCormack's forward pass: the least value each face blended
-GUST_CONST uint kFieldHigh = 5u; ///< and the largest (both after kFieldBack in velocity_back)
+GUST_CONST uint kFieldHigh = 5u; ///< and the largest (both after kFieldScratch in velocity_back)
 GUST_CONST uint kFaceFields = 6u;
 GUST_CONST uint kCellPressure = 0u;    ///< cell fields for load_cell(): a level's V-cycle value, downward
 GUST_CONST uint kCellRhs = 1u;         ///< a level's V-cycle right-hand side (level 0: the residual r)
@@ -174,7 +174,7 @@ GUST_CONST uint kCellFields = 11u;
 struct SolverBindings {
     GUST_ADDRESS velocity;        ///< float[faces]: one of the two velocity buffers (SolverPush::swap), m/s
     GUST_ADDRESS velocity_tmp;    ///< float[faces]: the other
-    GUST_ADDRESS velocity_back;   ///< float[faces]: MacCormack's backward pass (then kFieldLow, kFieldHigh)
+    GUST_ADDRESS velocity_back;   ///< float[faces]: kFieldScratch (then kFieldLow, kFieldHigh)
     GUST_ADDRESS weights;         ///< float[]: weights of levels 1 on, from index level0_faces
     GUST_ADDRESS solid_velocity;  ///< float[faces]: solid's normal velocity per face, m/s
     GUST_ADDRESS pressure;        ///< float[]: kCellPressure, all levels
@@ -281,11 +281,10 @@ GUST_CONST uint kNestInner = 2u;
 
 /// advect.comp: the velocity's next field into kFieldTmp.
 GUST_CONST uint kAdvectSemiLagrangian = 0u; ///< semi-Lagrangian advection, then the forces (forced_face)
-GUST_CONST uint kAdvectForward = 1u;        ///< MacCormack's forward pass, and the range it blended
-GUST_CONST uint kAdvectBackward = 2u;       ///< MacCormack's backward pass, kFieldTmp -> kFieldBack
-GUST_CONST uint kAdvectCorrect = 3u;        ///< MacCormack's clamped correction, then the forces, in place
-GUST_CONST uint kAdvectForces = 4u;         ///< no advection: the forces alone
-GUST_CONST uint kAdvectModes = 5u;
+GUST_CONST uint kAdvectForward = 1u;        ///< MacCormack's forward pass into kFieldScratch, and its range
+GUST_CONST uint kAdvectCorrect = 2u;        ///< MacCormack's backward pass and clamped correction, the forces
+GUST_CONST uint kAdvectForces = 3u;         ///< no advection: the forces alone
+GUST_CONST uint kAdvectModes = 4u;
 
 /// smooth.comp: one level's smoothing in shared-memory tiles.
 GUST_CONST uint kSmoothFirst = 0u;      ///< level 0, a conjugate-gradient iteration's first pass: x_k and r
@@ -323,9 +322,9 @@ GUST_CONST uint kScrollMove = 0u; ///< the field moved by SolverPush::shift cell
 GUST_CONST uint kScrollAmbientChange = 1u;
 
 /// diffuse.comp reads face field SolverPush::mode (kFieldVelocity, then each iteration's target) and
-/// writes this one: the iterations alternate between kFieldTmp and kFieldBack.
+/// writes this one: the iterations alternate between kFieldTmp and kFieldScratch.
 GUST_INLINE uint diffuse_target(uint from) {
-    return from == kFieldTmp ? kFieldBack : kFieldTmp;
+    return from == kFieldTmp ? kFieldScratch : kFieldTmp;
 }
 
 GUST_NAMESPACE_END

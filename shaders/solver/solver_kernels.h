@@ -228,12 +228,14 @@ GUST_INLINE float advect_face_range(uint axis, ivec3 f, float dt, GUST_OUT(vec2)
     return sample_component_range(kFieldVelocity, axis, trace(axis, f, dt), range);
 }
 
-/// MacCormack's correction of the forward result (kFieldTmp) by the error the backward pass
-/// (kFieldBack) found, clamped to the values the forward pass blended (stays bounded).
-GUST_INLINE float maccormack_face(uint axis, ivec3 f) {
+/// MacCormack's backward pass and correction of face f: the forward result (kFieldScratch) carried back
+/// over dt, and the forward result corrected by half the error that finds, clamped to the values the forward
+/// pass blended (stays bounded). The backward pass needs no field of its own: each face's backward value
+/// is used only by its own correction.
+GUST_INLINE float maccormack_face(uint axis, ivec3 f, float dt) {
     int i = face_index(grid_dims(), axis, f);
-    float corrected =
-        load_face(kFieldTmp, i) + 0.5f * (load_face(kFieldVelocity, i) - load_face(kFieldBack, i));
+    float backward = advect_face(kFieldScratch, axis, f, -dt);
+    float corrected = load_face(kFieldScratch, i) + 0.5f * (load_face(kFieldVelocity, i) - backward);
     return clamp(corrected, load_face(kFieldLow, i), load_face(kFieldHigh, i));
 }
 

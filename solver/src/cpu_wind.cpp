@@ -299,24 +299,20 @@ Result<WindStats> CpuWind::step(float dt, const CpuSolid* solid) {
         m.ambient_change = glm::vec3(0.0f);
     }
     std::vector<float>& tmp = k.face[shaderio::kFieldTmp];
-    std::vector<float>& back = k.face[shaderio::kFieldBack];
+    std::vector<float>& forward = k.face[shaderio::kFieldScratch];
     if (desc.advection != Advection::None) {
         if (desc.advection == Advection::MacCormack) {
             std::vector<float>& low = k.face[shaderio::kFieldLow];
             std::vector<float>& high = k.face[shaderio::kFieldHigh];
             m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
                 glm::vec2 range;
-                tmp[std::size_t(i)] = k.advect_face_range(a, f, dt, range);
+                forward[std::size_t(i)] = k.advect_face_range(a, f, dt, range);
                 low[std::size_t(i)] = range.x;
                 high[std::size_t(i)] = range.y;
             });
             m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
-                back[std::size_t(i)] = k.advect_face(shaderio::kFieldTmp, a, f, -dt);
+                tmp[std::size_t(i)] = k.maccormack_face(a, f, dt);
             });
-            std::vector<float> out(m.faces());
-            m.each_face(
-                [&](int i, std::uint32_t a, glm::ivec3 f) { out[std::size_t(i)] = k.maccormack_face(a, f); });
-            tmp = std::move(out);
         } else {
             m.each_face([&](int i, std::uint32_t a, glm::ivec3 f) {
                 tmp[std::size_t(i)] = k.advect_face(shaderio::kFieldVelocity, a, f, dt);

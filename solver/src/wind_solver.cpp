@@ -31,7 +31,6 @@ namespace {
 #include "gust_shaders/fluid_link_comp.h"
 #include "gust_shaders/jacobi_comp.h"
 #include "gust_shaders/project_comp.h"
-#include "gust_shaders/restrict_comp.h"
 #include "gust_shaders/sample_comp.h"
 #include "gust_shaders/scroll_comp.h"
 #include "gust_shaders/smooth_comp.h"
@@ -86,8 +85,7 @@ Status create_modes(gpu::Context& ctx, std::span<gpu::Pipeline> out, std::span<c
 /// cascade: a grid alone then carries none of the cascades' reads, which cost it half again in the pass.
 Status create_advect(gpu::Context& ctx, const SolverDesc& desc, bool nested,
                      std::array<gpu::Pipeline, shaderio::kAdvectModes>& out) {
-    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectBackward,
-                                                         shaderio::kAdvectCorrect},
+    static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectCorrect},
                                    kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
                                    kForcesMode[] = {shaderio::kAdvectForces};
     const std::span<const std::uint32_t> modes =
@@ -138,7 +136,6 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
         {&m.diffuse, words(diffuse_comp), "gust diffuse"},
         {&m.start, words(start_comp), "gust start"},
-        {&m.restrict_, words(restrict_comp), "gust restrict"},
         {&m.coarse_solve, words(coarse_solve_comp), "gust coarse_solve"},
         {&m.cg, words(cg_comp), "gust cg"},
         {&m.jacobi, words(jacobi_comp), "gust jacobi"},

@@ -106,6 +106,13 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         p.dispatch(cmd, g.x, g.y, g.z);
         gpu::barrier(ctx_, cmd);
     };
+    // A dispatch that the next one need not wait for: no barrier, so the two run as one stage; the barrier
+    // after the next one orders both before what follows.
+    auto run_beside = [&](const gpu::Pipeline& p, LevelDispatch g) {
+        push.swap = (push.swap & ~1u) | m.swap;
+        p.bind(cmd, &push, sizeof(push));
+        p.dispatch(cmd, g.x, g.y, g.z);
+    };
     // Indirect dispatches are the pressure solve's passes, each followed by another dispatch (or one whose
     // run() ends in a full barrier), so a compute barrier suffices.
     auto run_slot = [&](const gpu::Pipeline& p, std::uint32_t slot) {
@@ -131,9 +138,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.begin(cmd, "solid");
     push.mode = all_cells ? shaderio::kSolidAll : shaderio::kSolidChanged;
     run(m.solid_cells, cell_groups);
+    // The moving fragments' sums run beside the fill's links, which read no motion and only the bits of the
+    // cells' flags that solid_cells set (solid_motion adds kCellMoving with an atomic); fill_finish reads
+    // both.
     m.solid_motion.bind(cmd, &push, sizeof(push));
     m.solid_motion.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fragments_dispatch));
-    gpu::barrier(ctx_, cmd);
     m.profiler.end(cmd);
     m.profiler.begin(cmd, "fill");
     run(m.fill_link, cell_groups);
@@ -146,10 +155,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         p->dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fluid_dispatch));
         gpu::barrier(ctx_, cmd);
     }
+    // The coarse levels' weights run beside the advection: only the pressure solve's coarse levels read
+    // them, and they read no velocity.
     if (levels > 1) {
         const GridLevel& last = m.levels.back();
-        run(m.coarse_weights,
-            groups_for(last.faces - m.levels[1].faces + std::uint64_t(shaderio::faces_total(last.dims))));
+        run_beside(m.coarse_weights, groups_for(last.faces - m.levels[1].faces +
+                                                std::uint64_t(shaderio::faces_total(last.dims))));
     }
     m.profiler.end(cmd);
 
@@ -161,8 +172,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.begin(cmd, "advect");
     push.param = detail::emitter_rate(dt, desc_.emitter_response);
     if (desc_.advection == Advection::MacCormack) {
-        for (std::uint32_t mode :
-             {shaderio::kAdvectForward, shaderio::kAdvectBackward, shaderio::kAdvectCorrect}) {
+        for (std::uint32_t mode : {shaderio::kAdvectForward, shaderio::kAdvectCorrect}) {
             push.mode = mode;
             run(m.advect[mode], face_groups);
         }
@@ -183,7 +193,7 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             run(m.diffuse, face_groups);
             from = shaderio::diffuse_target(from);
         }
-        if (from == shaderio::kFieldBack) {
+        if (from == shaderio::kFieldScratch) {
             const VkBufferCopy region{0, 0, face_count() * sizeof(float)};
             vk.vkCmdCopyBuffer(cmd, m.velocity_back.handle(), m.other_velocity().handle(), 1, &region);
             gpu::barrier(ctx_, cmd);
@@ -219,12 +229,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.level = 0;
             push.mode = cg ? shaderio::kSmoothFirst : shaderio::kSmoothFirstPlain;
             run_slot(m.smooth[push.mode], shaderio::kTileSlot);
-            for (std::uint32_t l = 0; l < coarse; ++l) {
-                push.level = l + 1;
-                run_slot(m.restrict_, l + 1);
-                if (l + 1 == coarse) break;
+            // Each level below restricts its right-hand side from the finer level's residual in its own
+            // smoothing (or in the coarse solve), so going down costs one dispatch a level.
+            for (std::uint32_t l = 1; l < coarse; ++l) {
+                push.level = l;
                 push.mode = shaderio::kSmoothDown;
-                run_slot(m.smooth[push.mode], shaderio::kTileSlot + l + 1);
+                run_slot(m.smooth[push.mode], shaderio::kTileSlot + l);
             }
             push.level = coarse;
             push.mode = coarse == 0 && cg ? shaderio::kCoarseBeta : shaderio::kCoarseCorrection;
