@@ -8,12 +8,17 @@ layout(buffer_reference, scalar) readonly buffer Indices { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Fragments { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Velocities { uvec2 v[]; };
 layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
-layout(buffer_reference, scalar) buffer LargeList { uvec2 v[]; };
+layout(buffer_reference, scalar) buffer LargeList { uvec3 v[]; };
 
 layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
 
 // Pipelines made for calls without a frame time compile every velocity step out.
 layout(constant_id = 0) const bool kVelocities = false;
+
+// The instance a pass works on: pc.instance, unless the pass set another (the large pass takes each
+// item's from the queue).
+uint64_t item_instance = 0ul;
+InstanceRef instance() { return InstanceRef(item_instance != 0ul ? item_instance : pc.instance); }
 
 vec3 load_position(uint64_t positions, uint index) {
     Positions p = Positions(positions);
@@ -22,7 +27,7 @@ vec3 load_position(uint64_t positions, uint index) {
 
 /// Vertex `corner` of triangle `tri` in grid space (voxel units, grid min corner at 0).
 vec3 load_grid_vertex(uint tri, uint corner) {
-    InstanceRef inst = InstanceRef(pc.instance);
+    InstanceRef inst = instance();
     uint index = Indices(inst.i.indices).v[3u * tri + corner];
     return (inst.i.to_grid * vec4(load_position(inst.i.positions, index), 1.0)).xyz;
 }
@@ -30,7 +35,7 @@ vec3 load_grid_vertex(uint tri, uint corner) {
 /// World-space velocity (m/s) of vertex `corner` of triangle `tri` between last frame and this one,
 /// as motion vectors are made: this frame's world position minus last frame's, over the frame time.
 vec3 load_vertex_velocity(uint tri, uint corner) {
-    InstanceRef inst = InstanceRef(pc.instance);
+    InstanceRef inst = instance();
     if (!kVelocities) return vec3(0.0);
     uint index = Indices(inst.i.indices).v[3u * tri + corner];
     vec3 now = (inst.i.model * vec4(load_position(inst.i.positions, index), 1.0)).xyz;

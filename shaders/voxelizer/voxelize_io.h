@@ -27,9 +27,9 @@ struct DispatchArgs {
 struct VoxelizeCounters {
     uint fragments;   ///< fragments appended; may exceed the capacity, which means "redo larger"
     uint rejected;    ///< triangles with a non-finite vertex
-    uint large_items; ///< (triangle, tile) items queued for the current instance; may exceed the capacity
-    uint large_peak;  ///< the most items any instance queued, which tells the host to grow the list
-    DispatchArgs large_dispatch; ///< workgroups of the large pass, written by voxelize_args.comp
+    uint large_items; ///< (instance, triangle, tile) items queued by the call; may exceed the capacity
+    uint groups_done; ///< workgroups of the small-triangle pass done (its last one sizes the large pass)
+    DispatchArgs large_dispatch; ///< workgroups of the large pass, written by voxelize_tri.comp's last group
     uint wrapped; ///< nonzero when a counter passed 2^32 - 1 (the call fails instead of wrapping silently)
 };
 
@@ -45,6 +45,9 @@ struct VoxelizeInstance {
     float inv_dt; ///< 1 / frame time in seconds; 0 when no velocities are wanted
 };
 
+/// Bytes of a VoxelizeInstance: the large pass finds an item's instance at that stride.
+GUST_CONST uint kVoxelizeInstanceBytes = 224;
+
 /// Push constants of every voxelizer pass (<= 128 bytes, the guaranteed minimum).
 struct VoxelizePush {
     GUST_ADDRESS instance;  ///< VoxelizeInstance
@@ -52,7 +55,7 @@ struct VoxelizePush {
     GUST_ADDRESS
     velocities; ///< uvec2[capacity] surface velocity per fragment (half x, y, z; m/s, world); 0: none
     GUST_ADDRESS counters;   ///< VoxelizeCounters
-    GUST_ADDRESS large_list; ///< uvec2[large_capacity] (triangle, tile) items for the large pass
+    GUST_ADDRESS large_list; ///< uvec3[large_capacity] (instance, triangle, tile) items for the large pass
     uint res;                ///< voxels per axis
     uint capacity;           ///< fragment slots
     uint triangle_count;     ///< triangles in this draw or dispatch
@@ -63,6 +66,12 @@ struct VoxelizePush {
     /// lies outside [0, keep) on some axis (the rest are in the list shifted by voxelize_shift.comp).
     uint slabs;
     ivec3 slab_shift; ///< the scroll in voxels: the old grid's voxel v + slab_shift is the new grid's v
+    /// Compute path: the instance's index in the call's instance buffer, which the large queue's items
+    /// carry (the large pass's `instance` is that buffer's start).
+    uint instance_index;
+    /// Compute path: workgroups of all the call's small-triangle dispatches together; the one that finishes
+    /// last sizes the large pass.
+    uint groups_total;
 };
 
 /// Threads per workgroup of voxelize_shift.comp.
@@ -87,13 +96,13 @@ struct ShiftPush {
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gust::shaderio::VoxelizePush) == 88, "push constants must match the GLSL layout");
+static_assert(sizeof(gust::shaderio::VoxelizePush) == 96, "push constants must match the GLSL layout");
 static_assert(offsetof(gust::shaderio::VoxelizePush, slab_shift) == 76);
 static_assert(sizeof(gust::shaderio::ShiftPush) == 64);
 static_assert(offsetof(gust::shaderio::ShiftPush, shift) == 40);
 static_assert(offsetof(gust::shaderio::VoxelizePush, keep) == 60);
 static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 40);
-static_assert(sizeof(gust::shaderio::VoxelizeInstance) == 224);
+static_assert(sizeof(gust::shaderio::VoxelizeInstance) == gust::shaderio::kVoxelizeInstanceBytes);
 static_assert(offsetof(gust::shaderio::VoxelizeInstance, positions) == 192);
 static_assert(sizeof(gust::shaderio::VoxelizeCounters) == 32);
 static_assert(offsetof(gust::shaderio::VoxelizeCounters, large_dispatch) == 16);

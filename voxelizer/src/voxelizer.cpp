@@ -14,7 +14,6 @@ namespace gust {
 
 namespace {
 #include "gust_shaders/skin_comp.h"
-#include "gust_shaders/voxelize_args_comp.h"
 #include "gust_shaders/voxelize_frag.h"
 #include "gust_shaders/voxelize_geom.h"
 #include "gust_shaders/voxelize_large_comp.h"
@@ -206,10 +205,6 @@ Result<std::unique_ptr<Voxelizer>> Voxelizer::create(gpu::Context& ctx, const Vo
         if (!large) return large.status();
         v->compute_large_[with_velocity] = std::move(*large);
     }
-    auto args =
-        gpu::Pipeline::compute(ctx, "gust voxelize_args", words(voxelize_args_comp), sizeof(VoxelizePush));
-    if (!args) return args.status();
-    v->compute_args_ = std::move(*args);
     auto shift =
         gpu::Pipeline::compute(ctx, "gust voxelize_shift", words(voxelize_shift_comp), sizeof(ShiftPush));
     if (!shift) return shift.status();
@@ -381,10 +376,10 @@ void Voxelizer::record_skinning(VkCommandBuffer cmd, std::span<const GpuInstance
 
 Status Voxelizer::ensure_large_list(std::uint64_t items) {
     if (items <= large_capacity_) return {};
-    if (items > UINT32_MAX || items * sizeof(glm::uvec2) > ctx_.info().max_allocation_size)
+    if (items > UINT32_MAX || items * sizeof(glm::uvec3) > ctx_.info().max_allocation_size)
         return Status::failure("the large-triangle queue needs " + std::to_string(items) +
                                " items, more than one device allocation holds");
-    auto buffer = gpu::Buffer::create(ctx_, items * sizeof(glm::uvec2), gpu::MemoryUse::Device, 0,
+    auto buffer = gpu::Buffer::create(ctx_, items * sizeof(glm::uvec3), gpu::MemoryUse::Device, 0,
                                       "gust voxelizer large triangles");
     if (!buffer) return buffer.status();
     large_list_ = std::move(*buffer);
@@ -620,15 +615,15 @@ Status Voxelizer::take_counters(const VoxelizeCounters& counters, std::uint64_t 
         return Status::failure("the fragment list would pass 2^32 entries (too many "
                                "voxels per triangle at this resolution); "
                                "lower the resolution or split the scene");
-    stats.truncated = counters.fragments > capacity || counters.large_peak > large_capacity;
+    stats.truncated = counters.fragments > capacity || counters.large_items > large_capacity;
     // Grow with headroom so that a scene growing slowly does not redo every frame.
     if (counters.fragments > capacity_) {
         const std::uint64_t needed = counters.fragments;
         if (Status s = ensure_capacity(std::max(needed, std::min(needed + needed / 4, fragment_limit()))); !s)
             return s;
     }
-    if (counters.large_peak > large_capacity_)
-        if (Status s = ensure_large_list(std::uint64_t(counters.large_peak) + counters.large_peak / 4); !s)
+    if (counters.large_items > large_capacity_)
+        if (Status s = ensure_large_list(std::uint64_t(counters.large_items) + counters.large_items / 4); !s)
             return s;
     fragment_count_ = std::min<std::uint64_t>(counters.fragments, capacity);
     stats.capacity = capacity_;
@@ -786,34 +781,41 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
         vk.vkCmdEndRendering(cmd);
         profiler_.end(cmd);
     }
-    bool first_compute = true;
+    // The compute path in two stages whatever the instance count: every compute instance's small triangles
+    // back to back with no barrier between them (they only append, to the fragments and to one queue of
+    // large items that carry their instance), the last workgroup of all sizing the large pass; then one
+    // large pass over every instance's items. (One instance after another had cost three stages each.)
+    const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
+    auto groups_for = [](std::uint32_t triangles) {
+        return (triangles + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize;
+    };
+    push.groups_total = 0;
+    for (std::size_t i = 0; i < instances.size(); ++i)
+        if (methods[i] == VoxelizeMethod::Compute)
+            for (std::uint32_t first = 0; first < instances[i].mesh->triangles_; first += per_dispatch)
+                push.groups_total +=
+                    groups_for(std::min(per_dispatch, instances[i].mesh->triangles_ - first));
+    if (push.groups_total == 0) return;
+    profiler_.begin(cmd, "compute");
     for (std::size_t i = 0; i < instances.size(); ++i) {
         const GpuMesh& mesh = *instances[i].mesh;
-        if (methods[i] != VoxelizeMethod::Compute || mesh.triangles_ == 0) continue;
-        if (first_compute) profiler_.begin(cmd, "compute");
-        first_compute = false;
+        if (methods[i] != VoxelizeMethod::Compute) continue;
         push.instance = instances_.address() + i * sizeof(VoxelizeInstance);
-        // The large-triangle queue is per instance: empty it before each one.
-        vk.vkCmdFillBuffer(cmd, counters_.handle(), offsetof(VoxelizeCounters, large_items), 4, 0);
-        gpu::barrier(ctx_, cmd);
-        const std::uint32_t per_dispatch = kMaxGroupsX * kVoxelizeGroupSize;
+        push.instance_index = std::uint32_t(i);
         for (std::uint32_t first = 0; first < mesh.triangles_; first += per_dispatch) {
             push.first_triangle = first;
             push.triangle_count = std::min(per_dispatch, mesh.triangles_ - first);
             compute_small_[with_velocity].bind(cmd, &push, sizeof(push));
-            compute_small_[with_velocity].dispatch(
-                cmd, (push.triangle_count + kVoxelizeGroupSize - 1) / kVoxelizeGroupSize, 1, 1);
+            compute_small_[with_velocity].dispatch(cmd, groups_for(push.triangle_count), 1, 1);
         }
-        gpu::barrier(ctx_, cmd);
-        compute_args_.bind(cmd, &push, sizeof(push));
-        compute_args_.dispatch(cmd, 1, 1, 1);
-        gpu::barrier(ctx_, cmd);
-        compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
-        compute_large_[with_velocity].dispatch_indirect(cmd, counters_.handle(),
-                                                        offsetof(VoxelizeCounters, large_dispatch));
-        gpu::barrier(ctx_, cmd);
     }
-    if (!first_compute) profiler_.end(cmd);
+    gpu::barrier(ctx_, cmd);
+    push.instance = instances_.address();
+    compute_large_[with_velocity].bind(cmd, &push, sizeof(push));
+    compute_large_[with_velocity].dispatch_indirect(cmd, counters_.handle(),
+                                                    offsetof(VoxelizeCounters, large_dispatch));
+    gpu::barrier(ctx_, cmd);
+    profiler_.end(cmd);
 }
 
 Result<std::vector<std::uint32_t>> Voxelizer::read_fragments() const {

@@ -234,7 +234,6 @@ class Voxelizer : public gpu::HostObject {
     gpu::Context& ctx_;
     gpu::Pipeline raster_[2]; ///< [0]: without velocities, [1]: with
     gpu::Pipeline compute_small_[2];
-    gpu::Pipeline compute_args_;
     gpu::Pipeline compute_large_[2];
     gpu::Pipeline shift_;         ///< voxelize_shift.comp
     gpu::Pipeline skin_;          ///< skin.comp
