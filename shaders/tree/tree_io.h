@@ -39,10 +39,8 @@ struct TreeState {
     uint node_free_top;                ///< entries on the node-block free list
     uint mask_blocks_used;             ///< bump pointer of the mask-block pool (block 0 unused)
     uint mask_free_top;                ///< entries on the mask-block free list
-    uint requests;                     ///< nodes asking for a block at the current level
-    uint take_free;                    ///< of those, how many the free list serves (plan pass)
-    uint bump_first;                   ///< first bump-allocated block for the rest (plan pass)
-    uint exhausted;                    ///< requests the pool could not serve this frame
+    uint free_taken;                   ///< blocks the current tree_visit took (first from the free list)
+    uint exhausted;                    ///< refinements the pool could not serve this frame
     uint refined;                      ///< blocks handed out this frame
     uint coarsened;                    ///< blocks taken back this frame
     uint records_prev;                 ///< entries in last frame's coarsening list
@@ -51,10 +49,9 @@ struct TreeState {
     uint leaves_next;                  ///< leaves whose dynamic words this frame set
     uint static_voxels;                ///< voxels set in static words (since the last rebuild)
     uint dynamic_voxels;               ///< voxels set in dynamic words this frame and not in static ones
-    uint groups_done;                  ///< workgroups of the current tree_visit done (its last one plans)
+    uint groups_done;                  ///< workgroups of the current tree_visit done (its last one settles)
     uint blocks_per_level[kMaxLevels]; ///< live blocks whose owner is at each level
     TreeDispatch fragments_dispatch;   ///< over this frame's fragments
-    TreeDispatch requests_dispatch;    ///< over the current level's requests
     TreeDispatch records_dispatch;     ///< over the previous frame's coarsening list
     TreeDispatch leaves_dispatch;      ///< over the previous frame's leaf list
 };
@@ -71,7 +68,7 @@ GUST_INLINE TreeDispatch dispatch_for(uint items) {
 }
 
 /// dispatch_for, but at least one workgroup: a pass whose last workgroup finishes the work of the pass
-/// (tree_visit plans the allocation) runs even over no items.
+/// (tree_visit settles the pools) runs even over no items.
 GUST_INLINE TreeDispatch dispatch_at_least_one(uint items) {
     TreeDispatch d = dispatch_for(items);
     d.x = max(d.x, 1u);
@@ -91,13 +88,12 @@ struct TreeBindings {
     GUST_ADDRESS fragments;      ///< uint keys from the voxelizer
     GUST_ADDRESS fragment_count; ///< uint: the voxelizer's counter (clamped to fragment_capacity)
     GUST_ADDRESS frag_node;      ///< uint[fragment_capacity]: each fragment's node at the current level
-    GUST_ADDRESS request_list;   ///< uint[list_capacity]: nodes asking for a block at the current level
     GUST_ADDRESS records[2];     ///< BlockRecord[list_capacity]: coarsening lists
     GUST_ADDRESS leaves[2];      ///< uint[list_capacity]: leaves whose dynamic words a frame set
     uint fragment_capacity;
     uint node_capacity;  ///< node blocks
     uint mask_capacity;  ///< mask blocks
-    uint list_capacity;  ///< entries of each record, leaf and request list
+    uint list_capacity;  ///< entries of each record and leaf list
     uint log2_branching; ///< 1, 2 or 3
     uint levels;         ///< tree depth: res = b^levels
     uint hysteresis;     ///< K: a block whose owner went more than K frames unreached is coarsened
@@ -141,8 +137,8 @@ GUST_NAMESPACE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::TreePush) == 24, "push constants must match the GLSL layout");
-static_assert(sizeof(gust::shaderio::TreeBindings) == 13 * 8 + 8 * 4);
-static_assert(sizeof(gust::shaderio::TreeState) == (17 + 10 + 16) * 4);
+static_assert(sizeof(gust::shaderio::TreeBindings) == 12 * 8 + 8 * 4);
+static_assert(sizeof(gust::shaderio::TreeState) == (15 + 10 + 12) * 4);
 #endif
 
 #endif

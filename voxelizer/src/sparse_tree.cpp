@@ -8,7 +8,6 @@
 namespace gust {
 
 namespace {
-#include "gust_shaders/tree_alloc_comp.h"
 #include "gust_shaders/tree_begin_comp.h"
 #include "gust_shaders/tree_clear_comp.h"
 #include "gust_shaders/tree_coarsen_comp.h"
@@ -81,7 +80,6 @@ Result<std::unique_ptr<SparseTree>> SparseTree::create(gpu::Context& ctx, const 
                             {&tree->fragments_, "gust tree_fragments", words(tree_fragments_comp)},
                             {&tree->clear_, "gust tree_clear", words(tree_clear_comp)},
                             {&tree->visit_, "gust tree_visit", words(tree_visit_comp)},
-                            {&tree->alloc_, "gust tree_alloc", words(tree_alloc_comp)},
                             {&tree->leaf_, "gust tree_leaf", words(tree_leaf_comp)},
                             {&tree->coarsen_, "gust tree_coarsen", words(tree_coarsen_comp)}};
     for (const Stage& stage : stages) {
@@ -177,14 +175,10 @@ TreePools SparseTree::full_pools() const {
 Status SparseTree::ensure_scratch(std::uint64_t fragments) {
     if (fragments <= scratch_capacity_) return {};
     const std::uint64_t capacity = std::max(fragments, kMinScratch);
-    const std::pair<gpu::Buffer*, const char*> lists[] = {{&frag_node_, "gust tree fragment nodes"},
-                                                          {&requests_, "gust tree requests"}};
-    for (const auto& [b, name] : lists) {
-        auto buffer =
-            gpu::Buffer::create(ctx_, capacity * sizeof(std::uint32_t), gpu::MemoryUse::Device, 0, name);
-        if (!buffer) return buffer.status();
-        *b = std::move(*buffer);
-    }
+    auto buffer = gpu::Buffer::create(ctx_, capacity * sizeof(std::uint32_t), gpu::MemoryUse::Device, 0,
+                                      "gust tree fragment nodes");
+    if (!buffer) return buffer.status();
+    frag_node_ = std::move(*buffer);
     scratch_capacity_ = capacity;
     return {};
 }
@@ -200,7 +194,6 @@ void SparseTree::write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings
     b.fragments = source.keys;
     b.fragment_count = source.count;
     b.frag_node = frag_node_.address();
-    b.request_list = requests_.address();
     b.records[0] = records_[0].address();
     b.records[1] = records_[1].address();
     b.leaves[0] = leaves_[0].address();
@@ -229,12 +222,11 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
         gpu::barrier(ctx_, cmd);
     };
     once(fragments_);
-    // Two stages a level: each fragment steps down to its node, marks it and queues it (the last workgroup
-    // plans the blocks), then the blocks are handed out.
+    // One stage a level: each fragment steps down to its node and marks it, the first to reach a node
+    // without children giving it its block.
     for (std::uint32_t level = 0; level < levels_; ++level) {
         push.level = level;
         indirect(visit_, offsetof(TreeState, fragments_dispatch));
-        indirect(alloc_, offsetof(TreeState, requests_dispatch));
     }
     indirect(leaf_, offsetof(TreeState, fragments_dispatch));
 }

@@ -174,9 +174,9 @@ class SparseTree : public gpu::HostObject {
     std::uint32_t frame_ = 0;
     bool rebuild_pending_ = false;
     std::uint64_t scratch_capacity_ = 0;
-    gpu::Pipeline begin_, fragments_, clear_, visit_, alloc_, leaf_, coarsen_;
+    gpu::Pipeline begin_, fragments_, clear_, visit_, leaf_, coarsen_;
     gpu::Buffer state_, nodes_, masks_, node_free_, mask_free_;
-    gpu::Buffer frag_node_, requests_, records_[2], leaves_[2];
+    gpu::Buffer frag_node_, records_[2], leaves_[2];
     gpu::Buffer static_bindings_, dynamic_bindings_;
     gpu::Profiler profiler_;
 };
