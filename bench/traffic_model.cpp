@@ -149,15 +149,14 @@ Traffic pressure_traffic(const Workload& w) {
     return t;
 }
 
-/// The "project" pass: the gradient subtracted per face with the first layer of the air's velocity
-/// extended into closed faces, the second layer, then the cells' end of the step (finish.comp).
+/// The "project" pass: the gradient subtracted per face with both layers of the air's velocity extended
+/// into closed faces, then the cells' end of the step (finish.comp).
 Traffic project_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), W = Workload::weight(0) * F;
-    // project: the weight, the velocity and φ = x + αp of both cells (two loads each), the face stored.
-    t.add(F * 7 * 4, W + 8 * F + 8 * C);
-    // extend: the face's weight, value and store; the closed faces' neighbours are left out.
-    t.add(F * 3 * 4, W + 8 * F);
+    // project: the weight (read again for the second layer), the velocity and φ = x + αp of both cells (two
+    // loads each), the face stored; the closed faces' neighbours are left out.
+    t.add(F * 8 * 4, W + 8 * F + 8 * C);
     // finish: φ (two loads) stored, the residual from six weights, six neighbours' φ and b, the divergence
     // after (six face fluxes of 3 loads), the vorticity from six cell velocities of 6 faces, vec4 stored.
     t.add(C * ((2 + 1 + 6 + 12 + 1 + 18 + 36) * 4 + 16), W + 8 * F + 32 * C);

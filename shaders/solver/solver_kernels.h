@@ -618,6 +618,25 @@ GUST_INLINE float project_extend_face(uint axis, ivec3 f, bool gradient) {
     return count > 0.0f ? sum / count : load_face(kFieldSolid, face_index(n, axis, f));
 }
 
+/// Face f after the projection and both extension passes at once (project.comp): a face that holds the air's
+/// velocity after the first pass keeps its value there (project_extend_face); any other takes the mean of
+/// the first pass's values of its lattice neighbours that hold the air's velocity after it, each computed
+/// where it is read: extend_face's layer 2 over project_extend_face's values, so the second layer costs no
+/// pass of its own, and only faces two deep in a solid compute their neighbours'.
+GUST_INLINE float project_extended_face(uint axis, ivec3 f, bool gradient) {
+    float u = project_extend_face(axis, f, gradient);
+    if (face_has_air(axis, f, 1u)) return u;
+    float sum = 0.0f, count = 0.0f;
+    for (uint b = 0u; b < 3u; ++b)
+        for (int s = -1; s <= 1; s += 2) {
+            ivec3 nb = f + s * axis_unit(b);
+            if (!face_in_lattice(axis, nb) || !face_has_air(axis, nb, 1u)) continue;
+            sum += project_extend_face(axis, nb, gradient);
+            count += 1.0f;
+        }
+    return count > 0.0f ? sum / count : u;
+}
+
 /// Face f of `field` after extension pass `layer` (1, then 2): a face that holds the air's velocity after
 /// layer − 1 passes keeps it; a closed face takes the mean of its lattice neighbours on its air's side in the
 /// first pass (extension_sources), of those that hold the air's velocity after it in the second; any other

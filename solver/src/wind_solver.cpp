@@ -21,7 +21,6 @@ namespace {
 #include "gust_shaders/coarse_solve_comp.h"
 #include "gust_shaders/coarse_weights_comp.h"
 #include "gust_shaders/diffuse_comp.h"
-#include "gust_shaders/extend_comp.h"
 #include "gust_shaders/fill_finish_comp.h"
 #include "gust_shaders/fill_finish_small_comp.h"
 #include "gust_shaders/fill_link_comp.h"
@@ -140,7 +139,6 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.cg, words(cg_comp), "gust cg"},
         {&m.jacobi, words(jacobi_comp), "gust jacobi"},
         {&m.project, words(project_comp), "gust project"},
-        {&m.extend, words(extend_comp), "gust extend"},
         {&m.finish, words(finish_comp), "gust finish"},
         {&m.scroll, words(scroll_comp), "gust scroll"},
         {&m.sample, words(sample_comp), "gust sample"}};

@@ -253,13 +253,11 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     }
     m.profiler.end(cmd);
 
-    // The gradient and the first pass of the extension, the second, then the cells' end of the step.
+    // The gradient with both passes of the extension, then the cells' end of the step.
     m.profiler.begin(cmd, "project");
     push.swap = 0;
     push.level = 0;
     run(m.project, face_groups);
-    m.swap ^= 1u;
-    run(m.extend, face_groups);
     m.swap ^= 1u;
     run(m.finish, cell_groups);
     m.profiler.end(cmd);
