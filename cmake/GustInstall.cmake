@@ -3,8 +3,8 @@
 #   find_package(gust CONFIG REQUIRED)
 #   target_link_libraries(game PRIVATE gust::gust)
 # Every library is static, and a static archive names its private dependencies for the final link, so
-# the internal archives (solver, voxelizer, gpu, the OpenVDB writer) are installed and exported too; the
-# embedded-shader targets are empty at the consumer's side (the SPIR-V is compiled into the archives)
+# the internal archives (gust_core, solver, voxelizer, gpu, the OpenVDB writer) are installed and exported
+# too; the embedded-shader targets are empty at the consumer's side (the SPIR-V is compiled into the archives)
 # and are exported only because the archives name them. The module headers are not installed: gust.hpp
 # needs none of them. docs/dependencies.md ("Install package") says what a consumer needs.
 include(GNUInstallDirs)
@@ -19,7 +19,7 @@ endif()
 target_compile_features(gust INTERFACE cxx_std_20)
 
 get_property(gust_shader_targets GLOBAL PROPERTY GUST_SHADER_TARGETS)
-set(gust_internal_targets gust_solver gust_voxelizer gust_gpu ${gust_shader_targets})
+set(gust_internal_targets gust_core gust_solver gust_voxelizer gust_gpu ${gust_shader_targets})
 # Built with OpenVDB, System::export_vdb links it, so the consumer's link needs it: gustConfig.cmake finds it
 # with the same FindOpenVDB module (and its sibling modules) this build used. Built without
 # (GUST_WITH_OPENVDB=OFF), there is no gust_vdb and the package asks for no OpenVDB.

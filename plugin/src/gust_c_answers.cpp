@@ -1,4 +1,4 @@
-// The C ABI (gust.h), its answers: wind queries, the texture, stats, export and the debug views over
+// The C ABI (gust.h), its answers: wind queries, the texture, stats and the debug views over
 // gust::System (gust_c_internal.hpp has the registry and the conversions).
 #include "gust_c_internal.hpp"
 
@@ -171,10 +171,6 @@ gust_result gust_system_device_name(gust_system system, const char** name) {
         *name = s.device_name();
         return {};
     });
-}
-
-gust_result gust_system_export_vdb(gust_system system, const char* path) {
-    return on_system(system, "gust_system_export_vdb", [&](gust::System& s) { return s.export_vdb(path); });
 }
 
 gust_result gust_system_debug_voxel_grid(gust_system system, gust_voxel_grid_info* info) {
