@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages gust needs, only those missing; idempotent. Uses sudo only when not root.
+# Installs the Debian 12 packages gust needs, only those missing, and makes the Godot 4 root; idempotent. Uses
+# sudo only when not root. With --root-in-background the root is made by a background process (its pid in
+# build-deps/godot4-root.pid, its log in build-deps/godot4-root.log) for scripts/build.sh to wait on.
 set -euo pipefail
+root_in_background=0
+if [ "${1:-}" = --root-in-background ]; then root_in_background=1; fi
 
 packages=(
   build-essential cmake ninja-build pkg-config
@@ -14,6 +18,7 @@ packages=(
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth xdotool
   webp
   godot3-server godot3-runner python3
+  mmdebstrap
 )
 
 missing=()
@@ -29,19 +34,32 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 godot_src="$root/build-deps/godot3"
 need_godot_src=0
 if [ ! -f "$godot_src/modules/gdnative/include/gdnative_api_struct.gen.h" ]; then need_godot_src=1; fi
-if [ ${#missing[@]} -eq 0 ] && [ $need_godot_src -eq 0 ]; then
-  exit 0
-fi
-
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+# The Debian mirror this machine's apt already uses for its own release (none is written into the repository).
+host_mirror() {
+  local codename
+  codename="$(. /etc/os-release && echo "$VERSION_CODENAME")"
+  apt-get indextargets --format '$(REPO_URI) $(RELEASE) $(TARGET_OF)' 2>/dev/null |
+    awk -v c="$codename" '$2 == c && $3 == "deb" { print $1; exit }'
+}
+godot4_root="$root/build-deps/godot4-root"
+mirror=""
+if [ ${#missing[@]} -gt 0 ] || [ $need_godot_src -eq 1 ] || [ ! -x "$godot4_root/usr/bin/godot" ]; then
+  mirror="$(host_mirror)"
+  if [ -z "$mirror" ]; then
+    # apt lists its sources' index targets only once it has fetched them.
+    $sudo apt-get update -qq
+    mirror="$(host_mirror)"
+  fi
+fi
 if [ $need_godot_src -eq 1 ] && ! grep -rqs '^\(deb-src\|Types:.*deb-src\)' /etc/apt/sources.list /etc/apt/sources.list.d/; then
   # The same keyring as Debian's own entry: apt refuses one source with two Signed-By values.
   signed=""
   if [ -f /usr/share/keyrings/debian-archive-keyring.gpg ]; then
     signed="[signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] "
   fi
-  echo "deb-src ${signed}http://deb.debian.org/debian bookworm main" |
+  echo "deb-src ${signed}${mirror} $(. /etc/os-release && echo "$VERSION_CODENAME") main" |
     $sudo tee /etc/apt/sources.list.d/gust-deb-src.list >/dev/null
 fi
 if [ ${#missing[@]} -gt 0 ] || [ $need_godot_src -eq 1 ]; then
@@ -78,5 +96,34 @@ if [ $need_godot_src -eq 1 ]; then
   if ! fetch_godot_headers; then
     rm -rf "$godot_src"
     echo "gust: could not fetch the GDNative headers from Debian's godot3 source package: the Godot plugin is skipped" >&2
+  fi
+fi
+
+# Godot 4 (integrations/godot4) is packaged by Debian's unstable distribution only, built against a newer C
+# library than Debian 12's: it runs from a Debian unstable root made by mmdebstrap under build-deps/ (ignored
+# by git), which the tests enter with chroot. Only the packages the tests run are in it: Godot, Mesa's
+# Vulkan drivers (lavapipe), the validation layer, Xvfb. The root is made in a folder beside it and renamed
+# when complete, so a root that exists is whole. Failing to make it costs only the Godot 4 extension.
+make_godot4_root() {
+  local partial="$godot4_root.partial"
+  rm -rf "$partial"
+  # The mirror may serve a frozen copy of unstable whose Release file is past its Valid-Until date.
+  if ! mmdebstrap --quiet --variant=essential --aptopt='Acquire::Check-Valid-Until "false"' \
+    --include=godot,mesa-vulkan-drivers,vulkan-validationlayers,xvfb,xauth \
+    --dpkgopt='path-exclude=/usr/share/doc/*' --dpkgopt='path-exclude=/usr/share/man/*' \
+    --dpkgopt='path-exclude=/usr/share/locale/*' \
+    --customize-hook='mkdir -p "$1/gust"' unstable "$partial" "$mirror"; then
+    rm -rf "$partial"
+    echo "gust: could not make the Debian unstable root for Godot 4: the Godot 4 extension is skipped" >&2
+    return 1
+  fi
+  mv "$partial" "$godot4_root"
+}
+if [ ! -x "$godot4_root/usr/bin/godot" ]; then
+  if [ $root_in_background -eq 1 ]; then
+    make_godot4_root >"$godot4_root.log" 2>&1 &
+    echo $! >"$godot4_root.pid"
+  else
+    make_godot4_root || true
   fi
 fi
