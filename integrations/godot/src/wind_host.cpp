@@ -136,6 +136,12 @@ std::string validate(const WindHostConfig& config) {
     if (config.quality < 0 || config.quality > 2) {
         return "quality = " + std::to_string(config.quality) + ": must be 0 (low), 1 (medium) or 2 (high)";
     }
+    if (config.cascades < 1 || config.cascades > 8) {
+        return "cascades = " + std::to_string(config.cascades) + ": must be 1 to 8";
+    }
+    if (config.ratio != 2 && config.ratio != 4) {
+        return "ratio = " + std::to_string(config.ratio) + ": must be 2 or 4";
+    }
     if (!finite(config.focus)) {
         return "the node's position must be finite";
     }
@@ -166,6 +172,8 @@ Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks) {
     desc.domain.cell_size = config.cell_size;
     desc.domain.voxels_per_cell = config.voxels_per_cell;
     desc.domain.focus = config.focus;
+    desc.domain.cascades = config.cascades;
+    desc.domain.ratio = config.ratio;
     desc.wind = quality_settings(config.quality);
     desc.hooks = hooks;
     desc.snapshot = true;
@@ -366,6 +374,17 @@ Outcome WindHost::set_ambient(const Vec3& velocity) {
     return system_->set_ambient(velocity);
 }
 
+Outcome WindHost::set_focus(const Vec3& focus) {
+    if (!system_) {
+        return {ErrorCode::InvalidHandle, "no wind System (invalid properties)"};
+    }
+    if (focus.x == config_.focus.x && focus.y == config_.focus.y && focus.z == config_.focus.z) {
+        return {};
+    }
+    config_.focus = focus;
+    return system_->set_focus(focus);
+}
+
 Outcome WindHost::step(float dt) {
     if (!system_) {
         return {ErrorCode::InvalidHandle, "no wind System (invalid properties)"};
@@ -389,9 +408,13 @@ void WindHost::sample(std::span<const Vec3> points, std::span<Vec3> velocities, 
     }
 }
 
-Outcome WindHost::read_field(WindField& field) const {
+Outcome WindHost::read_field(WindField& field, std::uint32_t cascade) const {
     if (!system_) {
         return {ErrorCode::InvalidHandle, "no wind System (invalid properties)"};
+    }
+    if (cascade >= config_.cascades) {
+        return {ErrorCode::InvalidArgument, "cascade " + std::to_string(cascade) + ": the wind has " +
+                                                std::to_string(config_.cascades) + " cascades"};
     }
     SnapshotInfo info;
     Vec3 probe{};
@@ -400,15 +423,19 @@ Outcome WindHost::read_field(WindField& field) const {
         return o;
     }
     const std::uint32_t nx = info.extent[0], ny = info.extent[1], nz = info.extent[2];
+    // Cascade k shares the finest cascade's centre and cell count, its cells ratio^k as wide.
+    const float cell = info.cell_size * std::pow(float(config_.ratio), float(cascade));
+    const Vec3 origin{info.origin.x + 0.5f * float(nx) * (info.cell_size - cell),
+                      info.origin.y + 0.5f * float(ny) * (info.cell_size - cell),
+                      info.origin.z + 0.5f * float(nz) * (info.cell_size - cell)};
     std::vector<Vec3> points(std::size_t(nx) * ny * nz);
     std::vector<Vec3> velocities(points.size());
     std::size_t n = 0;
     for (std::uint32_t k = 0; k < nz; ++k) {
         for (std::uint32_t j = 0; j < ny; ++j) {
             for (std::uint32_t i = 0; i < nx; ++i) {
-                points[n++] = {info.origin.x + (float(i) + 0.5f) * info.cell_size,
-                               info.origin.y + (float(j) + 0.5f) * info.cell_size,
-                               info.origin.z + (float(k) + 0.5f) * info.cell_size};
+                points[n++] = {origin.x + (float(i) + 0.5f) * cell, origin.y + (float(j) + 0.5f) * cell,
+                               origin.z + (float(k) + 0.5f) * cell};
             }
         }
     }
@@ -430,8 +457,8 @@ Outcome WindHost::read_field(WindField& field) const {
     for (int a = 0; a < 3; ++a) {
         field.extent[a] = info.extent[a];
     }
-    field.origin = info.origin;
-    field.cell_size = info.cell_size;
+    field.origin = origin;
+    field.cell_size = cell;
     field.frame = info.frame;
     return {};
 }

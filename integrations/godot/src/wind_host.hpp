@@ -20,6 +20,8 @@ struct WindHostConfig {
     Vec3 ambient{};                        ///< m/s, the prevailing wind
     std::int32_t quality = 1;              ///< 0 low, 1 medium, 2 high (quality_settings)
     Vec3 focus{};                          ///< the domain's centre, world m
+    std::uint32_t cascades = 1;            ///< nested grids, 1..8 (DomainDesc::cascades)
+    std::uint32_t ratio = 4;               ///< cell size from one cascade to the next: 2 or 4
 };
 
 /// An error message for the first invalid value of `config` ("cell_size -1 must be in ..."), or "" when
@@ -108,6 +110,8 @@ class WindHost {
 
     Outcome set_emitters(std::span<const WindEmitter> emitters);
     Outcome set_ambient(const Vec3& velocity);
+    /// Moves the domain's centre to `focus` (world m) when it changed (System::set_focus).
+    Outcome set_focus(const Vec3& focus);
     Outcome step(float dt);
     /// Steps taken since create().
     std::uint64_t steps() const { return steps_; }
@@ -115,8 +119,9 @@ class WindHost {
     /// Reader call: the wind at each point from the last step's snapshot. Before the first step (or without
     /// a System) every point gets `fallback`.
     void sample(std::span<const Vec3> points, std::span<Vec3> velocities, const Vec3& fallback) const;
-    /// Reader call: the last step's field at every cell centre into `field` (its vector is reused).
-    Outcome read_field(WindField& field) const;
+    /// Reader call: the last step's wind at every cell centre of cascade `cascade` (0 the finest, cells
+    /// cell_size · ratio^cascade wide, centred as the finest) into `field` (its vector is reused).
+    Outcome read_field(WindField& field, std::uint32_t cascade = 0) const;
     /// Milliseconds the last step() took on the calling thread, wall clock.
     double last_step_ms() const { return last_step_ms_; }
     /// The Vulkan device's name, or "" without a System.

@@ -1,17 +1,21 @@
-// gust's own answer for test_box.gd's scene, through gust's C++ API alone: the same domain, box, ambient
+// gust's own answer for test_box.gd's scene (and the Godot 4 extension's test_box.gd, whose node has 4
+// voxels a cell and steps every physics frame), through gust's C++ API alone: the same domain, box, ambient
 // wind and steps. Reads the points and Godot's velocities that test_box.gd wrote and fails unless every
 // velocity is within 1 % of gust's (plus 1 mm/s for speeds near zero).
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <gust/gust.hpp>
 #include <vector>
 
 int main(int argc, char** argv) {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: gust_godot_reference WIND_TXT\n");
+    if (argc != 2 && argc != 4) {
+        std::fprintf(stderr, "usage: gust_godot_reference WIND_TXT [VOXELS_PER_CELL STEPS] (default 2 20)\n");
         return 2;
     }
+    const std::uint32_t voxels_per_cell = argc == 4 ? std::uint32_t(std::atoi(argv[2])) : 2;
+    const int steps = argc == 4 ? std::atoi(argv[3]) : 20;
     std::ifstream in(argv[1]);
     std::vector<gust::Vec3> points, godot_wind;
     gust::Vec3 p, v;
@@ -28,7 +32,7 @@ int main(int argc, char** argv) {
     desc.domain.cells[1] = 8;
     desc.domain.cells[2] = 16;
     desc.domain.cell_size = 0.5f;
-    desc.domain.voxels_per_cell = 2;
+    desc.domain.voxels_per_cell = voxels_per_cell;
     desc.snapshot = true;
     std::unique_ptr<gust::System> system;
     if (gust::Outcome o = gust::System::create(desc, system); !o) {
@@ -52,7 +56,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "scene setup failed\n");
         return 1;
     }
-    for (int i = 0; i < 20; ++i) {
+    for (int i = 0; i < steps; ++i) {
         if (gust::Outcome o = system->step(1.0f / 60.0f); !o) {
             std::fprintf(stderr, "step: %s\n", o.message().c_str());
             return 1;

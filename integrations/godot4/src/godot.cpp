@@ -1,0 +1,268 @@
+#include "godot.hpp"
+
+namespace gust::godot4 {
+
+Interface gd;
+Methods methods;
+
+namespace {
+
+template <class F> bool find(GDExtensionInterfaceGetProcAddress get, const char* name, F& out) {
+    out = reinterpret_cast<F>(get(name));
+    return out != nullptr;
+}
+
+// A builtin method of a builtin type, looked up once.
+GDExtensionPtrBuiltInMethod builtin(GDExtensionVariantType type, const char* name, std::int64_t hash) {
+    const StringName method(name);
+    return gd.builtin_method(type, method.ptr(), hash);
+}
+
+std::int64_t packed_size(GDExtensionVariantType type, std::int64_t hash, const void* self) {
+    std::int64_t n = 0;
+    // "size" is a const method: Godot reads the base, never writes it.
+    builtin(type, "size", hash)(const_cast<void*>(self), nullptr, &n, 0);
+    return n;
+}
+
+void packed_resize(GDExtensionVariantType type, std::int64_t hash, void* self, std::int64_t n) {
+    std::int64_t error = 0;
+    const GDExtensionConstTypePtr args[1] = {&n};
+    builtin(type, "resize", hash)(self, args, &error, 1);
+}
+
+} // namespace
+
+bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr library) {
+    gd.library = library;
+    return find(get, "print_error_with_message", gd.print_error) &&
+           find(get, "variant_new_nil", gd.variant_new_nil) &&
+           find(get, "variant_new_copy", gd.variant_new_copy) &&
+           find(get, "variant_destroy", gd.variant_destroy) &&
+           find(get, "variant_get_type", gd.variant_get_type) &&
+           find(get, "variant_construct", gd.variant_construct) &&
+           find(get, "variant_evaluate", gd.variant_evaluate) &&
+           find(get, "get_variant_from_type_constructor", gd.from_type) &&
+           find(get, "get_variant_to_type_constructor", gd.to_type) &&
+           find(get, "variant_get_ptr_constructor", gd.constructor) &&
+           find(get, "variant_get_ptr_destructor", gd.destructor) &&
+           find(get, "variant_get_ptr_builtin_method", gd.builtin_method) &&
+           find(get, "string_name_new_with_latin1_chars", gd.string_name_new) &&
+           find(get, "string_new_with_utf8_chars", gd.string_new) &&
+           find(get, "array_operator_index", gd.array_index) &&
+           find(get, "packed_vector3_array_operator_index", gd.vector3_array_index) &&
+           find(get, "packed_vector3_array_operator_index_const", gd.vector3_array_index_const) &&
+           find(get, "dictionary_operator_index", gd.dictionary_index) &&
+           find(get, "packed_int32_array_operator_index", gd.int32_array_index) &&
+           find(get, "packed_byte_array_operator_index", gd.byte_array_index) &&
+           find(get, "object_method_bind_call", gd.method_bind_call) &&
+           find(get, "object_method_bind_ptrcall", gd.method_bind_ptrcall) &&
+           find(get, "object_set_instance", gd.object_set_instance) &&
+           find(get, "object_cast_to", gd.object_cast_to) &&
+           find(get, "object_get_instance_id", gd.object_get_instance_id) &&
+           find(get, "global_get_singleton", gd.global_get_singleton) &&
+           find(get, "classdb_construct_object2", gd.construct_object) &&
+           find(get, "classdb_get_method_bind", gd.get_method_bind) &&
+           find(get, "classdb_get_class_tag", gd.get_class_tag) &&
+           find(get, "classdb_register_extension_class5", gd.register_class) &&
+           find(get, "classdb_register_extension_class_method", gd.register_method) &&
+           find(get, "classdb_register_extension_class_property", gd.register_property) &&
+           find(get, "classdb_unregister_extension_class", gd.unregister_class);
+}
+
+void error(const std::string& message, const char* function, const char* file, int line) {
+    gd.print_error(message.c_str(), message.c_str(), function, file, line, false);
+}
+
+StringName::StringName(const char* text) {
+    gd.string_name_new(data_, text, false);
+}
+
+String::String(const char* text) {
+    gd.string_new(data_, text);
+}
+
+std::int64_t Array::size() const {
+    return packed_size(GDEXTENSION_VARIANT_TYPE_ARRAY, hash::Array_size, data_);
+}
+
+void Array::append(const Variant& item) {
+    const GDExtensionConstTypePtr args[1] = {item.ptr()};
+    builtin(GDEXTENSION_VARIANT_TYPE_ARRAY, "append", hash::Array_append)(data_, args, nullptr, 1);
+}
+
+void Dictionary::set(const char* key, const Variant& value) {
+    const String text(key);
+    const Variant k = Variant::from(GDEXTENSION_VARIANT_TYPE_STRING, text.ptr());
+    GDExtensionVariantPtr slot = gd.dictionary_index(data_, k.ptr());
+    gd.variant_destroy(slot);
+    gd.variant_new_copy(slot, value.ptr());
+}
+
+std::int64_t PackedVector3Array::size() const {
+    return packed_size(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, hash::PackedVector3Array_size, data_);
+}
+
+void PackedVector3Array::resize(std::int64_t n) {
+    packed_resize(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, hash::PackedVector3Array_resize, data_, n);
+}
+
+Vec3* PackedVector3Array::data() {
+    static_assert(sizeof(Vec3) == 12, "Godot's Vector3 is three floats");
+    return size() ? static_cast<Vec3*>(gd.vector3_array_index(data_, 0)) : nullptr;
+}
+
+const Vec3* PackedVector3Array::data() const {
+    return size() ? static_cast<const Vec3*>(gd.vector3_array_index_const(data_, 0)) : nullptr;
+}
+
+std::int64_t PackedInt32Array::size() const {
+    return packed_size(GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY, hash::PackedInt32Array_size, data_);
+}
+
+void PackedByteArray::resize(std::int64_t n) {
+    packed_resize(GDEXTENSION_VARIANT_TYPE_PACKED_BYTE_ARRAY, hash::PackedByteArray_resize, data_, n);
+}
+
+Mat4 to_mat4(const Transform3D& t) {
+    Mat4 m;
+    for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 3; ++r) {
+            m.m[4 * c + r] = t.rows[r][c];
+        }
+        m.m[4 * c + 3] = 0.0f;
+        m.m[12 + c] = t.origin[c];
+    }
+    m.m[15] = 1.0f;
+    return m;
+}
+
+Variant& Variant::operator=(const Variant& other) {
+    if (this != &other) {
+        gd.variant_destroy(data_);
+        gd.variant_new_copy(data_, other.data_);
+    }
+    return *this;
+}
+
+Variant Variant::from(GDExtensionVariantType type, const void* value) {
+    Variant v;
+    // The constructor reads `value` only; nil holds nothing, so writing over it leaks nothing.
+    gd.from_type(type)(v.data_, const_cast<void*>(value));
+    return v;
+}
+
+Variant Variant::from(bool v) {
+    const GDExtensionBool b = v;
+    return from(GDEXTENSION_VARIANT_TYPE_BOOL, &b);
+}
+
+Variant Variant::from(std::int64_t v) {
+    return from(GDEXTENSION_VARIANT_TYPE_INT, &v);
+}
+
+Variant Variant::from(double v) {
+    return from(GDEXTENSION_VARIANT_TYPE_FLOAT, &v);
+}
+
+Variant Variant::from(const Vec3& v) {
+    return from(GDEXTENSION_VARIANT_TYPE_VECTOR3, &v);
+}
+
+Variant Variant::from(const StringName& v) {
+    return from(GDEXTENSION_VARIANT_TYPE_STRING_NAME, v.ptr());
+}
+
+Variant Variant::from(GDExtensionObjectPtr v) {
+    return from(GDEXTENSION_VARIANT_TYPE_OBJECT, &v);
+}
+
+void Variant::to(GDExtensionVariantType type, void* out) const {
+    gd.to_type(type)(out, const_cast<unsigned char*>(data_));
+}
+
+GDExtensionObjectPtr Variant::object() const {
+    GDExtensionObjectPtr o = nullptr;
+    if (type() == GDEXTENSION_VARIANT_TYPE_OBJECT) {
+        to(GDEXTENSION_VARIANT_TYPE_OBJECT, &o);
+    }
+    return o;
+}
+
+std::int64_t Variant::as_int() const {
+    std::int64_t n = 0;
+    if (type() == GDEXTENSION_VARIANT_TYPE_INT) {
+        to(GDEXTENSION_VARIANT_TYPE_INT, &n);
+    }
+    return n;
+}
+
+bool Variant::has(const Variant& item) const {
+    Variant result;
+    GDExtensionBool valid = false;
+    gd.variant_evaluate(GDEXTENSION_VARIANT_OP_IN, item.data_, data_, result.data_, &valid);
+    GDExtensionBool yes = false;
+    if (valid && result.type() == GDEXTENSION_VARIANT_TYPE_BOOL) {
+        result.to(GDEXTENSION_VARIANT_TYPE_BOOL, &yes);
+    }
+    return yes;
+}
+
+Method::Method(const char* class_name, const char* method, std::int64_t hash) : name_(method) {
+    const StringName c(class_name), m(method);
+    bind_ = gd.get_method_bind(c.ptr(), m.ptr(), hash);
+    if (!bind_) {
+        GUST_GODOT_ERROR(std::string("Godot has no method ") + class_name + "." + method + " with the hash " +
+                         std::to_string(hash) + " of the API the extension was built against");
+    }
+}
+
+Variant Method::operator()(GDExtensionObjectPtr self, std::initializer_list<Variant> args) const {
+    Variant result;
+    if (!bind_) {
+        return result;
+    }
+    GDExtensionConstVariantPtr pointers[8] = {};
+    std::size_t n = 0;
+    for (const Variant& a : args) {
+        pointers[n++] = a.ptr();
+    }
+    GDExtensionCallError call{};
+    gd.method_bind_call(bind_, self, pointers, GDExtensionInt(n), result.ptr(), &call);
+    if (call.error != GDEXTENSION_CALL_OK) {
+        GUST_GODOT_ERROR(std::string("calling ") + name_ + " failed (GDExtensionCallErrorType " +
+                         std::to_string(int(call.error)) + ", argument " + std::to_string(call.argument) +
+                         ")");
+    }
+    return result;
+}
+
+void bind_methods() {
+    methods.set_physics_process = {"Node", "set_physics_process", hash::Node_set_physics_process};
+    methods.get_children = {"Node", "get_children", hash::Node_get_children};
+    methods.get_tree = {"Node", "get_tree", hash::Node_get_tree};
+    methods.get_physics_process_delta_time = {"Node", "get_physics_process_delta_time",
+                                              hash::Node_get_physics_process_delta_time};
+    methods.get_global_transform = {"Node3D", "get_global_transform", hash::Node3D_get_global_transform};
+    methods.get_nodes_in_group = {"SceneTree", "get_nodes_in_group", hash::SceneTree_get_nodes_in_group};
+    methods.get_mesh = {"MeshInstance3D", "get_mesh", hash::MeshInstance3D_get_mesh};
+    methods.get_surface_count = {"Mesh", "get_surface_count", hash::Mesh_get_surface_count};
+    methods.surface_get_arrays = {"Mesh", "surface_get_arrays", hash::Mesh_surface_get_arrays};
+    methods.reference = {"RefCounted", "reference", hash::RefCounted_reference};
+    methods.image_create_from_data = {"Image", "create_from_data", hash::Image_create_from_data};
+    methods.texture3d_create = {"ImageTexture3D", "create", hash::ImageTexture3D_create};
+    methods.texture3d_update = {"ImageTexture3D", "update", hash::ImageTexture3D_update};
+    methods.global_shader_parameter_add = {"RenderingServer", "global_shader_parameter_add",
+                                           hash::RenderingServer_global_shader_parameter_add};
+    methods.global_shader_parameter_set = {"RenderingServer", "global_shader_parameter_set",
+                                           hash::RenderingServer_global_shader_parameter_set};
+    methods.global_shader_parameter_get_list = {"RenderingServer", "global_shader_parameter_get_list",
+                                                hash::RenderingServer_global_shader_parameter_get_list};
+}
+
+bool is_class(GDExtensionObjectPtr object, const char* class_name) {
+    const StringName name(class_name);
+    return object && gd.object_cast_to(object, gd.get_class_tag(name.ptr())) != nullptr;
+}
+
+} // namespace gust::godot4

@@ -1,0 +1,589 @@
+// GustWind3D and GustEmitter3D (../shared/DESIGN.md, docs/godot.md): the scene translated into wind_host
+// calls every physics frame, the wind handed back through sample_wind and a Texture3D per cascade.
+#include "nodes.hpp"
+
+#include "../../godot/src/wind_host.hpp"
+#include "classdb.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <set>
+#include <shared_mutex>
+
+namespace gust::godot4 {
+
+namespace {
+
+using integration::WindField;
+using integration::WindHost;
+using integration::WindHostConfig;
+
+constexpr const char* kWind = "GustWind3D";
+constexpr const char* kEmitter = "GustEmitter3D";
+constexpr std::int64_t kArrayVertex = 0;       // Mesh.ARRAY_VERTEX
+constexpr std::int64_t kArrayIndex = 12;       // Mesh.ARRAY_INDEX
+constexpr std::int64_t kImageFormatRgbaf = 11; // Image.FORMAT_RGBAF
+constexpr std::int64_t kGlobalSampler3D = 26;  // RenderingServer.GLOBAL_VAR_TYPE_SAMPLER3D
+constexpr std::int64_t kGlobalTransform = 23;  // RenderingServer.GLOBAL_VAR_TYPE_TRANSFORM (mat4)
+constexpr const char* kTextureParameter = "gust_wind_texture";
+constexpr const char* kTransformParameter = "gust_world_to_texture";
+
+// GustEmitter3D.kind, in its enum's order.
+constexpr WindEmitterType kKinds[] = {WindEmitterType::Directional, WindEmitterType::Omni,
+                                      WindEmitterType::Vortex, WindEmitterType::ConeMotor};
+
+struct Emitter final : Instance {
+    std::int64_t kind = 3; // a cone: a fan
+    double strength = 5.0; // m/s
+    double radius = 1.0;   // m
+};
+
+// The emitters in the tree by their Godot object, for the wind node that finds them among its children.
+struct EmitterRegistry {
+    std::mutex mutex;
+    std::map<GDExtensionObjectPtr, Emitter*> emitters;
+};
+EmitterRegistry& emitter_registry() {
+    static EmitterRegistry r;
+    return r;
+}
+
+// One cascade's texture and where it lies.
+struct CascadeTexture {
+    Variant texture; // ImageTexture3D
+    Vec3 origin{};   // world m of the texture's (0, 0, 0) corner
+    float cell = 0.0f;
+};
+
+struct Wind final : Instance {
+    WindHostConfig config;
+    Variant group = Variant::from(StringName("gust_obstacles"));
+    // sample_wind runs on any thread: the host's lifetime and the ambient wind it falls back to are guarded;
+    // everything else is the main thread's (Godot's physics frames and property setters).
+    mutable std::shared_mutex mutex;
+    WindHost host;
+    Vec3 ambient{};
+    bool in_tree = false;
+    bool dirty = true; // the System must be (re)made from config at the next physics frame
+    std::vector<CascadeTexture> textures;
+    WindField field;
+    std::uint64_t cpu_bytes_last_frame = 0;
+    std::set<std::string> reported; // errors already in the log, each printed once
+    std::vector<float> positions;
+    std::vector<std::uint32_t> indices;
+};
+
+Wind& wind(Instance& i) {
+    return static_cast<Wind&>(i);
+}
+Emitter& emitter(Instance& i) {
+    return static_cast<Emitter&>(i);
+}
+
+void report_once(Wind& w, const std::string& message) {
+    if (w.reported.insert(message).second) {
+        GUST_GODOT_ERROR(std::string(kWind) + ": " + message);
+    }
+}
+
+Transform3D global_transform(GDExtensionObjectPtr node) {
+    Transform3D t;
+    methods.get_global_transform(node).to(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t);
+    return t;
+}
+
+Array to_array(const Variant& v) {
+    Array a;
+    if (v.type() == GDEXTENSION_VARIANT_TYPE_ARRAY) {
+        v.to(GDEXTENSION_VARIANT_TYPE_ARRAY, a.ptr());
+    }
+    return a;
+}
+
+// The world-to-texture transform of a box `cells` wide from `origin`: texture coordinate (world − origin) /
+// (cells · cell).
+Transform3D world_to_texture(const std::uint32_t cells[3], const Vec3& origin, float cell) {
+    Transform3D t;
+    const float o[3] = {origin.x, origin.y, origin.z};
+    for (int a = 0; a < 3; ++a) {
+        const float scale = 1.0f / (float(cells[a]) * cell);
+        t.rows[a][a] = scale;
+        t.origin[a] = -o[a] * scale;
+    }
+    return t;
+}
+
+// Fills cascade k's texture from `field` (RGBA floats, a slice an Image), making it the first time.
+void upload(Wind& w, std::size_t k, const WindField& field) {
+    const std::int64_t nx = field.extent[0], ny = field.extent[1], nz = field.extent[2];
+    const std::size_t slice = std::size_t(nx * ny) * 4 * sizeof(float);
+    Array images;
+    for (std::int64_t z = 0; z < nz; ++z) {
+        PackedByteArray bytes;
+        bytes.resize(std::int64_t(slice));
+        std::memcpy(bytes.data(), field.rgba.data() + std::size_t(z) * slice / sizeof(float), slice);
+        images.append(methods.image_create_from_data(
+            nullptr,
+            {Variant::from(nx), Variant::from(ny), Variant::from(false), Variant::from(kImageFormatRgbaf),
+             Variant::from(GDEXTENSION_VARIANT_TYPE_PACKED_BYTE_ARRAY, bytes.ptr())}));
+    }
+    const Variant list = Variant::from(GDEXTENSION_VARIANT_TYPE_ARRAY, images.ptr());
+    CascadeTexture& t = w.textures[k];
+    if (t.texture.type() == GDEXTENSION_VARIANT_TYPE_NIL) {
+        const StringName type("ImageTexture3D");
+        t.texture = Variant::from(gd.construct_object(type.ptr()));
+        methods.texture3d_create(t.texture.object(),
+                                 {Variant::from(kImageFormatRgbaf), Variant::from(nx), Variant::from(ny),
+                                  Variant::from(nz), Variant::from(false), list});
+    } else {
+        methods.texture3d_update(t.texture.object(), {list});
+    }
+    t.origin = field.origin;
+    t.cell = field.cell_size;
+    w.cpu_bytes_last_frame += std::uint64_t(slice) * std::uint64_t(nz);
+}
+
+// Every cascade's texture filled with the ambient wind, where the domain will be (before a first step).
+void make_textures(Wind& w) {
+    w.textures.clear();
+    w.textures.resize(w.config.cascades);
+    WindField field;
+    for (int a = 0; a < 3; ++a) {
+        field.extent[a] = w.config.cells[a];
+    }
+    field.rgba.resize(std::size_t(field.extent[0]) * field.extent[1] * field.extent[2] * 4);
+    for (std::size_t c = 0; c < field.rgba.size() / 4; ++c) {
+        field.rgba[4 * c + 0] = w.config.ambient.x;
+        field.rgba[4 * c + 1] = w.config.ambient.y;
+        field.rgba[4 * c + 2] = w.config.ambient.z;
+        field.rgba[4 * c + 3] = 1.0f;
+    }
+    for (std::uint32_t k = 0; k < w.config.cascades; ++k) {
+        field.cell_size = w.config.cell_size * std::pow(float(w.config.ratio), float(k));
+        field.origin = {w.config.focus.x - 0.5f * float(field.extent[0]) * field.cell_size,
+                        w.config.focus.y - 0.5f * float(field.extent[1]) * field.cell_size,
+                        w.config.focus.z - 0.5f * float(field.extent[2]) * field.cell_size};
+        upload(w, k, field);
+    }
+}
+
+// The finest cascade as global shader parameters, so any material can read it (declared here when the
+// project does not declare them).
+void publish_globals(Wind& w) {
+    const StringName server_name("RenderingServer");
+    GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
+    if (!server || w.textures.empty()) {
+        return;
+    }
+    const CascadeTexture& t = w.textures[0];
+    const Transform3D m = world_to_texture(w.config.cells, t.origin, t.cell);
+    const Variant transform = Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &m);
+    const Variant declared = methods.global_shader_parameter_get_list(server);
+    const std::pair<const char*, std::pair<std::int64_t, const Variant*>> parameters[] = {
+        {kTextureParameter, {kGlobalSampler3D, &t.texture}},
+        {kTransformParameter, {kGlobalTransform, &transform}}};
+    for (const auto& [name, value] : parameters) {
+        const Variant key = Variant::from(StringName(name));
+        if (declared.has(key)) {
+            methods.global_shader_parameter_set(server, {key, *value.second});
+        } else {
+            methods.global_shader_parameter_add(server, {key, Variant::from(value.first), *value.second});
+        }
+    }
+}
+
+void report_obstacles(Wind& w, GDExtensionObjectPtr tree) {
+    Array nodes = to_array(methods.get_nodes_in_group(tree, {w.group}));
+    w.host.begin_obstacles();
+    for (std::int64_t i = 0; i < nodes.size(); ++i) {
+        const Variant item(*static_cast<const Variant*>(nodes.at(i)));
+        GDExtensionObjectPtr node = item.object();
+        const std::uint64_t id = gd.object_get_instance_id(node);
+        if (!is_class(node, "MeshInstance3D")) {
+            report_once(w, "node " + std::to_string(id) +
+                               " of the obstacle group is not a MeshInstance3D: ignored");
+            continue;
+        }
+        const Variant mesh = methods.get_mesh(node);
+        if (!mesh.object()) {
+            continue;
+        }
+        const std::uint64_t mesh_key = gd.object_get_instance_id(mesh.object());
+        if (!w.host.has_mesh(mesh_key)) {
+            w.positions.clear();
+            w.indices.clear();
+            const std::int64_t surfaces = methods.get_surface_count(mesh.object()).as_int();
+            for (std::int64_t s = 0; s < surfaces; ++s) {
+                Array arrays = to_array(methods.surface_get_arrays(mesh.object(), {Variant::from(s)}));
+                if (arrays.size() <= kArrayIndex) {
+                    continue;
+                }
+                PackedVector3Array vertices;
+                static_cast<const Variant*>(arrays.at(kArrayVertex))
+                    ->to(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, vertices.ptr());
+                const std::uint32_t base = std::uint32_t(w.positions.size() / 3);
+                const Vec3* v = vertices.data();
+                for (std::int64_t n = 0; n < vertices.size(); ++n) {
+                    w.positions.insert(w.positions.end(), {v[n].x, v[n].y, v[n].z});
+                }
+                const auto* index_variant = static_cast<const Variant*>(arrays.at(kArrayIndex));
+                if (index_variant->type() == GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY) {
+                    PackedInt32Array index;
+                    index_variant->to(GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY, index.ptr());
+                    const std::int32_t* x = index.data();
+                    for (std::int64_t n = 0; n < index.size(); ++n) {
+                        w.indices.push_back(base + std::uint32_t(x[n]));
+                    }
+                } else {
+                    for (std::int64_t n = 0; n < vertices.size(); ++n) {
+                        w.indices.push_back(base + std::uint32_t(n));
+                    }
+                }
+            }
+            if (Outcome o = w.host.add_mesh(mesh_key, w.positions, w.indices); !o) {
+                report_once(w, "MeshInstance3D " + std::to_string(id) + ": " + o.message());
+                continue;
+            }
+        }
+        if (Outcome o = w.host.report_obstacle(id, mesh_key, to_mat4(global_transform(node))); !o) {
+            report_once(w, "MeshInstance3D " + std::to_string(id) + ": " + o.message());
+        }
+    }
+    w.host.end_obstacles();
+}
+
+void report_emitters(Wind& w) {
+    std::vector<WindEmitter> emitters;
+    Array children = to_array(methods.get_children(w.owner, {Variant::from(false)}));
+    std::lock_guard lock(emitter_registry().mutex);
+    for (std::int64_t i = 0; i < children.size(); ++i) {
+        const Variant child(*static_cast<const Variant*>(children.at(i)));
+        auto found = emitter_registry().emitters.find(child.object());
+        if (found == emitter_registry().emitters.end()) {
+            continue;
+        }
+        const Emitter& e = *found->second;
+        const Transform3D t = global_transform(child.object());
+        // Pointing along its -Z: the basis' third column, negated.
+        const float dx = -t.rows[0][2], dy = -t.rows[1][2], dz = -t.rows[2][2];
+        const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (!(len > 0.0f) || !std::isfinite(len)) {
+            continue;
+        }
+        WindEmitter out;
+        out.type = kKinds[e.kind];
+        out.position = {t.origin[0], t.origin[1], t.origin[2]};
+        out.direction = {dx / len, dy / len, dz / len};
+        out.radius = float(e.radius);
+        out.strength = float(e.strength);
+        // A cone throws its air two radii (docs/godot.md "Godot 4").
+        out.length = out.type == WindEmitterType::ConeMotor ? 2.0f * out.radius : 0.0f;
+        emitters.push_back(out);
+    }
+    if (Outcome o = w.host.set_emitters(emitters); !o) {
+        report_once(w, "emitters: " + o.message());
+    }
+}
+
+void tick(Wind& w) {
+    GDExtensionObjectPtr tree = methods.get_tree(w.owner).object();
+    if (!tree) {
+        return;
+    }
+    const Transform3D t = global_transform(w.owner);
+    const Vec3 focus{t.origin[0], t.origin[1], t.origin[2]};
+    w.cpu_bytes_last_frame = 0;
+    if (w.dirty) {
+        w.dirty = false;
+        w.config.focus = focus;
+        std::unique_lock lock(w.mutex);
+        Hooks hooks;
+        hooks.log = [](void*, LogLevel level, const char* message) {
+            if (level == LogLevel::Error) {
+                GUST_GODOT_ERROR(std::string(kWind) + ": " + message);
+            }
+        };
+        if (Outcome o = w.host.create(w.config, hooks); !o) {
+            report_once(w, "no wind: " + o.message());
+            return;
+        }
+        lock.unlock();
+        w.reported.clear();
+        make_textures(w);
+    }
+    if (!w.host.alive()) {
+        return;
+    }
+    if (Outcome o = w.host.set_focus(focus); !o) {
+        report_once(w, "focus: " + o.message());
+    }
+    report_obstacles(w, tree);
+    report_emitters(w);
+    double dt = 0.0;
+    methods.get_physics_process_delta_time(w.owner).to(GDEXTENSION_VARIANT_TYPE_FLOAT, &dt);
+    if (Outcome o = w.host.step(float(dt)); !o) {
+        report_once(w, "step: " + o.message());
+        return;
+    }
+    for (std::uint32_t k = 0; k < w.config.cascades; ++k) {
+        if (Outcome o = w.host.read_field(w.field, k); !o) {
+            report_once(w, "wind texture: " + o.message());
+            return;
+        }
+        upload(w, k, w.field);
+    }
+    publish_globals(w);
+}
+
+void wind_notification(Instance& i, std::int32_t what) {
+    Wind& w = wind(i);
+    if (what == kNotificationEnterTree) {
+        w.in_tree = true;
+        w.dirty = true;
+        methods.set_physics_process(w.owner, {Variant::from(true)});
+    } else if (what == kNotificationExitTree) {
+        w.in_tree = false;
+        std::unique_lock lock(w.mutex);
+        w.host.destroy();
+    } else if (what == kNotificationPhysicsProcess && w.in_tree) {
+        tick(w);
+    }
+}
+
+// A new configuration takes effect at the next physics frame; an invalid one is refused, named in the log.
+void configure(Wind& w, const WindHostConfig& next) {
+    if (std::string message = integration::validate(next); !message.empty()) {
+        GUST_GODOT_ERROR(std::string(kWind) + "." + message);
+        return;
+    }
+    w.config = next;
+    w.dirty = true;
+}
+
+Variant set_cells(Instance& i, const Variant* args) {
+    std::int32_t v[3] = {};
+    args[0].to(GDEXTENSION_VARIANT_TYPE_VECTOR3I, v);
+    WindHostConfig next = wind(i).config;
+    for (int a = 0; a < 3; ++a) {
+        next.cells[a] = v[a] < 0 ? 0u : std::uint32_t(v[a]);
+    }
+    configure(wind(i), next);
+    return {};
+}
+Variant get_cells(Instance& i, const Variant*) {
+    const std::int32_t v[3] = {std::int32_t(wind(i).config.cells[0]), std::int32_t(wind(i).config.cells[1]),
+                               std::int32_t(wind(i).config.cells[2])};
+    return Variant::from(GDEXTENSION_VARIANT_TYPE_VECTOR3I, v);
+}
+Variant set_cell_size(Instance& i, const Variant* args) {
+    double v = 0.0;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_FLOAT, &v);
+    WindHostConfig next = wind(i).config;
+    next.cell_size = float(v);
+    configure(wind(i), next);
+    return {};
+}
+Variant get_cell_size(Instance& i, const Variant*) {
+    return Variant::from(double(wind(i).config.cell_size));
+}
+Variant set_cascades(Instance& i, const Variant* args) {
+    WindHostConfig next = wind(i).config;
+    const std::int64_t v = args[0].as_int();
+    next.cascades = v < 0 || v > 1000 ? 0u : std::uint32_t(v);
+    configure(wind(i), next);
+    return {};
+}
+Variant get_cascades(Instance& i, const Variant*) {
+    return Variant::from(std::int64_t(wind(i).config.cascades));
+}
+Variant set_ratio(Instance& i, const Variant* args) {
+    WindHostConfig next = wind(i).config;
+    const std::int64_t v = args[0].as_int();
+    next.ratio = v < 0 || v > 1000 ? 0u : std::uint32_t(v);
+    configure(wind(i), next);
+    return {};
+}
+Variant get_ratio(Instance& i, const Variant*) {
+    return Variant::from(std::int64_t(wind(i).config.ratio));
+}
+Variant set_ambient_wind(Instance& i, const Variant* args) {
+    Wind& w = wind(i);
+    Vec3 v{};
+    args[0].to(GDEXTENSION_VARIANT_TYPE_VECTOR3, &v);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        GUST_GODOT_ERROR(std::string(kWind) + ".ambient_wind must be finite (m/s)");
+        return {};
+    }
+    std::unique_lock lock(w.mutex);
+    w.config.ambient = v;
+    w.ambient = v;
+    if (Outcome o = w.host.set_ambient(v); !o) {
+        GUST_GODOT_ERROR(std::string(kWind) + ".ambient_wind: " + o.message());
+    }
+    return {};
+}
+Variant get_ambient_wind(Instance& i, const Variant*) {
+    return Variant::from(wind(i).config.ambient);
+}
+Variant set_obstacle_group(Instance& i, const Variant* args) {
+    wind(i).group = args[0];
+    return {};
+}
+Variant get_obstacle_group(Instance& i, const Variant*) {
+    return wind(i).group;
+}
+
+Variant sample_wind(Instance& i, const Variant* args) {
+    const Wind& w = wind(i);
+    PackedVector3Array points, velocities;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, points.ptr());
+    const std::int64_t n = points.size();
+    velocities.resize(n);
+    if (n > 0) {
+        std::shared_lock lock(w.mutex);
+        w.host.sample({points.data(), std::size_t(n)}, {velocities.data(), std::size_t(n)}, w.ambient);
+    }
+    return Variant::from(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, velocities.ptr());
+}
+
+bool cascade_of(const Wind& w, const Variant& arg, std::size_t& k) {
+    const std::int64_t c = arg.as_int();
+    if (c < 0 || std::size_t(c) >= w.textures.size()) {
+        GUST_GODOT_ERROR(std::string(kWind) + ": cascade " + std::to_string(c) + " has no texture (" +
+                         std::to_string(w.textures.size()) +
+                         " cascades; none before the node enters the tree)");
+        return false;
+    }
+    k = std::size_t(c);
+    return true;
+}
+
+Variant get_wind_texture(Instance& i, const Variant* args) {
+    std::size_t k = 0;
+    return cascade_of(wind(i), args[0], k) ? wind(i).textures[k].texture : Variant();
+}
+
+Variant get_world_to_texture(Instance& i, const Variant* args) {
+    const Wind& w = wind(i);
+    std::size_t k = 0;
+    const Transform3D t = cascade_of(w, args[0], k)
+                              ? world_to_texture(w.config.cells, w.textures[k].origin, w.textures[k].cell)
+                              : Transform3D{};
+    return Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t);
+}
+
+Variant get_stats(Instance& i, const Variant*) {
+    const Wind& w = wind(i);
+    Dictionary d;
+    d.set("steps", Variant::from(std::int64_t(w.host.steps())));
+    d.set("step_ms", Variant::from(w.host.last_step_ms()));
+    d.set("cpu_bytes_per_frame", Variant::from(std::int64_t(w.cpu_bytes_last_frame)));
+    const std::string device = w.host.device_name();
+    const String name(device.c_str());
+    d.set("device", Variant::from(GDEXTENSION_VARIANT_TYPE_STRING, name.ptr()));
+    return Variant::from(GDEXTENSION_VARIANT_TYPE_DICTIONARY, d.ptr());
+}
+
+void emitter_notification(Instance& i, std::int32_t what) {
+    EmitterRegistry& r = emitter_registry();
+    std::lock_guard lock(r.mutex);
+    if (what == kNotificationEnterTree) {
+        r.emitters[i.owner] = &emitter(i);
+    } else if (what == kNotificationExitTree) {
+        r.emitters.erase(i.owner);
+    }
+}
+
+Variant set_kind(Instance& i, const Variant* args) {
+    const std::int64_t v = args[0].as_int();
+    if (v < 0 || v > 3) {
+        GUST_GODOT_ERROR(std::string(kEmitter) + ".kind = " + std::to_string(v) +
+                         ": must be 0 (directional), 1 (omni), 2 (vortex) or 3 (cone)");
+        return {};
+    }
+    emitter(i).kind = v;
+    return {};
+}
+Variant get_kind(Instance& i, const Variant*) {
+    return Variant::from(emitter(i).kind);
+}
+Variant set_strength(Instance& i, const Variant* args) {
+    double v = 0.0;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_FLOAT, &v);
+    if (!std::isfinite(v)) {
+        GUST_GODOT_ERROR(std::string(kEmitter) + ".strength must be finite (m/s)");
+        return {};
+    }
+    emitter(i).strength = v;
+    return {};
+}
+Variant get_strength(Instance& i, const Variant*) {
+    return Variant::from(emitter(i).strength);
+}
+Variant set_radius(Instance& i, const Variant* args) {
+    double v = 0.0;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_FLOAT, &v);
+    if (!(std::isfinite(v) && v > 0.0)) {
+        GUST_GODOT_ERROR(std::string(kEmitter) + ".radius = " + std::to_string(v) +
+                         ": must be a length > 0 m");
+        return {};
+    }
+    emitter(i).radius = v;
+    return {};
+}
+Variant get_radius(Instance& i, const Variant*) {
+    return Variant::from(emitter(i).radius);
+}
+
+// A property with its two methods.
+void property(const char* cls, Slot slot, MethodBody setter, MethodBody getter, std::uint32_t hint = 0,
+              const char* hint_string = "") {
+    const std::string set = std::string("set_") + slot.name, get = std::string("get_") + slot.name;
+    // ClassDB copies the names: these strings need only outlive the calls, the MethodSpecs keep theirs.
+    static std::deque<std::string> names;
+    const char* set_name = names.emplace_back(set).c_str();
+    const char* get_name = names.emplace_back(get).c_str();
+    register_method(cls, {set_name, setter, {}, {slot}, {}, false});
+    register_method(cls, {get_name, getter, slot, {}, {}, true});
+    register_property(cls, slot, set_name, get_name, hint, hint_string);
+}
+
+} // namespace
+
+void register_nodes() {
+    register_class({kWind, "Node3D", []() -> Instance* { return new Wind(); }, wind_notification});
+    property(kWind, {"cells", GDEXTENSION_VARIANT_TYPE_VECTOR3I}, set_cells, get_cells);
+    property(kWind, {"cell_size", GDEXTENSION_VARIANT_TYPE_FLOAT}, set_cell_size, get_cell_size);
+    property(kWind, {"cascades", GDEXTENSION_VARIANT_TYPE_INT}, set_cascades, get_cascades);
+    property(kWind, {"ratio", GDEXTENSION_VARIANT_TYPE_INT}, set_ratio, get_ratio);
+    property(kWind, {"ambient_wind", GDEXTENSION_VARIANT_TYPE_VECTOR3}, set_ambient_wind, get_ambient_wind);
+    property(kWind, {"obstacle_group", GDEXTENSION_VARIANT_TYPE_STRING_NAME}, set_obstacle_group,
+             get_obstacle_group);
+    const Slot points{"points", GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY};
+    const Slot cascade{"cascade", GDEXTENSION_VARIANT_TYPE_INT};
+    register_method(kWind, {"sample_wind", sample_wind, points, {points}, {}, true});
+    register_method(kWind, {"get_wind_texture",
+                            get_wind_texture,
+                            {"", GDEXTENSION_VARIANT_TYPE_OBJECT, "Texture3D"},
+                            {cascade},
+                            {Variant::from(std::int64_t(0))},
+                            true});
+    register_method(kWind, {"get_world_to_texture",
+                            get_world_to_texture,
+                            {"", GDEXTENSION_VARIANT_TYPE_TRANSFORM3D},
+                            {cascade},
+                            {Variant::from(std::int64_t(0))},
+                            true});
+    register_method(kWind, {"get_stats", get_stats, {"", GDEXTENSION_VARIANT_TYPE_DICTIONARY}, {}, {}, true});
+
+    register_class({kEmitter, "Node3D", []() -> Instance* { return new Emitter(); }, emitter_notification});
+    property(kEmitter, {"kind", GDEXTENSION_VARIANT_TYPE_INT}, set_kind, get_kind, kHintEnum,
+             "directional,omni,vortex,cone");
+    property(kEmitter, {"strength", GDEXTENSION_VARIANT_TYPE_FLOAT}, set_strength, get_strength);
+    property(kEmitter, {"radius", GDEXTENSION_VARIANT_TYPE_FLOAT}, set_radius, get_radius);
+}
+
+} // namespace gust::godot4

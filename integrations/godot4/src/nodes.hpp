@@ -1,0 +1,10 @@
+// The extension's nodes: GustWind3D (Node3D) and GustEmitter3D (Node3D), ../shared/DESIGN.md's Godot 4
+// bullet.
+#pragma once
+
+namespace gust::godot4 {
+
+/// Registers GustWind3D and GustEmitter3D with ClassDB (at the scene level's initialization).
+void register_nodes();
+
+} // namespace gust::godot4
