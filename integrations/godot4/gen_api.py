@@ -26,7 +26,11 @@ CLASS_METHODS = [
     ("ImageTexture3D", "update"),
     ("RenderingServer", "global_shader_parameter_add"),
     ("RenderingServer", "global_shader_parameter_set"),
-    ("RenderingServer", "global_shader_parameter_get_list"),
+    ("RenderingServer", "get_rendering_device"),
+    ("RenderingDevice", "get_driver_resource"),
+    ("RenderingDevice", "texture_create_from_extension"),
+    ("RenderingDevice", "free_rid"),
+    ("Texture3DRD", "set_texture_rd_rid"),
 ]
 # (builtin type, method) pairs called through variant_get_ptr_builtin_method.
 BUILTIN_METHODS = [

@@ -160,7 +160,7 @@ WindSettings quality_settings(std::int32_t quality) {
     return s;
 }
 
-Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks) {
+Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host) {
     destroy();
     if (std::string message = validate(config); !message.empty()) {
         return {ErrorCode::InvalidArgument, message};
@@ -176,6 +176,7 @@ Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks) {
     desc.domain.ratio = config.ratio;
     desc.wind = quality_settings(config.quality);
     desc.hooks = hooks;
+    desc.host = host;
     desc.snapshot = true;
     if (Outcome o = System::create(desc, system_); !o) {
         return o;
@@ -461,6 +462,10 @@ Outcome WindHost::read_field(WindField& field, std::uint32_t cascade) const {
     field.cell_size = cell;
     field.frame = info.frame;
     return {};
+}
+
+std::span<const WindTexture> WindHost::wind_textures() const {
+    return system_ ? system_->wind_textures() : std::span<const WindTexture>();
 }
 
 std::string WindHost::device_name() const {

@@ -79,8 +79,9 @@ Mat4 multiply(const Mat4& a, const Mat4& b);
 /// Writer calls (everything but sample and read_field) from one thread; sample and read_field from any.
 class WindHost {
   public:
-    /// Creates the System on its own Vulkan device with the snapshot on (Submission::OwnQueue).
-    Outcome create(const WindHostConfig& config, const Hooks& hooks);
+    /// Creates the System with the snapshot on (Submission::OwnQueue): on `host`'s device when given (the
+    /// engine's own), else on a device of its own.
+    Outcome create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host = nullptr);
     /// Destroys the System and forgets every mesh and obstacle.
     void destroy();
     bool alive() const { return system_ != nullptr; }
@@ -124,6 +125,8 @@ class WindHost {
     Outcome read_field(WindField& field, std::uint32_t cascade = 0) const;
     /// Milliseconds the last step() took on the calling thread, wall clock.
     double last_step_ms() const { return last_step_ms_; }
+    /// Every cascade's wind image, the finest first (System::wind_textures); empty without a System.
+    std::span<const WindTexture> wind_textures() const;
     /// The Vulkan device's name, or "" without a System.
     std::string device_name() const;
 

@@ -36,12 +36,12 @@ void packed_resize(GDExtensionVariantType type, std::int64_t hash, void* self, s
 bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr library) {
     gd.library = library;
     return find(get, "print_error_with_message", gd.print_error) &&
+           find(get, "print_warning_with_message", gd.print_warning) &&
            find(get, "variant_new_nil", gd.variant_new_nil) &&
            find(get, "variant_new_copy", gd.variant_new_copy) &&
            find(get, "variant_destroy", gd.variant_destroy) &&
            find(get, "variant_get_type", gd.variant_get_type) &&
            find(get, "variant_construct", gd.variant_construct) &&
-           find(get, "variant_evaluate", gd.variant_evaluate) &&
            find(get, "get_variant_from_type_constructor", gd.from_type) &&
            find(get, "get_variant_to_type_constructor", gd.to_type) &&
            find(get, "variant_get_ptr_constructor", gd.constructor) &&
@@ -72,6 +72,10 @@ bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr lib
 
 void error(const std::string& message, const char* function, const char* file, int line) {
     gd.print_error(message.c_str(), message.c_str(), function, file, line, false);
+}
+
+void warning(const std::string& message, const char* function, const char* file, int line) {
+    gd.print_warning(message.c_str(), message.c_str(), function, file, line, false);
 }
 
 StringName::StringName(const char* text) {
@@ -197,17 +201,6 @@ std::int64_t Variant::as_int() const {
     return n;
 }
 
-bool Variant::has(const Variant& item) const {
-    Variant result;
-    GDExtensionBool valid = false;
-    gd.variant_evaluate(GDEXTENSION_VARIANT_OP_IN, item.data_, data_, result.data_, &valid);
-    GDExtensionBool yes = false;
-    if (valid && result.type() == GDEXTENSION_VARIANT_TYPE_BOOL) {
-        result.to(GDEXTENSION_VARIANT_TYPE_BOOL, &yes);
-    }
-    return yes;
-}
-
 Method::Method(const char* class_name, const char* method, std::int64_t hash) : name_(method) {
     const StringName c(class_name), m(method);
     bind_ = gd.get_method_bind(c.ptr(), m.ptr(), hash);
@@ -256,8 +249,14 @@ void bind_methods() {
                                            hash::RenderingServer_global_shader_parameter_add};
     methods.global_shader_parameter_set = {"RenderingServer", "global_shader_parameter_set",
                                            hash::RenderingServer_global_shader_parameter_set};
-    methods.global_shader_parameter_get_list = {"RenderingServer", "global_shader_parameter_get_list",
-                                                hash::RenderingServer_global_shader_parameter_get_list};
+    methods.get_rendering_device = {"RenderingServer", "get_rendering_device",
+                                    hash::RenderingServer_get_rendering_device};
+    methods.get_driver_resource = {"RenderingDevice", "get_driver_resource",
+                                   hash::RenderingDevice_get_driver_resource};
+    methods.texture_create_from_extension = {"RenderingDevice", "texture_create_from_extension",
+                                             hash::RenderingDevice_texture_create_from_extension};
+    methods.free_rid = {"RenderingDevice", "free_rid", hash::RenderingDevice_free_rid};
+    methods.set_texture_rd_rid = {"Texture3DRD", "set_texture_rd_rid", hash::Texture3DRD_set_texture_rd_rid};
 }
 
 bool is_class(GDExtensionObjectPtr object, const char* class_name) {

@@ -20,12 +20,12 @@ namespace gust::godot4 {
 struct Interface {
     GDExtensionClassLibraryPtr library = nullptr;
     GDExtensionInterfacePrintErrorWithMessage print_error = nullptr;
+    GDExtensionInterfacePrintWarningWithMessage print_warning = nullptr;
     GDExtensionInterfaceVariantNewNil variant_new_nil = nullptr;
     GDExtensionInterfaceVariantNewCopy variant_new_copy = nullptr;
     GDExtensionInterfaceVariantDestroy variant_destroy = nullptr;
     GDExtensionInterfaceVariantGetType variant_get_type = nullptr;
     GDExtensionInterfaceVariantConstruct variant_construct = nullptr;
-    GDExtensionInterfaceVariantEvaluate variant_evaluate = nullptr;
     GDExtensionInterfaceGetVariantFromTypeConstructor from_type = nullptr;
     GDExtensionInterfaceGetVariantToTypeConstructor to_type = nullptr;
     GDExtensionInterfaceVariantGetPtrConstructor constructor = nullptr;
@@ -60,6 +60,9 @@ bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr lib
 /// Prints an error into Godot's log ("ERROR: message"), naming the C++ function and file.
 void error(const std::string& message, const char* function, const char* file, int line);
 #define GUST_GODOT_ERROR(message) ::gust::godot4::error((message), __func__, __FILE__, __LINE__)
+/// Prints a warning into Godot's log ("WARNING: message").
+void warning(const std::string& message, const char* function, const char* file, int line);
+#define GUST_GODOT_WARNING(message) ::gust::godot4::warning((message), __func__, __FILE__, __LINE__)
 
 class Variant;
 
@@ -158,8 +161,6 @@ class Variant {
     /// The object held, or null.
     GDExtensionObjectPtr object() const;
     std::int64_t as_int() const;
-    /// `item in this` as GDScript evaluates it (an Array holding item, a String holding it...).
-    bool has(const Variant& item) const;
     GDExtensionVariantPtr ptr() { return data_; }
     GDExtensionConstVariantPtr ptr() const { return data_; }
 
@@ -186,7 +187,8 @@ struct Methods {
     Method set_physics_process, get_children, get_tree, get_global_transform, get_nodes_in_group, get_mesh,
         get_physics_process_delta_time, get_surface_count, surface_get_arrays, reference,
         image_create_from_data, texture3d_create, texture3d_update, global_shader_parameter_add,
-        global_shader_parameter_set, global_shader_parameter_get_list;
+        global_shader_parameter_set, get_rendering_device, get_driver_resource, texture_create_from_extension,
+        free_rid, set_texture_rd_rid;
 };
 extern Methods methods;
 void bind_methods();

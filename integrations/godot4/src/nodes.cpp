@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <dlfcn.h>
 #include <map>
 #include <mutex>
 #include <set>
@@ -23,11 +24,21 @@ using integration::WindHostConfig;
 
 constexpr const char* kWind = "GustWind3D";
 constexpr const char* kEmitter = "GustEmitter3D";
-constexpr std::int64_t kArrayVertex = 0;       // Mesh.ARRAY_VERTEX
-constexpr std::int64_t kArrayIndex = 12;       // Mesh.ARRAY_INDEX
-constexpr std::int64_t kImageFormatRgbaf = 11; // Image.FORMAT_RGBAF
-constexpr std::int64_t kGlobalSampler3D = 26;  // RenderingServer.GLOBAL_VAR_TYPE_SAMPLER3D
-constexpr std::int64_t kGlobalTransform = 23;  // RenderingServer.GLOBAL_VAR_TYPE_TRANSFORM (mat4)
+constexpr std::int64_t kArrayVertex = 0;          // Mesh.ARRAY_VERTEX
+constexpr std::int64_t kArrayIndex = 12;          // Mesh.ARRAY_INDEX
+constexpr std::int64_t kImageFormatRgbaf = 11;    // Image.FORMAT_RGBAF
+constexpr std::int64_t kGlobalSampler3D = 26;     // RenderingServer.GLOBAL_VAR_TYPE_SAMPLER3D
+constexpr std::int64_t kGlobalTransform = 23;     // RenderingServer.GLOBAL_VAR_TYPE_TRANSFORM (mat4)
+constexpr std::int64_t kDriverDevice = 0;         // RenderingDevice.DRIVER_RESOURCE_LOGICAL_DEVICE
+constexpr std::int64_t kDriverPhysicalDevice = 1; // DRIVER_RESOURCE_PHYSICAL_DEVICE
+constexpr std::int64_t kDriverInstance = 2;       // DRIVER_RESOURCE_TOPMOST_OBJECT
+constexpr std::int64_t kDriverQueue = 3;          // DRIVER_RESOURCE_COMMAND_QUEUE
+constexpr std::int64_t kDriverQueueFamily = 4;    // DRIVER_RESOURCE_QUEUE_FAMILY
+constexpr std::int64_t kTextureType3D = 2;        // RenderingDevice.TEXTURE_TYPE_3D
+constexpr std::int64_t kFormatRgba16f = 96;       // RenderingDevice.DATA_FORMAT_R16G16B16A16_SFLOAT
+// TEXTURE_USAGE_SAMPLING_BIT | CAN_COPY_FROM_BIT | CAN_COPY_TO_BIT: what gust made its wind images with
+// (sampled, transfer source and destination), as texture_create_from_extension must be told.
+constexpr std::int64_t kSharedUsage = 1 | 128 | 256;
 constexpr const char* kTextureParameter = "gust_wind_texture";
 constexpr const char* kTransformParameter = "gust_world_to_texture";
 
@@ -53,9 +64,10 @@ EmitterRegistry& emitter_registry() {
 
 // One cascade's texture and where it lies.
 struct CascadeTexture {
-    Variant texture; // ImageTexture3D
-    Vec3 origin{};   // world m of the texture's (0, 0, 0) corner
-    float cell = 0.0f;
+    Variant texture;                // ImageTexture3D, or Texture3DRD over gust's image
+    Transform3D to_texture{};       // world m to the texture's 0..1
+    VkImage image = VK_NULL_HANDLE; // shared: gust's image the RD texture wraps
+    std::uint64_t rid = 0;          // shared: the RD texture (texture_create_from_extension)
 };
 
 struct Wind final : Instance {
@@ -71,6 +83,9 @@ struct Wind final : Instance {
     std::vector<CascadeTexture> textures;
     WindField field;
     std::uint64_t cpu_bytes_last_frame = 0;
+    // Godot's RenderingDevice while gust runs on Godot's own Vulkan device and shares its images (Forward+,
+    // Mobile); null on a device of gust's own (headless, Compatibility).
+    GDExtensionObjectPtr rd = nullptr;
     std::set<std::string> reported; // errors already in the log, each printed once
     std::vector<float> positions;
     std::vector<std::uint32_t> indices;
@@ -141,8 +156,7 @@ void upload(Wind& w, std::size_t k, const WindField& field) {
     } else {
         methods.texture3d_update(t.texture.object(), {list});
     }
-    t.origin = field.origin;
-    t.cell = field.cell_size;
+    t.to_texture = world_to_texture(field.extent, field.origin, field.cell_size);
     w.cpu_bytes_last_frame += std::uint64_t(slice) * std::uint64_t(nz);
 }
 
@@ -170,29 +184,135 @@ void make_textures(Wind& w) {
     }
 }
 
-// The finest cascade as global shader parameters, so any material can read it (declared here when the
-// project does not declare them).
+// Godot's own Vulkan instance, physical device, device and queue, when Godot renders through a
+// RenderingDevice and this is its render thread (get_driver_resource answers 0 anywhere else): gust then
+// runs there and shares its wind images. False (gust on a device of its own) otherwise.
+bool godot_device(Wind& w, HostDevice& host) {
+    const StringName server_name("RenderingServer");
+    GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
+    GDExtensionObjectPtr rd = server ? methods.get_rendering_device(server).object() : nullptr;
+    if (!rd) {
+        return false;
+    }
+    const std::uint64_t no_rid = 0;
+    const Variant rid = Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &no_rid);
+    const auto resource = [&](std::int64_t which) {
+        return std::uint64_t(
+            methods.get_driver_resource(rd, {Variant::from(which), rid, Variant::from(std::int64_t(0))})
+                .as_int());
+    };
+    const std::uint64_t instance = resource(kDriverInstance), physical = resource(kDriverPhysicalDevice),
+                        device = resource(kDriverDevice), queue = resource(kDriverQueue);
+    if (!instance || !physical || !device || !queue) {
+        return false;
+    }
+    // Godot loaded Vulkan's loader already: the same one answers for its instance.
+    void* loader = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_NOLOAD);
+    auto get_instance_proc_addr =
+        loader ? reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader, "vkGetInstanceProcAddr"))
+               : nullptr;
+    if (!get_instance_proc_addr) {
+        return false;
+    }
+    host.instance = reinterpret_cast<VkInstance>(instance);
+    host.physical_device = reinterpret_cast<VkPhysicalDevice>(physical);
+    host.device = reinterpret_cast<VkDevice>(device);
+    host.queue_family = std::uint32_t(resource(kDriverQueueFamily));
+    host.get_instance_proc_addr = get_instance_proc_addr;
+    // gust takes the queue by its index in the family: find Godot's.
+    auto get_device_proc_addr = reinterpret_cast<PFN_vkGetDeviceProcAddr>(
+        get_instance_proc_addr(host.instance, "vkGetDeviceProcAddr"));
+    auto get_queue =
+        reinterpret_cast<PFN_vkGetDeviceQueue>(get_device_proc_addr(host.device, "vkGetDeviceQueue"));
+    auto queue_families = reinterpret_cast<PFN_vkGetPhysicalDeviceQueueFamilyProperties>(
+        get_instance_proc_addr(host.instance, "vkGetPhysicalDeviceQueueFamilyProperties"));
+    std::uint32_t count = 0;
+    queue_families(host.physical_device, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    queue_families(host.physical_device, &count, families.data());
+    if (host.queue_family >= count) {
+        return false;
+    }
+    for (std::uint32_t i = 0; i < families[host.queue_family].queueCount; ++i) {
+        VkQueue q = VK_NULL_HANDLE;
+        get_queue(host.device, host.queue_family, i, &q);
+        if (reinterpret_cast<std::uint64_t>(q) == queue) {
+            host.queue_index = i;
+            w.rd = rd;
+            return true;
+        }
+    }
+    return false;
+}
+
+// Frees the RD textures over gust's images (the images stay gust's) before the System goes.
+void release_shared(Wind& w) {
+    for (CascadeTexture& t : w.textures) {
+        if (t.rid && w.rd) {
+            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
+        }
+    }
+    w.textures.clear();
+}
+
+// Wraps each cascade's wind image as a Texture3DRD (once, and again if gust replaced the image) and takes
+// its world-to-texture transform. No byte passes through the CPU.
+void share_textures(Wind& w) {
+    const std::span<const WindTexture> images = w.host.wind_textures();
+    w.textures.resize(images.size());
+    for (std::size_t k = 0; k < images.size(); ++k) {
+        const WindTexture& image = images[k];
+        CascadeTexture& t = w.textures[k];
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) {
+                t.to_texture.rows[r][c] = image.world_to_texture.m[4 * c + r];
+            }
+            t.to_texture.origin[r] = image.world_to_texture.m[12 + r];
+        }
+        if (t.image == image.image) {
+            continue;
+        }
+        if (t.rid) {
+            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
+        }
+        const Variant rid = methods.texture_create_from_extension(
+            w.rd, {Variant::from(kTextureType3D), Variant::from(kFormatRgba16f),
+                   Variant::from(std::int64_t(0)), Variant::from(kSharedUsage),
+                   Variant::from(std::int64_t(reinterpret_cast<std::uintptr_t>(image.image))),
+                   Variant::from(std::int64_t(image.extent[0])), Variant::from(std::int64_t(image.extent[1])),
+                   Variant::from(std::int64_t(image.extent[2])), Variant::from(std::int64_t(1)),
+                   Variant::from(std::int64_t(1))});
+        rid.to(GDEXTENSION_VARIANT_TYPE_RID, &t.rid);
+        const StringName type("Texture3DRD");
+        t.texture = Variant::from(gd.construct_object(type.ptr()));
+        methods.set_texture_rd_rid(t.texture.object(), {rid});
+        t.image = image.image;
+    }
+}
+
+// The finest cascade as global shader parameters, so any material can read it. The extension declares them
+// once a process (Godot lists its parameters in the editor only): a project must not declare them itself.
 void publish_globals(Wind& w) {
+    static bool declared = false;
     const StringName server_name("RenderingServer");
     GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
     if (!server || w.textures.empty()) {
         return;
     }
     const CascadeTexture& t = w.textures[0];
-    const Transform3D m = world_to_texture(w.config.cells, t.origin, t.cell);
-    const Variant transform = Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &m);
-    const Variant declared = methods.global_shader_parameter_get_list(server);
-    const std::pair<const char*, std::pair<std::int64_t, const Variant*>> parameters[] = {
-        {kTextureParameter, {kGlobalSampler3D, &t.texture}},
-        {kTransformParameter, {kGlobalTransform, &transform}}};
-    for (const auto& [name, value] : parameters) {
-        const Variant key = Variant::from(StringName(name));
-        if (declared.has(key)) {
-            methods.global_shader_parameter_set(server, {key, *value.second});
-        } else {
-            methods.global_shader_parameter_add(server, {key, Variant::from(value.first), *value.second});
-        }
+    const Variant transform = Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t.to_texture);
+    const Variant texture_name = Variant::from(StringName(kTextureParameter));
+    const Variant transform_name = Variant::from(StringName(kTransformParameter));
+    if (!declared) {
+        declared = true;
+        methods.global_shader_parameter_add(server,
+                                            {texture_name, Variant::from(kGlobalSampler3D), t.texture});
+        methods.global_shader_parameter_add(server,
+                                            {transform_name, Variant::from(kGlobalTransform), transform});
+        return;
     }
+    methods.global_shader_parameter_set(server, {texture_name, t.texture});
+    methods.global_shader_parameter_set(server, {transform_name, transform});
 }
 
 void report_obstacles(Wind& w, GDExtensionObjectPtr tree) {
@@ -300,19 +420,37 @@ void tick(Wind& w) {
         w.dirty = false;
         w.config.focus = focus;
         std::unique_lock lock(w.mutex);
+        release_shared(w);
+        w.host.destroy();
+        w.rd = nullptr;
         Hooks hooks;
         hooks.log = [](void*, LogLevel level, const char* message) {
             if (level == LogLevel::Error) {
                 GUST_GODOT_ERROR(std::string(kWind) + ": " + message);
             }
         };
-        if (Outcome o = w.host.create(w.config, hooks); !o) {
-            report_once(w, "no wind: " + o.message());
-            return;
+        HostDevice host;
+        if (godot_device(w, host)) {
+            if (Outcome o = w.host.create(w.config, hooks, &host); !o) {
+                // Godot's device lacks what gust needs (Godot 4.6.3's device answers none of Vulkan 1.3's
+                // entry points): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
+                GUST_GODOT_WARNING(std::string(kWind) + ": gust cannot run on Godot's Vulkan device (" +
+                                   o.message() +
+                                   "): it runs on its own, the wind textures filled through the CPU");
+                w.rd = nullptr;
+            }
+        }
+        if (!w.rd) {
+            if (Outcome o = w.host.create(w.config, hooks); !o) {
+                report_once(w, "no wind: " + o.message());
+                return;
+            }
         }
         lock.unlock();
         w.reported.clear();
-        make_textures(w);
+        if (!w.rd) {
+            make_textures(w);
+        }
     }
     if (!w.host.alive()) {
         return;
@@ -328,12 +466,16 @@ void tick(Wind& w) {
         report_once(w, "step: " + o.message());
         return;
     }
-    for (std::uint32_t k = 0; k < w.config.cascades; ++k) {
-        if (Outcome o = w.host.read_field(w.field, k); !o) {
-            report_once(w, "wind texture: " + o.message());
-            return;
+    if (w.rd) {
+        share_textures(w);
+    } else {
+        for (std::uint32_t k = 0; k < w.config.cascades; ++k) {
+            if (Outcome o = w.host.read_field(w.field, k); !o) {
+                report_once(w, "wind texture: " + o.message());
+                return;
+            }
+            upload(w, k, w.field);
         }
-        upload(w, k, w.field);
     }
     publish_globals(w);
 }
@@ -347,7 +489,9 @@ void wind_notification(Instance& i, std::int32_t what) {
     } else if (what == kNotificationExitTree) {
         w.in_tree = false;
         std::unique_lock lock(w.mutex);
+        release_shared(w);
         w.host.destroy();
+        w.rd = nullptr;
     } else if (what == kNotificationPhysicsProcess && w.in_tree) {
         tick(w);
     }
@@ -469,9 +613,7 @@ Variant get_wind_texture(Instance& i, const Variant* args) {
 Variant get_world_to_texture(Instance& i, const Variant* args) {
     const Wind& w = wind(i);
     std::size_t k = 0;
-    const Transform3D t = cascade_of(w, args[0], k)
-                              ? world_to_texture(w.config.cells, w.textures[k].origin, w.textures[k].cell)
-                              : Transform3D{};
+    const Transform3D t = cascade_of(w, args[0], k) ? w.textures[k].to_texture : Transform3D{};
     return Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t);
 }
 
@@ -480,7 +622,8 @@ Variant get_stats(Instance& i, const Variant*) {
     Dictionary d;
     d.set("steps", Variant::from(std::int64_t(w.host.steps())));
     d.set("step_ms", Variant::from(w.host.last_step_ms()));
-    d.set("cpu_bytes_per_frame", Variant::from(std::int64_t(w.cpu_bytes_last_frame)));
+    d.set("texture_bytes_through_cpu", Variant::from(std::int64_t(w.cpu_bytes_last_frame)));
+    d.set("shares_godot_device", Variant::from(w.rd != nullptr));
     const std::string device = w.host.device_name();
     const String name(device.c_str());
     d.set("device", Variant::from(GDEXTENSION_VARIANT_TYPE_STRING, name.ptr()));

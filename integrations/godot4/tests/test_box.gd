@@ -61,8 +61,8 @@ func _process(_delta: float) -> bool:
 	expect((to_texture * Vector3(0, 0, 0)).is_equal_approx(Vector3(0.5, 0.5, 0.5))
 		and (to_texture * Vector3(4, 2, 4)).is_equal_approx(Vector3(1, 1, 1)),
 		"world_to_texture %s does not map the domain (-4 -2 -4)..(4 2 4) to 0..1" % to_texture)
-	expect(stats.cpu_bytes_per_frame == 16 * 8 * 16 * 16,
-		"%d bytes through the CPU a frame, not the texture's 32768" % stats.cpu_bytes_per_frame)
+	expect(stats.texture_bytes_through_cpu == 16 * 8 * 16 * 16,
+		"%d bytes through the CPU a frame, not the texture's 32768" % stats.texture_bytes_through_cpu)
 	if failures.is_empty():
 		print("GUST_TEST PASS %d points after %d steps on %s" % [points.size(), stats.steps, stats.device])
 	else:
