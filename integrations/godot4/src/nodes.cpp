@@ -1,4 +1,4 @@
-// GustWind3D and GustEmitter3D (../shared/DESIGN.md, docs/godot.md): the scene translated into wind_host
+// GustWind3D and GustEmitter3D (docs/godot.md, "GustWind3D" and "GustEmitter3D"): the scene translated into wind_host
 // calls every physics frame, the wind handed back through sample_wind and a Texture3D per cascade.
 #include "nodes.hpp"
 

@@ -1,5 +1,5 @@
-// The extension's nodes: GustWind3D (Node3D) and GustEmitter3D (Node3D), ../shared/DESIGN.md's Godot 4
-// bullet.
+// The extension's nodes: GustWind3D (Node3D) and GustEmitter3D (Node3D), with the properties and methods
+// docs/godot.md lists.
 #pragma once
 
 namespace gust::godot4 {
