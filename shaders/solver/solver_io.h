@@ -38,6 +38,9 @@ GUST_CONST uint kMaxEmitters = 64;
 GUST_CONST uint kMaxCascades = 8;
 GUST_CONST float kCascadeBlendCells = 3.0f;
 GUST_CONST float kCascadeSolidShare = 0.3f;
+/// The share of the finer cascade's wind a coarser cascade takes each step on the faces the finer one covers
+/// (docs/solver.md "Cascades", "Fine to coarse"): relaxed towards it, not overwritten by it.
+GUST_CONST float kCascadeFeedback = 0.25f;
 /// Fragment velocities are summed per cell as fixed point with this many steps per m/s, clamped to
 /// ±kMaxFragmentSpeed, so 32-bit integer atomics suffice (no float-atomic feature needed).
 GUST_CONST float kVelocityScale = 256.0f;

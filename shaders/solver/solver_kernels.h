@@ -329,19 +329,20 @@ GUST_INLINE float confinement_change(uint axis, ivec3 f, float dt, float epsilon
 }
 
 /// Face f of the next field from advection's value `u` there: the wind beyond the grid on the domain's
-/// faces (the ambient wind, or the next coarser cascade's); a finer cascade's wind where one covers f; else
-/// the emitters (`rate` of the gap each), then vorticity confinement (confinement_change), then, near the
-/// border of a cascade inside a coarser one, drawn towards the coarser wind (border_relaxation).
+/// faces (the ambient wind, or the next coarser cascade's); else the emitters (`rate` of the gap each), then
+/// vorticity confinement (confinement_change), then, where a finer cascade covers f, drawn by
+/// kCascadeFeedback towards its wind, and near the border of a cascade inside a coarser one, drawn towards
+/// the coarser wind (border_relaxation).
 GUST_INLINE float forced_face(float u, uint axis, ivec3 f, float rate, float dt, float epsilon) {
     vec3 x = grid_origin() + face_position(axis, f) * grid_h();
     if (boundary_side(grid_dims(), axis, f) != 6u) return beyond_component(axis, x);
-    float finer;
-    if (inner_face(axis, f, finer)) return finer;
     // The omni emitters, first in the list, are added where the field is read, not driven into it
     // (omni_velocity).
     for (uint e = omni_count(); e < emitter_count(); ++e)
         u = emitter_drive(u, emitter_velocity(load_emitter(e), x)[axis], rate);
     u += confinement_change(axis, f, dt, epsilon);
+    float finer;
+    if (inner_face(axis, f, finer)) u = mix(u, finer, kCascadeFeedback);
     float relax = border_relaxation(axis, f);
     return relax > 0.0f ? mix(u, beyond_component(axis, x), relax) : u;
 }

@@ -188,8 +188,9 @@ class WindSolver : public gpu::HostObject {
     /// its grid it takes the wind of `outer` (the next coarser cascade, and those beyond it) in place of the
     /// ambient wind: every side held at it but the one the ambient wind leaves through most, which stays open
     /// (shaderio::nested_open_sides); where `inner` (the next finer cascade) covers a face with at least
-    /// one of this grid's cells inside inner's border, the face takes inner's wind averaged over it in place
-    /// of advection and forces. Either may be null (null, null: one grid again). Each reads the other's
+    /// one of this grid's cells inside inner's border, each step draws the face a quarter of the way
+    /// (shaderio::kCascadeFeedback) from its own advected and forced value towards inner's wind averaged
+    /// over it. Either may be null (null, null: one grid again). Each reads the other's
     /// field as its last step or scroll left it; `inner` reads this one's blended in time between its last
     /// two steps (record_keep_previous, record_time_blend). Both outlive the coupling. With an inner, it
     /// allocates a copy of the field (fails when it cannot).
