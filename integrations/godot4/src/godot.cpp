@@ -215,7 +215,14 @@ Variant Method::operator()(GDExtensionObjectPtr self, std::initializer_list<Vari
     if (!bind_) {
         return result;
     }
-    GDExtensionConstVariantPtr pointers[8] = {};
+    // Room for the longest engine method bound (texture_create_from_extension takes 10): 8, as before,
+    // overran the array and handed Godot a null argument.
+    GDExtensionConstVariantPtr pointers[kMaxArguments] = {};
+    if (args.size() > kMaxArguments) {
+        GUST_GODOT_ERROR(std::string("calling ") + name_ + " with " + std::to_string(args.size()) +
+                         " arguments: the extension passes at most " + std::to_string(kMaxArguments));
+        return result;
+    }
     std::size_t n = 0;
     for (const Variant& a : args) {
         pointers[n++] = a.ptr();

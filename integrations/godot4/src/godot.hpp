@@ -173,7 +173,10 @@ class Method {
   public:
     Method() = default;
     Method(const char* class_name, const char* method, std::int64_t hash);
-    /// Calls it on `self` (null for a static method) with Variant arguments; errors go to Godot's log.
+    /// The most arguments operator() passes.
+    static constexpr std::size_t kMaxArguments = 16;
+    /// Calls it on `self` (null for a static method) with at most kMaxArguments Variant arguments; errors go
+    /// to Godot's log.
     Variant operator()(GDExtensionObjectPtr self, std::initializer_list<Variant> args = {}) const;
     bool valid() const { return bind_ != nullptr; }
 

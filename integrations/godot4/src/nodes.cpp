@@ -245,10 +245,32 @@ bool godot_device(Wind& w, HostDevice& host) {
     return false;
 }
 
-// Frees the RD textures over gust's images (the images stay gust's) before the System goes.
+// Whether the global shader parameters were declared in this process (publish_globals).
+bool globals_declared = false;
+
+// Frees the RD textures over gust's images (the images stay gust's) before the System goes. Materials may
+// still hold the finest one through the global shader parameter, and would draw with a freed image: the
+// parameter is first pointed at a texture of one texel of the ambient wind (Godot's placeholder for an empty
+// Texture3DRD is 2D, which a sampler3D must not read).
 void release_shared(Wind& w) {
+    if (!w.rd || w.textures.empty()) {
+        w.textures.clear();
+        return;
+    }
+    const StringName server_name("RenderingServer");
+    GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
+    if (server && globals_declared) {
+        WindField still;
+        still.extent[0] = still.extent[1] = still.extent[2] = 1;
+        still.cell_size = 1.0f;
+        still.rgba = {w.config.ambient.x, w.config.ambient.y, w.config.ambient.z, 1.0f};
+        w.textures.resize(w.textures.size() + 1);
+        upload(w, w.textures.size() - 1, still);
+        methods.global_shader_parameter_set(
+            server, {Variant::from(StringName(kTextureParameter)), w.textures.back().texture});
+    }
     for (CascadeTexture& t : w.textures) {
-        if (t.rid && w.rd) {
+        if (t.rid) {
             methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
         }
     }
@@ -272,9 +294,7 @@ void share_textures(Wind& w) {
         if (t.image == image.image) {
             continue;
         }
-        if (t.rid) {
-            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
-        }
+        const std::uint64_t old = t.rid;
         const Variant rid = methods.texture_create_from_extension(
             w.rd, {Variant::from(kTextureType3D), Variant::from(kFormatRgba16f),
                    Variant::from(std::int64_t(0)), Variant::from(kSharedUsage),
@@ -283,9 +303,15 @@ void share_textures(Wind& w) {
                    Variant::from(std::int64_t(image.extent[2])), Variant::from(std::int64_t(1)),
                    Variant::from(std::int64_t(1))});
         rid.to(GDEXTENSION_VARIANT_TYPE_RID, &t.rid);
-        const StringName type("Texture3DRD");
-        t.texture = Variant::from(gd.construct_object(type.ptr()));
+        // One Texture3DRD a cascade for the node's life in the tree: materials holding it see the new image.
+        if (t.texture.type() == GDEXTENSION_VARIANT_TYPE_NIL) {
+            const StringName type("Texture3DRD");
+            t.texture = Variant::from(gd.construct_object(type.ptr()));
+        }
         methods.set_texture_rd_rid(t.texture.object(), {rid});
+        if (old) {
+            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &old)});
+        }
         t.image = image.image;
     }
 }
@@ -293,7 +319,6 @@ void share_textures(Wind& w) {
 // The finest cascade as global shader parameters, so any material can read it. The extension declares them
 // once a process (Godot lists its parameters in the editor only): a project must not declare them itself.
 void publish_globals(Wind& w) {
-    static bool declared = false;
     const StringName server_name("RenderingServer");
     GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
     if (!server || w.textures.empty()) {
@@ -303,8 +328,8 @@ void publish_globals(Wind& w) {
     const Variant transform = Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t.to_texture);
     const Variant texture_name = Variant::from(StringName(kTextureParameter));
     const Variant transform_name = Variant::from(StringName(kTransformParameter));
-    if (!declared) {
-        declared = true;
+    if (!globals_declared) {
+        globals_declared = true;
         methods.global_shader_parameter_add(server,
                                             {texture_name, Variant::from(kGlobalSampler3D), t.texture});
         methods.global_shader_parameter_add(server,
@@ -432,8 +457,8 @@ void tick(Wind& w) {
         HostDevice host;
         if (godot_device(w, host)) {
             if (Outcome o = w.host.create(w.config, hooks, &host); !o) {
-                // Godot's device lacks what gust needs (Godot 4.6.3's device answers none of Vulkan 1.3's
-                // entry points): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
+                // Godot's device lacks what gust needs (a Vulkan 1.2 device without bufferDeviceAddress,
+                // say): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
                 GUST_GODOT_WARNING(std::string(kWind) + ": gust cannot run on Godot's Vulkan device (" +
                                    o.message() +
                                    "): it runs on its own, the wind textures filled through the CPU");
