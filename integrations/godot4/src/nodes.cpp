@@ -94,6 +94,9 @@ struct Wind final : Instance {
     Vec3 ambient{};
     bool in_tree = false;
     bool dirty = true; // the System must be (re)made from config at the next physics frame
+    // Run on Godot's device where it has one (share_godot_device): gust's submissions on Godot's queue race
+    // Godot's uploads from other threads, so a game that uploads from threads turns it off (docs/godot.md).
+    bool share = true;
     std::vector<CascadeTexture> textures;
     WindField field;
     std::uint64_t cpu_bytes_last_frame = 0;
@@ -669,7 +672,7 @@ void tick(Wind& w) {
             }
         };
         HostDevice host;
-        if (godot_device(w, host)) {
+        if (w.share && godot_device(w, host)) {
             if (Outcome o = w.host.create(w.config, hooks, &host); !o) {
                 // Godot's device lacks what gust needs (a Vulkan 1.2 device without bufferDeviceAddress,
                 // say): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
@@ -812,6 +815,19 @@ Variant set_ambient_wind(Instance& i, const Variant* args) {
 Variant get_ambient_wind(Instance& i, const Variant*) {
     return Variant::from(wind(i).config.ambient);
 }
+Variant set_share_godot_device(Instance& i, const Variant* args) {
+    Wind& w = wind(i);
+    GDExtensionBool v = false;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_BOOL, &v);
+    if (w.share != bool(v)) {
+        w.share = v;
+        w.dirty = true;
+    }
+    return {};
+}
+Variant get_share_godot_device(Instance& i, const Variant*) {
+    return Variant::from(wind(i).share);
+}
 Variant set_obstacle_group(Instance& i, const Variant* args) {
     wind(i).group = args[0];
     return {};
@@ -943,6 +959,8 @@ void register_nodes() {
     property(kWind, {"cascades", GDEXTENSION_VARIANT_TYPE_INT}, set_cascades, get_cascades);
     property(kWind, {"ratio", GDEXTENSION_VARIANT_TYPE_INT}, set_ratio, get_ratio);
     property(kWind, {"ambient_wind", GDEXTENSION_VARIANT_TYPE_VECTOR3}, set_ambient_wind, get_ambient_wind);
+    property(kWind, {"share_godot_device", GDEXTENSION_VARIANT_TYPE_BOOL}, set_share_godot_device,
+             get_share_godot_device);
     property(kWind, {"obstacle_group", GDEXTENSION_VARIANT_TYPE_STRING_NAME}, set_obstacle_group,
              get_obstacle_group);
     const Slot points{"points", GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY};
