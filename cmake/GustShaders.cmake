@@ -39,7 +39,7 @@ function(gust_embed_shaders)
     set(header ${out_dir}/${var}.h)
     add_custom_command(
       OUTPUT ${header}
-      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.3 ${define} -I${CMAKE_CURRENT_SOURCE_DIR} ${include_flags}
+      COMMAND ${GLSLANG_VALIDATOR} -V --target-env vulkan1.2 ${define} -I${CMAKE_CURRENT_SOURCE_DIR} ${include_flags}
               --vn ${var} -o ${header} ${CMAKE_CURRENT_SOURCE_DIR}/${src}
       DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${src} ${ARG_DEPENDS}
       COMMENT "glslang ${src} ${define}"

@@ -110,7 +110,7 @@ std::string Context::last_validation_message() const {
 Status Context::finish_device(std::uint32_t queue_index) {
     if (const std::string missing = load_device_functions(vk_, device_); !missing.empty())
         return Status::failure("vkGetDeviceProcAddr returned null for " + missing +
-                               " (is the device Vulkan 1.3?)");
+                               " (is the device Vulkan 1.2?)");
     vk_.vkGetDeviceQueue(device_, queue_family_, queue_index, &queue_);
     vk_.vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
 
@@ -154,6 +154,24 @@ Status Context::finish_device(std::uint32_t queue_index) {
     if (VkResult r = vk_.vkCreateFence(device_, &fence_info, allocator(), &fence_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateFence failed: ") + to_string(r));
     name(VK_OBJECT_TYPE_FENCE, std::uint64_t(fence_), "gust submit fence");
+
+    VkSubpassDescription subpass{};
+    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    VkRenderPassCreateInfo pass_info{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+    pass_info.subpassCount = 1;
+    pass_info.pSubpasses = &subpass;
+    if (VkResult r = vk_.vkCreateRenderPass(device_, &pass_info, allocator(), &render_pass_); r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateRenderPass failed: ") + to_string(r));
+    name(VK_OBJECT_TYPE_RENDER_PASS, std::uint64_t(render_pass_), "gust attachmentless pass");
+    VkFramebufferCreateInfo framebuffer_info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    framebuffer_info.renderPass = render_pass_;
+    framebuffer_info.width = kMaxFramebufferExtent;
+    framebuffer_info.height = kMaxFramebufferExtent;
+    framebuffer_info.layers = 1;
+    if (VkResult r = vk_.vkCreateFramebuffer(device_, &framebuffer_info, allocator(), &framebuffer_);
+        r != VK_SUCCESS)
+        return Status::failure(std::string("vkCreateFramebuffer failed: ") + to_string(r));
+    name(VK_OBJECT_TYPE_FRAMEBUFFER, std::uint64_t(framebuffer_), "gust attachmentless framebuffer");
     return {};
 }
 
@@ -176,6 +194,8 @@ Context::~Context() {
         wait_idle();
         retire(UINT64_MAX);
         if (fence_) vk_.vkDestroyFence(device_, fence_, allocator());
+        if (framebuffer_) vk_.vkDestroyFramebuffer(device_, framebuffer_, allocator());
+        if (render_pass_) vk_.vkDestroyRenderPass(device_, render_pass_, allocator());
         if (pipeline_cache_) vk_.vkDestroyPipelineCache(device_, pipeline_cache_, allocator());
         if (pool_) vk_.vkDestroyCommandPool(device_, pool_, allocator());
         if (owns_device_) vk_.vkDestroyDevice(device_, allocator());
@@ -219,22 +239,20 @@ Status Context::end_one_time(VkCommandBuffer cmd) {
         return Status::failure(std::string("vkEndCommandBuffer failed: ") + to_string(r));
     }
 
-    VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
-    cmd_info.commandBuffer = cmd;
-    VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
-    submit.commandBufferInfoCount = 1;
-    submit.pCommandBufferInfos = &cmd_info;
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
     Status status;
     vk_.vkResetFences(device_, 1, &fence_);
     VkResult submitted = VK_SUCCESS;
     {
         std::unique_lock<std::mutex> lock;
         if (queue_mutex_) lock = std::unique_lock<std::mutex>(*queue_mutex_);
-        submitted = vk_.vkQueueSubmit2(queue_, 1, &submit, fence_);
+        submitted = vk_.vkQueueSubmit(queue_, 1, &submit, fence_);
     }
     ++work_.submissions;
     if (submitted != VK_SUCCESS)
-        status = Status::failure(std::string("vkQueueSubmit2 failed: ") + to_string(submitted));
+        status = Status::failure(std::string("vkQueueSubmit failed: ") + to_string(submitted));
     else if (++work_.waits; vk_.vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX) != VK_SUCCESS)
         status = Status::failure("waiting for the GPU failed");
     vk_.vkFreeCommandBuffers(device_, pool_, 1, &cmd);

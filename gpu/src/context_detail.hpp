@@ -12,31 +12,28 @@
 namespace gust::gpu::detail {
 
 /// What device_requirements() lists beyond the features.
-inline constexpr std::uint32_t kApiVersion = VK_API_VERSION_1_3;
+inline constexpr std::uint32_t kApiVersion = VK_API_VERSION_1_2;
 inline constexpr std::array<const char*, 0> kRequiredExtensions{};
 inline constexpr std::array kOptionalExtensions{VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME};
 
 // The one list of device features gust uses: create() enables it, adopt() and check_device_support()
 // check it, add_required_features() hands it to a host. vertexPipelineStoresAndAtomics because
-// voxelize.geom counts rejected triangles with an atomic.
+// voxelize.geom counts rejected triangles with an atomic. Nothing of Vulkan 1.3 (synchronization2,
+// dynamic rendering, maintenance4) nor scalarBlockLayout: Godot 4 creates its device with Vulkan 1.2 and
+// none of them (docs/godot.md), so gust records Vulkan 1.0 barriers and render passes, and its shaders,
+// SPIR-V 1.5, keep every block within the relaxed layout Vulkan 1.2 validates.
 template <class Fn>
-void for_each_feature(VkPhysicalDeviceFeatures& f, VkPhysicalDeviceVulkan12Features& f12,
-                      VkPhysicalDeviceVulkan13Features& f13, Fn&& fn) {
+void for_each_feature(VkPhysicalDeviceFeatures& f, VkPhysicalDeviceVulkan12Features& f12, Fn&& fn) {
     fn(f.geometryShader, "geometryShader");
     fn(f.fragmentStoresAndAtomics, "fragmentStoresAndAtomics");
     fn(f.vertexPipelineStoresAndAtomics, "vertexPipelineStoresAndAtomics");
     fn(f.shaderInt64, "shaderInt64");
     fn(f12.bufferDeviceAddress, "bufferDeviceAddress");
-    fn(f12.scalarBlockLayout, "scalarBlockLayout");
-    fn(f13.synchronization2, "synchronization2");
-    fn(f13.dynamicRendering, "dynamicRendering");
-    fn(f13.maintenance4, "maintenance4");
 }
 
-// VkPhysicalDeviceFeatures2 -> Vulkan12Features -> Vulkan13Features, chained (so neither copied nor moved).
+// VkPhysicalDeviceFeatures2 -> Vulkan12Features, chained (so neither copied nor moved).
 struct FeatureChain {
-    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &f13};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
     FeatureChain() = default;
     FeatureChain(const FeatureChain&) = delete;

@@ -66,7 +66,7 @@ bool graphics_and_compute(const VkQueueFamilyProperties& family) {
 Status load_instance_table(Dispatch& vk, VkInstance instance) {
     if (const std::string missing = load_instance_functions(vk, instance); !missing.empty())
         return Status::failure("vkGetInstanceProcAddr returned null for " + missing +
-                               " (is the instance Vulkan 1.3?)");
+                               " (is the instance Vulkan 1.2?)");
     return {};
 }
 
@@ -80,7 +80,7 @@ Status check_support(const Dispatch& vk, VkPhysicalDevice physical, std::pmr::me
     FeatureChain have;
     vk.vkGetPhysicalDeviceFeatures2(physical, &have.f2);
     std::string missing_features;
-    for_each_feature(have.f2.features, have.f12, have.f13, [&](VkBool32 supported, const char* name) {
+    for_each_feature(have.f2.features, have.f12, [&](VkBool32 supported, const char* name) {
         if (!supported) append(missing_features, name);
     });
     const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk, physical, memory);
@@ -106,27 +106,20 @@ DeviceRequirements device_requirements() {
     req.extensions.assign(kRequiredExtensions.begin(), kRequiredExtensions.end());
     req.optional_extensions.assign(kOptionalExtensions.begin(), kOptionalExtensions.end());
     FeatureChain chain;
-    for_each_feature(chain.f2.features, chain.f12, chain.f13,
+    for_each_feature(chain.f2.features, chain.f12,
                      [&](VkBool32&, const char* name) { req.features.push_back(name); });
     return req;
 }
 
 Status add_required_features(VkPhysicalDeviceFeatures2& features) {
     VkPhysicalDeviceVulkan12Features* f12 = nullptr;
-    VkPhysicalDeviceVulkan13Features* f13 = nullptr;
-    for (auto* s = static_cast<VkBaseOutStructure*>(features.pNext); s; s = s->pNext) {
+    for (auto* s = static_cast<VkBaseOutStructure*>(features.pNext); s; s = s->pNext)
         if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES)
             f12 = reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(s);
-        if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES)
-            f13 = reinterpret_cast<VkPhysicalDeviceVulkan13Features*>(s);
-    }
-    std::string missing;
-    if (!f12) append(missing, "VkPhysicalDeviceVulkan12Features");
-    if (!f13) append(missing, "VkPhysicalDeviceVulkan13Features");
-    if (!missing.empty())
-        return Status::failure("the pNext chain of VkPhysicalDeviceFeatures2 lacks " + missing +
-                               ", where gust's required features are set");
-    for_each_feature(features.features, *f12, *f13, [](VkBool32& enable, const char*) { enable = VK_TRUE; });
+    if (!f12)
+        return Status::failure("the pNext chain of VkPhysicalDeviceFeatures2 lacks "
+                               "VkPhysicalDeviceVulkan12Features, where gust's required features are set");
+    for_each_feature(features.features, *f12, [](VkBool32& enable, const char*) { enable = VK_TRUE; });
     return {};
 }
 

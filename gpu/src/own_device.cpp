@@ -80,9 +80,9 @@ Status Context::init(const ContextDesc& desc) {
 
     std::uint32_t version = VK_API_VERSION_1_0;
     if (vk_.vkEnumerateInstanceVersion) vk_.vkEnumerateInstanceVersion(&version);
-    if (version < VK_API_VERSION_1_3)
+    if (version < kApiVersion)
         return Status::failure("the Vulkan loader supports only " + version_string(version) +
-                               "; gust needs Vulkan 1.3");
+                               "; gust needs Vulkan " + version_string(kApiVersion));
 
     std::pmr::vector<const char*> layers(host_memory_);
     std::pmr::vector<const char*> extensions(host_memory_);
@@ -110,7 +110,7 @@ Status Context::init(const ContextDesc& desc) {
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "gust";
     app.pEngineName = "gust";
-    app.apiVersion = VK_API_VERSION_1_3;
+    app.apiVersion = kApiVersion;
     const VkDebugUtilsMessengerCreateInfoEXT messenger = messenger_info(this);
 
     VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
@@ -165,7 +165,7 @@ Status Context::pick_device(std::string_view override_spec) {
             .append(" (")
             .append(type_name(props.deviceType))
             .append(")");
-        const bool usable = props.apiVersion >= VK_API_VERSION_1_3;
+        const bool usable = props.apiVersion >= kApiVersion;
         if (!override_spec.empty()) {
             // A number is an index only: "5" must not pick "llvmpipe (LLVM 15.0.6)" by its name.
             const bool numeric = override_spec.find_first_not_of("0123456789") == std::string_view::npos;
@@ -176,7 +176,7 @@ Status Context::pick_device(std::string_view override_spec) {
                     return Status::failure("device '" + std::string(props.deviceName) +
                                            "' selected by GUST_DEVICE/--device supports only Vulkan " +
                                            std::to_string(VK_API_VERSION_MINOR(props.apiVersion)) +
-                                           ".x; gust needs 1.3");
+                                           ".x; gust needs " + version_string(kApiVersion));
                 physical_ = devices[i];
             }
             continue;
@@ -193,7 +193,8 @@ Status Context::pick_device(std::string_view override_spec) {
         if (!override_spec.empty())
             return Status::failure("no Vulkan device matches '" + std::string(override_spec) +
                                    "'; devices: " + list);
-        return Status::failure("no Vulkan 1.3 device found; devices: " + list);
+        return Status::failure("no Vulkan " + version_string(kApiVersion) +
+                               " device found; devices: " + list);
     }
     return {};
 }
@@ -218,7 +219,7 @@ Status Context::create_device() {
     info_.conservative_rasterization = has_extension(exts, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
 
     FeatureChain features;
-    for_each_feature(features.f2.features, features.f12, features.f13,
+    for_each_feature(features.f2.features, features.f12,
                      [](VkBool32& enable, const char*) { enable = VK_TRUE; });
 
     const float priority = 1.0f;

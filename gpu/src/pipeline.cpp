@@ -124,10 +124,9 @@ Result<Pipeline> Pipeline::graphics(Context& ctx, const char* name, const Graphi
     VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
     dynamic.dynamicStateCount = 2;
     dynamic.pDynamicStates = dynamic_states;
-    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
 
     VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    info.pNext = &rendering;
+    info.renderPass = ctx.attachmentless_pass();
     info.stageCount = std::uint32_t(stages.size());
     info.pStages = stages.data();
     info.pVertexInputState = &vertex_input;

@@ -32,8 +32,8 @@ void Profiler::begin(VkCommandBuffer cmd, const char* name) {
     ctx_->begin_label(cmd, name);
     std::uint32_t& count = counts_[slot_];
     if (!pool_ || count >= capacity_) return;
-    ctx_->vk().vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_,
-                                    slot_ * 2 * capacity_ + 2 * count);
+    ctx_->vk().vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_,
+                                   slot_ * 2 * capacity_ + 2 * count);
     names_[slot_ * capacity_ + count++] = name;
 }
 
@@ -41,8 +41,8 @@ void Profiler::end(VkCommandBuffer cmd) {
     ctx_->end_label(cmd);
     const std::uint32_t count = counts_[slot_];
     if (!pool_ || count == 0) return;
-    ctx_->vk().vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_,
-                                    slot_ * 2 * capacity_ + 2 * count - 1);
+    ctx_->vk().vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_,
+                                   slot_ * 2 * capacity_ + 2 * count - 1);
 }
 
 Timings Profiler::read() const {

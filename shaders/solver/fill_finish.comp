@@ -73,8 +73,10 @@ void main() {
         LabelsRef(hot.labels).v[fluid] = fluid;
         uint v = hot.voxels_per_cell;
         uint flags = flags_at(i);
-        uint counts[2];
-        uint roots[2];
+        // Vectors, not uint[2]: glslang gives a local array the type of a buffer's uint[2], whose ArrayStride
+        // a Function variable must not carry (SPIR-V validation rejects it).
+        uvec2 counts;
+        uvec2 roots;
         bool cut = (flags & kCellCut) != 0u;
         for (uint k = 0u; k < kCellParts; ++k) {
             counts[k] = cut ? bits_count(part_of(i, flags, k)) : (k == 0u ? v * v * v : 0u);

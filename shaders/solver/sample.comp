@@ -13,8 +13,22 @@
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
 
-layout(buffer_reference, scalar) readonly buffer PointsRef { vec3 v[]; };
-layout(buffer_reference, scalar) writeonly buffer SamplesRef { vec3 v[]; };
+// Points and samples are 3 floats each, as the host's arrays hold them: an array of vec3 (a stride of 12)
+// would need scalarBlockLayout.
+layout(buffer_reference, scalar) readonly buffer PointsRef { float v[]; };
+layout(buffer_reference, scalar) writeonly buffer SamplesRef { float v[]; };
+
+vec3 point(int i) {
+    PointsRef points = PointsRef(sb().b.points);
+    return vec3(points.v[3 * i], points.v[3 * i + 1], points.v[3 * i + 2]);
+}
+
+void store_sample(int i, vec3 u) {
+    SamplesRef samples = SamplesRef(sb().b.samples);
+    samples.v[3 * i] = u.x;
+    samples.v[3 * i + 1] = u.y;
+    samples.v[3 * i + 2] = u.z;
+}
 
 void main() {
     load_bindings();
@@ -22,10 +36,10 @@ void main() {
     ivec3 n = grid_dims();
     if (pc.mode == kSampleWind) {
         if (i >= int(sb().b.point_count)) return;
-        SamplesRef(sb().b.samples).v[i] = texel_wind(PointsRef(sb().b.points).v[i]);
+        store_sample(i, texel_wind(point(i)));
     } else if (pc.mode == kSamplePoints) {
         if (i >= int(sb().b.point_count)) return;
-        vec3 p = (PointsRef(sb().b.points).v[i] - grid_origin()) / grid_h();
+        vec3 p = (point(i) - grid_origin()) / grid_h();
         vec3 x = grid_origin() + p * grid_h();
         // Towards the border of a cascade with coarser ones beyond, the answer blends into theirs.
         float own = !inside_grid(p) ? 0.0 : !nested(kNestOuter) ? 1.0 : nested_weight(p, n, sb().b.outer, x);
@@ -38,11 +52,11 @@ void main() {
         }
         if (own < 1.0)
             u += (1.0 - own) * vec3(beyond_component(0u, x), beyond_component(1u, x), beyond_component(2u, x));
-        SamplesRef(sb().b.samples).v[i] = u;
+        store_sample(i, u);
     } else {
         if (i >= n.x * n.y * n.z) return;
         if (pc.mode == kSampleCells)
-            SamplesRef(sb().b.samples).v[i] = cell_output(i);
+            store_sample(i, cell_output(i));
         else
             store_texel(i);
     }

@@ -246,13 +246,18 @@ struct SolverBindings {
     uint smoothing;           ///< red-black sweeps per V-cycle level and leg (SolverDesc::smoothing)
     uint cycles_recorded;     ///< V-cycles (Jacobi: blocks) this step records, for the stats
     uint omni_count;          ///< the first emitters are the omni ones (set_emitters puts them first)
-    vec3 previous_origin; ///< world position of `previous`'s min corner, m (before the last step's scroll)
     /// Where the finer cascade's time lies between `previous` (0) and `current` (1): the nest's steps run
     /// ahead of the finest, and the finer cascades read the wind in between (docs/solver.md "Cascades").
     float time_blend;
+    // From here on vectors and levels start at multiples of 16 bytes: under Vulkan 1.2's relaxed block
+    // layout, which a device without scalarBlockLayout (Godot 4's) holds shaders to, no vector straddles 16
+    // bytes and an array of GridLevel is 16-aligned.
+    vec3 previous_origin; ///< world position of `previous`'s min corner, m (before the last step's scroll)
+    uint pad0;
     /// m/s: how much the ambient wind changed since the last step (WindSolver::set_ambient), added to every
     /// open face before the step's advection (scroll.comp kScrollAmbientChange).
     vec3 ambient_change;
+    uint pad1;
     GridLevel level[kMaxGridLevels];
     uint face_mask[6 * kCellWords]; ///< voxel sets of a cell's six faces (−x,+x,−y,+y,−z,+z)
 };
@@ -335,6 +340,9 @@ GUST_NAMESPACE_END
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::GpuEmitter) == 48);
 static_assert(sizeof(gust::shaderio::GridLevel) == 48);
+static_assert(offsetof(gust::shaderio::SolverBindings, previous_origin) % 16 == 0);
+static_assert(offsetof(gust::shaderio::SolverBindings, ambient_change) % 16 == 0);
+static_assert(offsetof(gust::shaderio::SolverBindings, level) % 16 == 0);
 static_assert(sizeof(gust::shaderio::SolverPush) == 48);
 static_assert(sizeof(gust::shaderio::SolverState) == 112);
 #endif

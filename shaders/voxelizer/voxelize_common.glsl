@@ -8,7 +8,8 @@ layout(buffer_reference, scalar) readonly buffer Indices { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Fragments { uint v[]; };
 layout(buffer_reference, scalar) writeonly buffer Velocities { uvec2 v[]; };
 layout(buffer_reference, scalar) buffer Counters { VoxelizeCounters c; };
-layout(buffer_reference, scalar) buffer LargeList { uvec3 v[]; };
+// (instance, triangle, tile) items, 3 words each: an array of uvec3 would need scalarBlockLayout.
+layout(buffer_reference, scalar) buffer LargeList { uint v[]; };
 
 layout(push_constant, scalar) uniform Push { VoxelizePush pc; };
 

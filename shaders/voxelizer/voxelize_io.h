@@ -58,14 +58,16 @@ struct VoxelizePush {
     GUST_ADDRESS large_list; ///< uvec3[large_capacity] (instance, triangle, tile) items for the large pass
     uint res;                ///< voxels per axis
     uint capacity;           ///< fragment slots
-    uint triangle_count;     ///< triangles in this draw or dispatch
-    uint first_triangle;     ///< compute path: offset of this dispatch's first triangle
-    uint large_capacity;     ///< items the large list holds
+    // The vectors start at multiples of 16 bytes: Vulkan 1.2's relaxed block layout, which a device without
+    // scalarBlockLayout (Godot 4's) holds push constants to, lets no vector straddle a 16-byte boundary.
     uvec3 keep; ///< voxels kept per axis from the grid's origin (the wind domain); the rest dropped
     /// Nonzero: only the slabs a scroll uncovered are voxelized, the voxels v for which v + slab_shift
     /// lies outside [0, keep) on some axis (the rest are in the list shifted by voxelize_shift.comp).
     uint slabs;
-    ivec3 slab_shift; ///< the scroll in voxels: the old grid's voxel v + slab_shift is the new grid's v
+    ivec3 slab_shift;    ///< the scroll in voxels: the old grid's voxel v + slab_shift is the new grid's v
+    uint triangle_count; ///< triangles in this draw or dispatch
+    uint first_triangle; ///< compute path: offset of this dispatch's first triangle
+    uint large_capacity; ///< items the large list holds
     /// Compute path: the instance's index in the call's instance buffer, which the large queue's items
     /// carry (the large pass's `instance` is that buffer's start).
     uint instance_index;
@@ -87,26 +89,27 @@ struct ShiftPush {
     GUST_ADDRESS source_count; ///< uint: fragments the last pass counted (may exceed source_capacity)
     GUST_ADDRESS fragments;    ///< uint[capacity]: the new list, appended to through counters
     GUST_ADDRESS counters;     ///< VoxelizeCounters of the new pass (zeroed before)
+    ivec3 shift; ///< old key - shift = new key (at 32 bytes: no vector straddles 16, as in VoxelizePush)
     uint source_capacity;
+    uvec3 keep; ///< the new grid's kept voxels per axis; keys outside are dropped
     uint capacity;
-    ivec3 shift; ///< old key - shift = new key
-    uvec3 keep;  ///< the new grid's kept voxels per axis; keys outside are dropped
 };
 
 GUST_NAMESPACE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gust::shaderio::VoxelizePush) == 96, "push constants must match the GLSL layout");
-static_assert(offsetof(gust::shaderio::VoxelizePush, slab_shift) == 76);
+static_assert(offsetof(gust::shaderio::VoxelizePush, slab_shift) == 64);
 static_assert(sizeof(gust::shaderio::ShiftPush) == 64);
-static_assert(offsetof(gust::shaderio::ShiftPush, shift) == 40);
-static_assert(offsetof(gust::shaderio::VoxelizePush, keep) == 60);
+static_assert(offsetof(gust::shaderio::ShiftPush, shift) == 32);
+static_assert(offsetof(gust::shaderio::ShiftPush, keep) == 48);
+static_assert(offsetof(gust::shaderio::VoxelizePush, keep) == 48);
 static_assert(offsetof(gust::shaderio::VoxelizePush, res) == 40);
 static_assert(sizeof(gust::shaderio::VoxelizeInstance) == gust::shaderio::kVoxelizeInstanceBytes);
 static_assert(offsetof(gust::shaderio::VoxelizeInstance, positions) == 192);
 static_assert(sizeof(gust::shaderio::VoxelizeCounters) == 32);
 static_assert(offsetof(gust::shaderio::VoxelizeCounters, large_dispatch) == 16);
-static_assert(offsetof(gust::shaderio::VoxelizePush, large_capacity) == 56);
+static_assert(offsetof(gust::shaderio::VoxelizePush, large_capacity) == 84);
 #endif
 
 #endif

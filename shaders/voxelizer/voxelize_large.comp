@@ -10,7 +10,8 @@ layout(local_size_x = kVoxelizeGroupSize) in;
 void main() {
     uint item = gl_WorkGroupID.y * kMaxGroupsX + gl_WorkGroupID.x;
     if (item >= min(Counters(pc.counters).c.large_items, pc.large_capacity)) return;
-    uvec3 queued = LargeList(pc.large_list).v[item];
+    LargeList list = LargeList(pc.large_list);
+    const uvec3 queued = uvec3(list.v[3 * item], list.v[3 * item + 1], list.v[3 * item + 2]);
     item_instance = pc.instance + uint64_t(queued.x) * uint64_t(kVoxelizeInstanceBytes);
     uint t = queued.y;
     Setup s;

@@ -23,8 +23,12 @@ void voxelize_triangle(uint t) {
         uint tiles = (columns + kTileColumns - 1u) / kTileColumns;
         uint slot = atomicAdd(Counters(pc.counters).c.large_items, tiles);
         if (slot > 0xffffffffu - tiles) atomicOr(Counters(pc.counters).c.wrapped, 1u);
-        for (uint i = 0u; i < tiles && slot + i < pc.large_capacity; ++i)
-            LargeList(pc.large_list).v[slot + i] = uvec3(pc.instance_index, t, i);
+        LargeList list = LargeList(pc.large_list);
+        for (uint i = 0u; i < tiles && slot + i < pc.large_capacity; ++i) {
+            list.v[3 * (slot + i)] = pc.instance_index;
+            list.v[3 * (slot + i) + 1] = t;
+            list.v[3 * (slot + i) + 2] = i;
+        }
         return;
     }
     setup_velocities(t, s);

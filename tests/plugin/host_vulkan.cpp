@@ -84,6 +84,9 @@ HostVulkan::HostVulkan() {
     VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &f13};
     VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
+    // The host's own shader (shaders/cascade_wind.comp) reads arrays of vec3: a feature of its own, which
+    // gust does not need.
+    f12.scalarBlockLayout = VK_TRUE;
     if (Outcome added = add_required_features(features); !added) {
         error_ = added.message();
         return;

@@ -323,7 +323,7 @@ TEST(HostMemory, aStepWhoseAllocationFailsLeavesTheSystemRefusingLaterSteps) {
 // gust's own memory may run out at any of its allocations in a step, once or for good. The step then
 // fails with DeviceFailure; it never throws (a failure kept by allocating threw std::bad_alloc out of
 // step) and later steps refuse to run. The driver's allocations through the hook are left alone here:
-// lavapipe (Mesa 22.3) crashes inside vkCmdPipelineBarrier2 when its own allocation there fails, a fault
+// lavapipe (Mesa 22.3) crashed inside vkCmdPipelineBarrier2 when its own allocation there fails, a fault
 // of the driver's; for drivers that report a failed recording, vkEndCommandBuffer's result is checked and
 // such a buffer is never submitted (docs/api.md, "Errors").
 TEST(HostMemory, aStepFailsCleanlyWhereverGustsOwnMemoryRunsOut) {

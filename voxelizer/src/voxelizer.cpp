@@ -34,6 +34,9 @@ using shaderio::VoxelizeCounters;
 using shaderio::VoxelizeInstance;
 using shaderio::VoxelizePush;
 
+// The raster path draws a grid res texels square into the Context's attachmentless framebuffer.
+static_assert(kMaxRes <= gpu::Context::kMaxFramebufferExtent);
+
 /// Headroom over the expected fragment count when sizing the list before a pass: the expectation is a
 /// mean over sub-voxel offsets (faces on voxel planes touch 11% more), and a pass that overflows is
 /// redone. The slack keeps small meshes clear of it too.
@@ -762,10 +765,11 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
         std::find(methods.begin(), methods.end(), VoxelizeMethod::Raster) != methods.end();
     if (any_raster) {
         profiler_.begin(cmd, "raster");
-        VkRenderingInfo rendering{VK_STRUCTURE_TYPE_RENDERING_INFO};
+        VkRenderPassBeginInfo rendering{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+        rendering.renderPass = ctx_.attachmentless_pass();
+        rendering.framebuffer = ctx_.attachmentless_framebuffer();
         rendering.renderArea = {{0, 0}, {grid.res, grid.res}};
-        rendering.layerCount = 1;
-        vk.vkCmdBeginRendering(cmd, &rendering);
+        vk.vkCmdBeginRenderPass(cmd, &rendering, VK_SUBPASS_CONTENTS_INLINE);
         const VkViewport viewport{0.0f, 0.0f, float(grid.res), float(grid.res), 0.0f, 1.0f};
         const VkRect2D scissor{{0, 0}, {grid.res, grid.res}};
         vk.vkCmdSetViewport(cmd, 0, 1, &viewport);
@@ -778,7 +782,7 @@ void Voxelizer::record_pass(VkCommandBuffer cmd, std::span<const GpuInstance> in
             raster_[with_velocity].bind(cmd, &push, sizeof(push));
             raster_[with_velocity].draw(cmd, 3 * mesh.triangles_);
         }
-        vk.vkCmdEndRendering(cmd);
+        vk.vkCmdEndRenderPass(cmd);
         profiler_.end(cmd);
     }
     // The compute path in two stages whatever the instance count: every compute instance's small triangles

@@ -41,6 +41,7 @@ bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr lib
            find(get, "variant_new_copy", gd.variant_new_copy) &&
            find(get, "variant_destroy", gd.variant_destroy) &&
            find(get, "variant_get_type", gd.variant_get_type) &&
+           find(get, "variant_booleanize", gd.variant_booleanize) &&
            find(get, "variant_construct", gd.variant_construct) &&
            find(get, "get_variant_from_type_constructor", gd.from_type) &&
            find(get, "get_variant_to_type_constructor", gd.to_type) &&
@@ -54,6 +55,7 @@ bool load(GDExtensionInterfaceGetProcAddress get, GDExtensionClassLibraryPtr lib
            find(get, "packed_vector3_array_operator_index_const", gd.vector3_array_index_const) &&
            find(get, "dictionary_operator_index", gd.dictionary_index) &&
            find(get, "packed_int32_array_operator_index", gd.int32_array_index) &&
+           find(get, "packed_float32_array_operator_index", gd.float32_array_index) &&
            find(get, "packed_byte_array_operator_index", gd.byte_array_index) &&
            find(get, "object_method_bind_call", gd.method_bind_call) &&
            find(get, "object_method_bind_ptrcall", gd.method_bind_ptrcall) &&
@@ -118,6 +120,10 @@ Vec3* PackedVector3Array::data() {
 
 const Vec3* PackedVector3Array::data() const {
     return size() ? static_cast<const Vec3*>(gd.vector3_array_index_const(data_, 0)) : nullptr;
+}
+
+std::int64_t PackedFloat32Array::size() const {
+    return packed_size(GDEXTENSION_VARIANT_TYPE_PACKED_FLOAT32_ARRAY, hash::PackedFloat32Array_size, data_);
 }
 
 std::int64_t PackedInt32Array::size() const {
@@ -215,7 +221,14 @@ Variant Method::operator()(GDExtensionObjectPtr self, std::initializer_list<Vari
     if (!bind_) {
         return result;
     }
-    GDExtensionConstVariantPtr pointers[8] = {};
+    // Room for the longest engine method bound (texture_create_from_extension takes 10): 8, as before,
+    // overran the array and handed Godot a null argument.
+    GDExtensionConstVariantPtr pointers[kMaxArguments] = {};
+    if (args.size() > kMaxArguments) {
+        GUST_GODOT_ERROR(std::string("calling ") + name_ + " with " + std::to_string(args.size()) +
+                         " arguments: the extension passes at most " + std::to_string(kMaxArguments));
+        return result;
+    }
     std::size_t n = 0;
     for (const Variant& a : args) {
         pointers[n++] = a.ptr();
@@ -239,6 +252,21 @@ void bind_methods() {
     methods.get_global_transform = {"Node3D", "get_global_transform", hash::Node3D_get_global_transform};
     methods.get_nodes_in_group = {"SceneTree", "get_nodes_in_group", hash::SceneTree_get_nodes_in_group};
     methods.get_mesh = {"MeshInstance3D", "get_mesh", hash::MeshInstance3D_get_mesh};
+    methods.get_skin = {"MeshInstance3D", "get_skin", hash::MeshInstance3D_get_skin};
+    methods.get_skeleton_path = {"MeshInstance3D", "get_skeleton_path",
+                                 hash::MeshInstance3D_get_skeleton_path};
+    methods.get_node_or_null = {"Node", "get_node_or_null", hash::Node_get_node_or_null};
+    methods.surface_get_format = {"ArrayMesh", "surface_get_format", hash::ArrayMesh_surface_get_format};
+    methods.get_bone_count = {"Skeleton3D", "get_bone_count", hash::Skeleton3D_get_bone_count};
+    methods.get_bone_global_pose = {"Skeleton3D", "get_bone_global_pose",
+                                    hash::Skeleton3D_get_bone_global_pose};
+    methods.get_bone_rest = {"Skeleton3D", "get_bone_rest", hash::Skeleton3D_get_bone_rest};
+    methods.get_bone_parent = {"Skeleton3D", "get_bone_parent", hash::Skeleton3D_get_bone_parent};
+    methods.find_bone = {"Skeleton3D", "find_bone", hash::Skeleton3D_find_bone};
+    methods.get_bind_count = {"Skin", "get_bind_count", hash::Skin_get_bind_count};
+    methods.get_bind_name = {"Skin", "get_bind_name", hash::Skin_get_bind_name};
+    methods.get_bind_bone = {"Skin", "get_bind_bone", hash::Skin_get_bind_bone};
+    methods.get_bind_pose = {"Skin", "get_bind_pose", hash::Skin_get_bind_pose};
     methods.get_surface_count = {"Mesh", "get_surface_count", hash::Mesh_get_surface_count};
     methods.surface_get_arrays = {"Mesh", "surface_get_arrays", hash::Mesh_surface_get_arrays};
     methods.reference = {"RefCounted", "reference", hash::RefCounted_reference};

@@ -25,6 +25,7 @@ struct Interface {
     GDExtensionInterfaceVariantNewCopy variant_new_copy = nullptr;
     GDExtensionInterfaceVariantDestroy variant_destroy = nullptr;
     GDExtensionInterfaceVariantGetType variant_get_type = nullptr;
+    GDExtensionInterfaceVariantBooleanize variant_booleanize = nullptr;
     GDExtensionInterfaceVariantConstruct variant_construct = nullptr;
     GDExtensionInterfaceGetVariantFromTypeConstructor from_type = nullptr;
     GDExtensionInterfaceGetVariantToTypeConstructor to_type = nullptr;
@@ -38,6 +39,7 @@ struct Interface {
     GDExtensionInterfacePackedVector3ArrayOperatorIndexConst vector3_array_index_const = nullptr;
     GDExtensionInterfaceDictionaryOperatorIndex dictionary_index = nullptr;
     GDExtensionInterfacePackedInt32ArrayOperatorIndex int32_array_index = nullptr;
+    GDExtensionInterfacePackedFloat32ArrayOperatorIndex float32_array_index = nullptr;
     GDExtensionInterfacePackedByteArrayOperatorIndex byte_array_index = nullptr;
     GDExtensionInterfaceObjectMethodBindCall method_bind_call = nullptr;
     GDExtensionInterfaceObjectMethodBindPtrcall method_bind_ptrcall = nullptr;
@@ -124,6 +126,11 @@ class PackedInt32Array : public Builtin<GDEXTENSION_VARIANT_TYPE_PACKED_INT32_AR
     std::int64_t size() const;
     const std::int32_t* data() { return size() ? gd.int32_array_index(data_, 0) : nullptr; }
 };
+class PackedFloat32Array : public Builtin<GDEXTENSION_VARIANT_TYPE_PACKED_FLOAT32_ARRAY, 16> {
+  public:
+    std::int64_t size() const;
+    const float* data() { return size() ? gd.float32_array_index(data_, 0) : nullptr; }
+};
 class PackedByteArray : public Builtin<GDEXTENSION_VARIANT_TYPE_PACKED_BYTE_ARRAY, 16> {
   public:
     void resize(std::int64_t n);
@@ -173,7 +180,10 @@ class Method {
   public:
     Method() = default;
     Method(const char* class_name, const char* method, std::int64_t hash);
-    /// Calls it on `self` (null for a static method) with Variant arguments; errors go to Godot's log.
+    /// The most arguments operator() passes.
+    static constexpr std::size_t kMaxArguments = 16;
+    /// Calls it on `self` (null for a static method) with at most kMaxArguments Variant arguments; errors go
+    /// to Godot's log.
     Variant operator()(GDExtensionObjectPtr self, std::initializer_list<Variant> args = {}) const;
     bool valid() const { return bind_ != nullptr; }
 
@@ -185,8 +195,10 @@ class Method {
 /// The engine methods the nodes call (godot.cpp binds them at the scene level's initialization).
 struct Methods {
     Method set_physics_process, get_children, get_tree, get_global_transform, get_nodes_in_group, get_mesh,
-        get_physics_process_delta_time, get_surface_count, surface_get_arrays, reference,
-        image_create_from_data, texture3d_create, texture3d_update, global_shader_parameter_add,
+        get_skin, get_skeleton_path, get_node_or_null, surface_get_format, get_bone_count,
+        get_bone_global_pose, get_bone_rest, get_bone_parent, find_bone, get_bind_count, get_bind_name,
+        get_bind_bone, get_bind_pose, get_physics_process_delta_time, get_surface_count, surface_get_arrays,
+        reference, image_create_from_data, texture3d_create, texture3d_update, global_shader_parameter_add,
         global_shader_parameter_set, get_rendering_device, get_driver_resource, texture_create_from_extension,
         free_rid, set_texture_rd_rid;
 };

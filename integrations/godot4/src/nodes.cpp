@@ -1,10 +1,11 @@
-// GustWind3D and GustEmitter3D (docs/godot.md, "GustWind3D" and "GustEmitter3D"): the scene translated into wind_host
-// calls every physics frame, the wind handed back through sample_wind and a Texture3D per cascade.
+// GustWind3D and GustEmitter3D (docs/godot.md, "GustWind3D" and "GustEmitter3D"): the scene translated into
+// wind_host calls every physics frame, the wind handed back through sample_wind and a Texture3D per cascade.
 #include "nodes.hpp"
 
 #include "../../godot/src/wind_host.hpp"
 #include "classdb.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <deque>
@@ -24,18 +25,22 @@ using integration::WindHostConfig;
 
 constexpr const char* kWind = "GustWind3D";
 constexpr const char* kEmitter = "GustEmitter3D";
-constexpr std::int64_t kArrayVertex = 0;          // Mesh.ARRAY_VERTEX
-constexpr std::int64_t kArrayIndex = 12;          // Mesh.ARRAY_INDEX
-constexpr std::int64_t kImageFormatRgbaf = 11;    // Image.FORMAT_RGBAF
-constexpr std::int64_t kGlobalSampler3D = 26;     // RenderingServer.GLOBAL_VAR_TYPE_SAMPLER3D
-constexpr std::int64_t kGlobalTransform = 23;     // RenderingServer.GLOBAL_VAR_TYPE_TRANSFORM (mat4)
-constexpr std::int64_t kDriverDevice = 0;         // RenderingDevice.DRIVER_RESOURCE_LOGICAL_DEVICE
-constexpr std::int64_t kDriverPhysicalDevice = 1; // DRIVER_RESOURCE_PHYSICAL_DEVICE
-constexpr std::int64_t kDriverInstance = 2;       // DRIVER_RESOURCE_TOPMOST_OBJECT
-constexpr std::int64_t kDriverQueue = 3;          // DRIVER_RESOURCE_COMMAND_QUEUE
-constexpr std::int64_t kDriverQueueFamily = 4;    // DRIVER_RESOURCE_QUEUE_FAMILY
-constexpr std::int64_t kTextureType3D = 2;        // RenderingDevice.TEXTURE_TYPE_3D
-constexpr std::int64_t kFormatRgba16f = 96;       // RenderingDevice.DATA_FORMAT_R16G16B16A16_SFLOAT
+constexpr std::int64_t kArrayVertex = 0;           // Mesh.ARRAY_VERTEX
+constexpr std::int64_t kArrayBones = 10;           // Mesh.ARRAY_BONES: bone (bind) indices a vertex
+constexpr std::int64_t kArrayWeights = 11;         // Mesh.ARRAY_WEIGHTS
+constexpr std::int64_t kArrayIndex = 12;           // Mesh.ARRAY_INDEX
+constexpr std::int64_t kArrayFormatBones = 1024;   // Mesh.ARRAY_FORMAT_BONES
+constexpr std::int64_t kArrayFormatWeights = 2048; // Mesh.ARRAY_FORMAT_WEIGHTS
+constexpr std::int64_t kImageFormatRgbaf = 11;     // Image.FORMAT_RGBAF
+constexpr std::int64_t kGlobalSampler3D = 26;      // RenderingServer.GLOBAL_VAR_TYPE_SAMPLER3D
+constexpr std::int64_t kGlobalTransform = 23;      // RenderingServer.GLOBAL_VAR_TYPE_TRANSFORM (mat4)
+constexpr std::int64_t kDriverDevice = 0;          // RenderingDevice.DRIVER_RESOURCE_LOGICAL_DEVICE
+constexpr std::int64_t kDriverPhysicalDevice = 1;  // DRIVER_RESOURCE_PHYSICAL_DEVICE
+constexpr std::int64_t kDriverInstance = 2;        // DRIVER_RESOURCE_TOPMOST_OBJECT
+constexpr std::int64_t kDriverQueue = 3;           // DRIVER_RESOURCE_COMMAND_QUEUE
+constexpr std::int64_t kDriverQueueFamily = 4;     // DRIVER_RESOURCE_QUEUE_FAMILY
+constexpr std::int64_t kTextureType3D = 2;         // RenderingDevice.TEXTURE_TYPE_3D
+constexpr std::int64_t kFormatRgba16f = 96;        // RenderingDevice.DATA_FORMAT_R16G16B16A16_SFLOAT
 // TEXTURE_USAGE_SAMPLING_BIT | CAN_COPY_FROM_BIT | CAN_COPY_TO_BIT: what gust made its wind images with
 // (sampled, transfer source and destination), as texture_create_from_extension must be told.
 constexpr std::int64_t kSharedUsage = 1 | 128 | 256;
@@ -70,6 +75,15 @@ struct CascadeTexture {
     std::uint64_t rid = 0;          // shared: the RD texture (texture_create_from_extension)
 };
 
+// A skinned obstacle's gust mesh and what it was made from (a change of any uploads it again).
+struct Skinned {
+    std::uint64_t mesh = 0, skin = 0, skeleton = 0; // instance ids; skin 0: Godot's default skin
+    std::size_t joints = 0;
+    std::uint64_t key = 0; // gust's mesh key
+    bool refused = false;  // gust refused it (logged): taken in its rest pose until something changes
+    bool seen = false;     // reported this frame
+};
+
 struct Wind final : Instance {
     WindHostConfig config;
     Variant group = Variant::from(StringName("gust_obstacles"));
@@ -80,15 +94,20 @@ struct Wind final : Instance {
     Vec3 ambient{};
     bool in_tree = false;
     bool dirty = true; // the System must be (re)made from config at the next physics frame
+    // Run on Godot's device where it has one (share_godot_device): gust's submissions on Godot's queue race
+    // Godot's uploads from other threads, so a game that uploads from threads turns it off (docs/godot.md).
+    bool share = true;
     std::vector<CascadeTexture> textures;
     WindField field;
     std::uint64_t cpu_bytes_last_frame = 0;
     // Godot's RenderingDevice while gust runs on Godot's own Vulkan device and shares its images (Forward+,
     // Mobile); null on a device of gust's own (headless, Compatibility).
     GDExtensionObjectPtr rd = nullptr;
-    std::set<std::string> reported; // errors already in the log, each printed once
-    std::vector<float> positions;
-    std::vector<std::uint32_t> indices;
+    std::set<std::string> reported;           // errors already in the log, each printed once
+    std::map<std::uint64_t, Skinned> skinned; // by MeshInstance3D
+    // Skinned meshes are the node's own, not shared by Mesh resource: their keys have the top bit set, apart
+    // from Godot's instance ids, which key the shared static meshes.
+    std::uint64_t next_skinned_key = std::uint64_t(1) << 63;
 };
 
 Wind& wind(Instance& i) {
@@ -245,10 +264,32 @@ bool godot_device(Wind& w, HostDevice& host) {
     return false;
 }
 
-// Frees the RD textures over gust's images (the images stay gust's) before the System goes.
+// Whether the global shader parameters were declared in this process (publish_globals).
+bool globals_declared = false;
+
+// Frees the RD textures over gust's images (the images stay gust's) before the System goes. Materials may
+// still hold the finest one through the global shader parameter, and would draw with a freed image: the
+// parameter is first pointed at a texture of one texel of the ambient wind (Godot's placeholder for an empty
+// Texture3DRD is 2D, which a sampler3D must not read).
 void release_shared(Wind& w) {
+    if (!w.rd || w.textures.empty()) {
+        w.textures.clear();
+        return;
+    }
+    const StringName server_name("RenderingServer");
+    GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
+    if (server && globals_declared) {
+        WindField still;
+        still.extent[0] = still.extent[1] = still.extent[2] = 1;
+        still.cell_size = 1.0f;
+        still.rgba = {w.config.ambient.x, w.config.ambient.y, w.config.ambient.z, 1.0f};
+        w.textures.resize(w.textures.size() + 1);
+        upload(w, w.textures.size() - 1, still);
+        methods.global_shader_parameter_set(
+            server, {Variant::from(StringName(kTextureParameter)), w.textures.back().texture});
+    }
     for (CascadeTexture& t : w.textures) {
-        if (t.rid && w.rd) {
+        if (t.rid) {
             methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
         }
     }
@@ -272,9 +313,7 @@ void share_textures(Wind& w) {
         if (t.image == image.image) {
             continue;
         }
-        if (t.rid) {
-            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
-        }
+        const std::uint64_t old = t.rid;
         const Variant rid = methods.texture_create_from_extension(
             w.rd, {Variant::from(kTextureType3D), Variant::from(kFormatRgba16f),
                    Variant::from(std::int64_t(0)), Variant::from(kSharedUsage),
@@ -283,9 +322,15 @@ void share_textures(Wind& w) {
                    Variant::from(std::int64_t(image.extent[2])), Variant::from(std::int64_t(1)),
                    Variant::from(std::int64_t(1))});
         rid.to(GDEXTENSION_VARIANT_TYPE_RID, &t.rid);
-        const StringName type("Texture3DRD");
-        t.texture = Variant::from(gd.construct_object(type.ptr()));
+        // One Texture3DRD a cascade for the node's life in the tree: materials holding it see the new image.
+        if (t.texture.type() == GDEXTENSION_VARIANT_TYPE_NIL) {
+            const StringName type("Texture3DRD");
+            t.texture = Variant::from(gd.construct_object(type.ptr()));
+        }
         methods.set_texture_rd_rid(t.texture.object(), {rid});
+        if (old) {
+            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &old)});
+        }
         t.image = image.image;
     }
 }
@@ -293,7 +338,6 @@ void share_textures(Wind& w) {
 // The finest cascade as global shader parameters, so any material can read it. The extension declares them
 // once a process (Godot lists its parameters in the editor only): a project must not declare them itself.
 void publish_globals(Wind& w) {
-    static bool declared = false;
     const StringName server_name("RenderingServer");
     GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
     if (!server || w.textures.empty()) {
@@ -303,8 +347,8 @@ void publish_globals(Wind& w) {
     const Variant transform = Variant::from(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t.to_texture);
     const Variant texture_name = Variant::from(StringName(kTextureParameter));
     const Variant transform_name = Variant::from(StringName(kTransformParameter));
-    if (!declared) {
-        declared = true;
+    if (!globals_declared) {
+        globals_declared = true;
         methods.global_shader_parameter_add(server,
                                             {texture_name, Variant::from(kGlobalSampler3D), t.texture});
         methods.global_shader_parameter_add(server,
@@ -315,9 +359,215 @@ void publish_globals(Wind& w) {
     methods.global_shader_parameter_set(server, {transform_name, transform});
 }
 
+// A Mesh's triangles in mesh space, every triangle surface in one list; with `skinned`, also each vertex's 4
+// bone indices and weights (ARRAY_BONES and ARRAY_WEIGHTS).
+struct MeshArrays {
+    std::vector<float> positions;
+    std::vector<std::uint32_t> indices;
+    std::vector<std::int32_t> joints;
+    std::vector<float> weights;
+};
+
+// Fills `out` from `mesh`; false with the reason in `why` when it has no triangles or (skinned) a surface
+// lacks 4 bone indices and weights a vertex (Godot 4 may have 8: gust takes 4).
+bool read_mesh(GDExtensionObjectPtr mesh, bool skinned, MeshArrays& out, std::string& why) {
+    const std::int64_t surfaces = methods.get_surface_count(mesh).as_int();
+    for (std::int64_t s = 0; s < surfaces; ++s) {
+        Array arrays = to_array(methods.surface_get_arrays(mesh, {Variant::from(s)}));
+        if (arrays.size() <= kArrayIndex) {
+            continue;
+        }
+        PackedVector3Array vertices;
+        static_cast<const Variant*>(arrays.at(kArrayVertex))
+            ->to(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, vertices.ptr());
+        const std::uint32_t base = std::uint32_t(out.positions.size() / 3);
+        const Vec3* v = vertices.data();
+        const std::int64_t nv = vertices.size();
+        for (std::int64_t i = 0; i < nv; ++i) {
+            out.positions.insert(out.positions.end(), {v[i].x, v[i].y, v[i].z});
+        }
+        if (skinned) {
+            const auto* bones = static_cast<const Variant*>(arrays.at(kArrayBones));
+            const auto* weights = static_cast<const Variant*>(arrays.at(kArrayWeights));
+            if (bones->type() != GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY ||
+                weights->type() != GDEXTENSION_VARIANT_TYPE_PACKED_FLOAT32_ARRAY) {
+                why = "surface " + std::to_string(s) + " has no bone indices and weights";
+                return false;
+            }
+            PackedInt32Array b;
+            PackedFloat32Array wt;
+            bones->to(GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY, b.ptr());
+            weights->to(GDEXTENSION_VARIANT_TYPE_PACKED_FLOAT32_ARRAY, wt.ptr());
+            if (b.size() != 4 * nv || wt.size() != 4 * nv) {
+                why = "surface " + std::to_string(s) + " has " + std::to_string(nv ? b.size() / nv : 0) +
+                      " bone indices a vertex, not 4";
+                return false;
+            }
+            out.joints.insert(out.joints.end(), b.data(), b.data() + b.size());
+            out.weights.insert(out.weights.end(), wt.data(), wt.data() + wt.size());
+        }
+        const auto* index_variant = static_cast<const Variant*>(arrays.at(kArrayIndex));
+        if (index_variant->type() == GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY) {
+            PackedInt32Array index;
+            index_variant->to(GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY, index.ptr());
+            const std::int32_t* x = index.data();
+            for (std::int64_t i = 0; i < index.size(); ++i) {
+                out.indices.push_back(base + std::uint32_t(x[i]));
+            }
+        } else {
+            for (std::int64_t i = 0; i < nv; ++i) {
+                out.indices.push_back(base + std::uint32_t(i));
+            }
+        }
+    }
+    if (out.indices.empty()) {
+        why = "has no triangles";
+        return false;
+    }
+    return true;
+}
+
+Mat4 to_mat4(const Variant& transform) {
+    Transform3D t;
+    transform.to(GDEXTENSION_VARIANT_TYPE_TRANSFORM3D, &t);
+    return godot4::to_mat4(t);
+}
+
+// The Skeleton3D a MeshInstance3D's skeleton path leads to, or null.
+GDExtensionObjectPtr skeleton_of(GDExtensionObjectPtr node) {
+    GDExtensionObjectPtr target = methods.get_node_or_null(node, {methods.get_skeleton_path(node)}).object();
+    return is_class(target, "Skeleton3D") ? target : nullptr;
+}
+
+// True when some surface of an ArrayMesh carries bone indices and weights (PrimitiveMeshes carry none).
+bool has_bone_weights(GDExtensionObjectPtr mesh) {
+    if (!is_class(mesh, "ArrayMesh")) {
+        return false;
+    }
+    const std::int64_t surfaces = methods.get_surface_count(mesh).as_int();
+    for (std::int64_t s = 0; s < surfaces; ++s) {
+        const std::int64_t format = methods.surface_get_format(mesh, {Variant::from(s)}).as_int();
+        if ((format & kArrayFormatBones) != 0 && (format & kArrayFormatWeights) != 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The binds of `skin` on `skeleton` (a bind names its bone, or gives its index), or Godot's default skin from
+// the skeleton's rests when the MeshInstance3D has no Skin (Skeleton3D.create_skin_from_rest_transforms).
+// False with the reason in `why`.
+bool skin_binds(GDExtensionObjectPtr skin, GDExtensionObjectPtr skeleton,
+                std::vector<integration::SkinBind>& binds, std::string& why) {
+    const std::int64_t bones = methods.get_bone_count(skeleton).as_int();
+    if (!skin) {
+        std::vector<Mat4> rests(std::size_t(std::max<std::int64_t>(bones, 0)));
+        std::vector<std::int32_t> parents(rests.size());
+        for (std::size_t i = 0; i < rests.size(); ++i) {
+            const Variant bone = Variant::from(std::int64_t(i));
+            rests[i] = to_mat4(methods.get_bone_rest(skeleton, {bone}));
+            parents[i] = std::int32_t(methods.get_bone_parent(skeleton, {bone}).as_int());
+        }
+        if (Outcome o = integration::default_skin(rests, parents, binds); !o) {
+            why = "the skeleton's default skin: " + o.message();
+            return false;
+        }
+        return true;
+    }
+    const std::int64_t count = methods.get_bind_count(skin).as_int();
+    binds.assign(std::size_t(std::max<std::int64_t>(count, 0)), {});
+    for (std::size_t i = 0; i < binds.size(); ++i) {
+        const Variant index = Variant::from(std::int64_t(i));
+        const Variant name = methods.get_bind_name(skin, {index});
+        if (gd.variant_booleanize(name.ptr())) {
+            binds[i].bone = std::int32_t(methods.find_bone(skeleton, {name}).as_int());
+            if (binds[i].bone < 0) {
+                why = "bind " + std::to_string(i) + " names a bone the skeleton lacks";
+                return false;
+            }
+        } else {
+            binds[i].bone = std::int32_t(methods.get_bind_bone(skin, {index}).as_int());
+        }
+        if (binds[i].bone < 0 || binds[i].bone >= bones) {
+            why = "bind " + std::to_string(i) + " follows bone " + std::to_string(binds[i].bone) +
+                  ", the skeleton has " + std::to_string(bones);
+            return false;
+        }
+        binds[i].pose = to_mat4(methods.get_bind_pose(skin, {index}));
+    }
+    return true;
+}
+
+// A skinned MeshInstance3D: its bind pose and skin uploaded once (again when its Mesh, Skin, Skeleton3D or
+// bind count changes), its palette from the skeleton's bone poses every frame, placed by the node's global
+// transform (docs/godot.md, "Skinned meshes"). False when gust refuses it (the reason is logged once): the
+// caller then takes it in its rest pose.
+bool report_skinned(Wind& w, GDExtensionObjectPtr node, std::uint64_t id, GDExtensionObjectPtr mesh,
+                    GDExtensionObjectPtr skeleton, GDExtensionObjectPtr skin) {
+    auto refuse = [&](const std::string& why) {
+        report_once(w,
+                    "skinned MeshInstance3D " + std::to_string(id) + ": " + why + ": taken in its rest pose");
+        return false;
+    };
+    std::vector<integration::SkinBind> binds;
+    std::string why;
+    if (!skin_binds(skin, skeleton, binds, why)) {
+        return refuse(why);
+    }
+    Skinned now;
+    now.mesh = gd.object_get_instance_id(mesh);
+    now.skin = skin ? gd.object_get_instance_id(skin) : 0;
+    now.skeleton = gd.object_get_instance_id(skeleton);
+    now.joints = binds.size();
+    Skinned& s = w.skinned[id];
+    s.seen = true;
+    if (s.mesh != now.mesh || s.skin != now.skin || s.skeleton != now.skeleton || s.joints != now.joints) {
+        s = now;
+        s.seen = true;
+        MeshArrays arrays;
+        if (!read_mesh(mesh, true, arrays, why)) {
+            s.refused = true;
+            return refuse("its Mesh " + why);
+        }
+        const integration::SkinnedMeshData data{
+            arrays.positions, arrays.indices, arrays.joints, arrays.weights,
+            std::uint32_t(std::min<std::size_t>(binds.size(), 0xffffffffu))};
+        const std::uint64_t key = w.next_skinned_key++;
+        if (Outcome o = w.host.add_skinned_mesh(key, data); !o) {
+            s.refused = true;
+            return refuse(o.message());
+        }
+        s.key = key;
+    }
+    if (s.refused) {
+        return false;
+    }
+    const std::int64_t bones = methods.get_bone_count(skeleton).as_int();
+    std::vector<Mat4> poses(std::size_t(std::max<std::int64_t>(bones, 0)));
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+        poses[i] = to_mat4(methods.get_bone_global_pose(skeleton, {Variant::from(std::int64_t(i))}));
+    }
+    std::vector<Mat4> palette;
+    Outcome o = integration::skin_palette(poses, binds, palette);
+    if (o) {
+        o = w.host.set_bones(s.key, palette);
+    }
+    if (!o) {
+        s.refused = true;
+        return refuse(o.message());
+    }
+    if (Outcome r = w.host.report_obstacle(id, s.key, godot4::to_mat4(global_transform(node))); !r) {
+        report_once(w, "MeshInstance3D " + std::to_string(id) + ": " + r.message());
+    }
+    return true;
+}
+
 void report_obstacles(Wind& w, GDExtensionObjectPtr tree) {
     Array nodes = to_array(methods.get_nodes_in_group(tree, {w.group}));
     w.host.begin_obstacles();
+    for (auto& [id, s] : w.skinned) {
+        s.seen = false;
+    }
     for (std::int64_t i = 0; i < nodes.size(); ++i) {
         const Variant item(*static_cast<const Variant*>(nodes.at(i)));
         GDExtensionObjectPtr node = item.object();
@@ -331,48 +581,39 @@ void report_obstacles(Wind& w, GDExtensionObjectPtr tree) {
         if (!mesh.object()) {
             continue;
         }
+        GDExtensionObjectPtr skin = methods.get_skin(node).object();
+        GDExtensionObjectPtr skeleton = skeleton_of(node);
+        if (skeleton && has_bone_weights(mesh.object())) {
+            if (report_skinned(w, node, id, mesh.object(), skeleton, skin)) {
+                continue;
+            }
+        } else if (skin) {
+            report_once(w, "MeshInstance3D " + std::to_string(id) + " has a Skin but " +
+                               (skeleton ? "its Mesh has no bone weights"
+                                         : "its skeleton path leads to no Skeleton3D") +
+                               ": taken in its rest pose");
+        }
         const std::uint64_t mesh_key = gd.object_get_instance_id(mesh.object());
         if (!w.host.has_mesh(mesh_key)) {
-            w.positions.clear();
-            w.indices.clear();
-            const std::int64_t surfaces = methods.get_surface_count(mesh.object()).as_int();
-            for (std::int64_t s = 0; s < surfaces; ++s) {
-                Array arrays = to_array(methods.surface_get_arrays(mesh.object(), {Variant::from(s)}));
-                if (arrays.size() <= kArrayIndex) {
-                    continue;
-                }
-                PackedVector3Array vertices;
-                static_cast<const Variant*>(arrays.at(kArrayVertex))
-                    ->to(GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY, vertices.ptr());
-                const std::uint32_t base = std::uint32_t(w.positions.size() / 3);
-                const Vec3* v = vertices.data();
-                for (std::int64_t n = 0; n < vertices.size(); ++n) {
-                    w.positions.insert(w.positions.end(), {v[n].x, v[n].y, v[n].z});
-                }
-                const auto* index_variant = static_cast<const Variant*>(arrays.at(kArrayIndex));
-                if (index_variant->type() == GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY) {
-                    PackedInt32Array index;
-                    index_variant->to(GDEXTENSION_VARIANT_TYPE_PACKED_INT32_ARRAY, index.ptr());
-                    const std::int32_t* x = index.data();
-                    for (std::int64_t n = 0; n < index.size(); ++n) {
-                        w.indices.push_back(base + std::uint32_t(x[n]));
-                    }
-                } else {
-                    for (std::int64_t n = 0; n < vertices.size(); ++n) {
-                        w.indices.push_back(base + std::uint32_t(n));
-                    }
-                }
+            MeshArrays arrays;
+            std::string why;
+            if (!read_mesh(mesh.object(), false, arrays, why)) {
+                report_once(w, "MeshInstance3D " + std::to_string(id) + " " + why + ": ignored");
+                continue;
             }
-            if (Outcome o = w.host.add_mesh(mesh_key, w.positions, w.indices); !o) {
+            if (Outcome o = w.host.add_mesh(mesh_key, arrays.positions, arrays.indices); !o) {
                 report_once(w, "MeshInstance3D " + std::to_string(id) + ": " + o.message());
                 continue;
             }
         }
-        if (Outcome o = w.host.report_obstacle(id, mesh_key, to_mat4(global_transform(node))); !o) {
+        if (Outcome o = w.host.report_obstacle(id, mesh_key, godot4::to_mat4(global_transform(node))); !o) {
             report_once(w, "MeshInstance3D " + std::to_string(id) + ": " + o.message());
         }
     }
     w.host.end_obstacles();
+    for (auto it = w.skinned.begin(); it != w.skinned.end();) {
+        it = it->second.seen ? std::next(it) : w.skinned.erase(it);
+    }
 }
 
 void report_emitters(Wind& w) {
@@ -422,6 +663,7 @@ void tick(Wind& w) {
         std::unique_lock lock(w.mutex);
         release_shared(w);
         w.host.destroy();
+        w.skinned.clear();
         w.rd = nullptr;
         Hooks hooks;
         hooks.log = [](void*, LogLevel level, const char* message) {
@@ -430,10 +672,10 @@ void tick(Wind& w) {
             }
         };
         HostDevice host;
-        if (godot_device(w, host)) {
+        if (w.share && godot_device(w, host)) {
             if (Outcome o = w.host.create(w.config, hooks, &host); !o) {
-                // Godot's device lacks what gust needs (Godot 4.6.3's device answers none of Vulkan 1.3's
-                // entry points): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
+                // Godot's device lacks what gust needs (a Vulkan 1.2 device without bufferDeviceAddress,
+                // say): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
                 GUST_GODOT_WARNING(std::string(kWind) + ": gust cannot run on Godot's Vulkan device (" +
                                    o.message() +
                                    "): it runs on its own, the wind textures filled through the CPU");
@@ -491,6 +733,7 @@ void wind_notification(Instance& i, std::int32_t what) {
         std::unique_lock lock(w.mutex);
         release_shared(w);
         w.host.destroy();
+        w.skinned.clear();
         w.rd = nullptr;
     } else if (what == kNotificationPhysicsProcess && w.in_tree) {
         tick(w);
@@ -571,6 +814,19 @@ Variant set_ambient_wind(Instance& i, const Variant* args) {
 }
 Variant get_ambient_wind(Instance& i, const Variant*) {
     return Variant::from(wind(i).config.ambient);
+}
+Variant set_share_godot_device(Instance& i, const Variant* args) {
+    Wind& w = wind(i);
+    GDExtensionBool v = false;
+    args[0].to(GDEXTENSION_VARIANT_TYPE_BOOL, &v);
+    if (w.share != bool(v)) {
+        w.share = v;
+        w.dirty = true;
+    }
+    return {};
+}
+Variant get_share_godot_device(Instance& i, const Variant*) {
+    return Variant::from(wind(i).share);
 }
 Variant set_obstacle_group(Instance& i, const Variant* args) {
     wind(i).group = args[0];
@@ -703,6 +959,8 @@ void register_nodes() {
     property(kWind, {"cascades", GDEXTENSION_VARIANT_TYPE_INT}, set_cascades, get_cascades);
     property(kWind, {"ratio", GDEXTENSION_VARIANT_TYPE_INT}, set_ratio, get_ratio);
     property(kWind, {"ambient_wind", GDEXTENSION_VARIANT_TYPE_VECTOR3}, set_ambient_wind, get_ambient_wind);
+    property(kWind, {"share_godot_device", GDEXTENSION_VARIANT_TYPE_BOOL}, set_share_godot_device,
+             get_share_godot_device);
     property(kWind, {"obstacle_group", GDEXTENSION_VARIANT_TYPE_STRING_NAME}, set_obstacle_group,
              get_obstacle_group);
     const Slot points{"points", GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY};

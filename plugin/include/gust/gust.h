@@ -105,7 +105,7 @@ typedef struct gust_hooks {
 /// A host engine's Vulkan device for gust to run on (the host keeps every handle alive until
 /// gust_system_destroy).
 typedef struct gust_host_device {
-    VkInstance instance;                              ///< the host's instance (apiVersion >= 1.3)
+    VkInstance instance;                              ///< the host's instance (apiVersion >= 1.2)
     VkPhysicalDevice physical_device;                 ///< the device's physical device
     VkDevice device;                                  ///< created with gust_add_required_features
     uint32_t queue_family;                            ///< a family with graphics and compute
@@ -119,7 +119,7 @@ typedef struct gust_host_device {
 
 /// What a host enables on its instance and device before gust can adopt it (arrays and strings are static).
 typedef struct gust_device_requirements {
-    uint32_t api_version;                   ///< lowest Vulkan API version (VK_API_VERSION_1_3)
+    uint32_t api_version;                   ///< lowest Vulkan API version (VK_API_VERSION_1_2)
     uint32_t extension_count;               ///< entries in extensions
     const char* const* extensions;          ///< required device extensions
     uint32_t optional_extension_count;      ///< entries in optional_extensions
@@ -343,8 +343,8 @@ const char* gust_last_create_error(void);
 /// Fills `requirements` with what a host device needs (static arrays, valid for the process). Any thread.
 gust_result gust_get_device_requirements(gust_device_requirements* requirements);
 
-/// Sets gust's required features in `features` and the Vulkan 1.2 and 1.3 feature structs on its pNext chain
-/// (which must hold both), leaving the host's other flags as they are. Any thread.
+/// Sets gust's required features in `features` and the Vulkan 1.2 feature struct on its pNext chain (which
+/// must hold it), leaving the host's other flags as they are. Any thread.
 gust_result gust_add_required_features(VkPhysicalDeviceFeatures2* features);
 
 /// Fills `desc` with the library's defaults stamped with `header_version`; refuses (writing only

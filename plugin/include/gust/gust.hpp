@@ -119,15 +119,15 @@ struct HostDevice {
 
 /// What a host must enable on its instance and device before gust can adopt it.
 struct DeviceRequirements {
-    std::uint32_t api_version = VK_API_VERSION_1_3;
+    std::uint32_t api_version = VK_API_VERSION_1_2;
     std::vector<const char*> extensions;          ///< required device extensions
     std::vector<const char*> optional_extensions; ///< used when the host enables them
     std::vector<const char*> features;            ///< names of required VkPhysicalDevice*Features members
 };
 /// The list a host enables (static strings).
 DeviceRequirements device_requirements();
-/// Sets gust's required features in `features` and the Vulkan 1.2 and 1.3 feature structs on its pNext
-/// chain (which must hold both), leaving the host's other flags as they are.
+/// Sets gust's required features in `features` and the Vulkan 1.2 feature struct on its pNext chain
+/// (which must hold it), leaving the host's other flags as they are.
 Outcome add_required_features(VkPhysicalDeviceFeatures2& features);
 
 /// The farthest the focus may be from the world's origin, in cells: 2^19, where a float's step is 1/16 of a

@@ -1,4 +1,4 @@
-// A Vulkan 1.3 device and queue: either gust's own instance and device (tests, tools, the sample), with
+// A Vulkan 1.2 device and queue: either gust's own instance and device (tests, tools, the sample), with
 // validation messages captured so tests can fail on them, or a host engine's device adopted through
 // the host's entry points (Jolt-style tiered backends).
 #pragma once
@@ -52,8 +52,8 @@ struct ContextDesc {
 /// Context::adopt() checks the physical device supports the required ones.
 struct DeviceRequirements {
     /// Lowest VkPhysicalDeviceProperties::apiVersion; the host's instance must ask for it too.
-    std::uint32_t api_version = VK_API_VERSION_1_3;
-    /// Device extensions the host must enable (empty while everything gust needs is core in 1.3).
+    std::uint32_t api_version = VK_API_VERSION_1_2;
+    /// Device extensions the host must enable (empty while everything gust needs is core in 1.2).
     std::vector<const char*> extensions;
     /// Device extensions gust uses only when the host enabled them and lists them in
     /// HostDevice::enabled_extensions (VK_EXT_conservative_rasterization).
@@ -67,8 +67,8 @@ struct DeviceRequirements {
 DeviceRequirements device_requirements();
 
 /// Sets gust's required features to VK_TRUE in `features` and in the VkPhysicalDeviceVulkan12Features
-/// and VkPhysicalDeviceVulkan13Features found on its pNext chain, leaving every other flag as it was.
-/// Fails, changing nothing, when the chain lacks one of those two structs.
+/// found on its pNext chain, leaving every other flag as it was.
+/// Fails, changing nothing, when the chain lacks VkPhysicalDeviceVulkan12Features.
 Status add_required_features(VkPhysicalDeviceFeatures2& features);
 
 /// Reports what `physical_device` (of the host's `instance`, queried through `get_instance_proc_addr`)
@@ -78,7 +78,7 @@ Status check_device_support(PFN_vkGetInstanceProcAddr get_instance_proc_addr, Vk
 
 /// A host engine's Vulkan objects for Context::adopt(). gust keeps the handles but never destroys them;
 /// the host keeps them alive until the Context is destroyed. The host must have created the instance
-/// with apiVersion >= 1.3 and the device with device_requirements() enabled (add_required_features()):
+/// with apiVersion >= 1.2 and the device with device_requirements() enabled (add_required_features()):
 /// Vulkan cannot report which features or extensions a device was created with, so gust trusts that.
 struct HostDevice {
     VkInstance instance = VK_NULL_HANDLE;              ///< the host's instance (required)
@@ -197,6 +197,13 @@ class Context : public HostObject {
     /// Waits until nothing runs on gust's resources: the whole device when gust owns it, else the queue it
     /// was given (HostDevice::queue_mutex held), where the host submits what gust recorded for it.
     void wait_idle() const;
+    /// A render pass of one subpass without attachments, which every graphics pipeline is made for (Vulkan
+    /// 1.0's, not dynamic rendering: a host's device need not enable it), and a framebuffer for it
+    /// kMaxFramebufferExtent texels square, inside which a pass sets its render area.
+    VkRenderPass attachmentless_pass() const { return render_pass_; }
+    VkFramebuffer attachmentless_framebuffer() const { return framebuffer_; }
+    /// Width and height of attachmentless_framebuffer(): Vulkan's guaranteed maxFramebufferWidth and Height.
+    static constexpr std::uint32_t kMaxFramebufferExtent = 4096;
     /// The pipeline cache every pipeline is created through (ContextDesc::pipeline_cache).
     VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
     /// Writes the pipeline cache to ContextDesc::pipeline_cache (nothing when none was named), so the
@@ -299,6 +306,8 @@ class Context : public HostObject {
     std::mutex* queue_mutex_ = nullptr;
     VkCommandPool pool_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
+    VkRenderPass render_pass_ = VK_NULL_HANDLE;
+    VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
     VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;
     std::pmr::string pipeline_cache_path_;
     bool pipeline_cache_loaded_ = false;

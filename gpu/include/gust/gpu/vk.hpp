@@ -82,22 +82,26 @@ namespace gust::gpu {
     X(vkDestroyFence)                                                                                        \
     X(vkResetFences)                                                                                         \
     X(vkWaitForFences)                                                                                       \
-    X(vkQueueSubmit2)                                                                                        \
+    X(vkQueueSubmit)                                                                                         \
     X(vkCreateQueryPool)                                                                                     \
     X(vkDestroyQueryPool)                                                                                    \
     X(vkGetQueryPoolResults)                                                                                 \
     X(vkCmdResetQueryPool)                                                                                   \
-    X(vkCmdWriteTimestamp2)                                                                                  \
+    X(vkCmdWriteTimestamp)                                                                                   \
     X(vkCmdBindPipeline)                                                                                     \
     X(vkCmdPushConstants)                                                                                    \
     X(vkCmdDispatch)                                                                                         \
     X(vkCmdDispatchIndirect)                                                                                 \
-    X(vkCmdPipelineBarrier2)                                                                                 \
+    X(vkCmdPipelineBarrier)                                                                                  \
     X(vkCmdFillBuffer)                                                                                       \
     X(vkCmdCopyBuffer)                                                                                       \
     X(vkCmdUpdateBuffer)                                                                                     \
-    X(vkCmdBeginRendering)                                                                                   \
-    X(vkCmdEndRendering)                                                                                     \
+    X(vkCreateRenderPass)                                                                                    \
+    X(vkDestroyRenderPass)                                                                                   \
+    X(vkCreateFramebuffer)                                                                                   \
+    X(vkDestroyFramebuffer)                                                                                  \
+    X(vkCmdBeginRenderPass)                                                                                  \
+    X(vkCmdEndRenderPass)                                                                                    \
     X(vkCmdSetViewport)                                                                                      \
     X(vkCmdSetScissor)                                                                                       \
     X(vkCmdDraw)
