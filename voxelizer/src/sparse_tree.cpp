@@ -228,7 +228,9 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
         push.level = level;
         indirect(visit_, offsetof(TreeState, fragments_dispatch));
     }
-    indirect(leaf_, offsetof(TreeState, fragments_dispatch));
+    // No barrier after the leaf pass: the caller orders it before what follows.
+    leaf_.bind(cmd, &push, sizeof(push));
+    leaf_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, fragments_dispatch));
 }
 
 Status SparseTree::prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
@@ -315,6 +317,7 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
     if (rebuild_static) {
         profiler_.begin(cmd, "tree_static");
         record_insert(cmd, static_bindings_, true, false);
+        if (dynamic) gpu::barrier(ctx_, cmd);
         profiler_.end(cmd);
     }
     if (dynamic) {
@@ -322,6 +325,9 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
         record_insert(cmd, dynamic_bindings_, false, sized);
         profiler_.end(cmd);
     }
+    // The coarsening runs beside the last leaf pass: it frees only blocks whose owners went unreached for
+    // more than the hysteresis, and the leaf pass writes only leaves reached this frame (their whole paths
+    // marked by the visits before it); the two count into different fields of the state.
     profiler_.begin(cmd, "tree_coarsen");
     coarsen_.bind(cmd, &push, sizeof(push));
     coarsen_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));

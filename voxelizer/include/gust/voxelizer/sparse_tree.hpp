@@ -161,6 +161,7 @@ class SparseTree : public gpu::HostObject {
     void write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings, const FragmentSource& source);
     /// Records an insertion of the fragments `bindings` names; `sized` when tree_begin sized its dispatches
     /// and visited its root (TreePush::size_fragments), else tree_fragments and the root's visit come first.
+    /// No barrier follows its last (leaf) pass.
     void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned, bool sized);
     Status prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
     void record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
