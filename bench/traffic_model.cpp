@@ -96,7 +96,7 @@ Traffic advect_traffic(const Workload& w) {
 /// The "pressure" pass with the default MGPCG (wind_solver.cpp, record_step): start.comp, then per
 /// iteration smooth.comp's first pass at level 0 (the iterate, its residual and the check, then smoothing),
 /// the downward smoothing per level above the coarse solve (each restricting its right-hand side from the
-/// finer level first), the coarse solve (every coarser level in one workgroup, restricting its first), the
+/// finer level first), coarse_solve.comp (every coarser level in one workgroup, restricting its first), the
 /// upward smoothing per level (at level 0 with the sums for beta), and cg.comp (the new direction and the sum
 /// of p·Lp).
 Traffic pressure_traffic(const Workload& w) {

@@ -56,8 +56,8 @@ struct Workload {
     /// Bytes of one face's weight at level l: level 0 keeps a byte per face (open_counts), coarser levels
     /// a float. Accessed bytes count each weight load as the 4-byte word it is.
     static double weight(std::size_t l) { return l == 0 ? 1.0 : 4.0; }
-    /// The level the coarse solve (coarse_levels.glsl) starts at: the finest whose cells, and every coarser
-    /// level's, fit kCoarseCells (as WindSolver::create picks it).
+    /// The level coarse_solve.comp starts at: the finest whose cells, and every coarser level's, fit
+    /// kCoarseCells (as WindSolver::create picks it).
     std::size_t coarse_level() const;
 };
 
