@@ -37,8 +37,8 @@ Traffic fill_traffic(const Workload& w) {
     return t;
 }
 
-/// The "faces" pass: solid_faces, fluid_link and fluid_finish, then coarse_weights (every coarser level's
-/// weights from level 0's, one dispatch).
+/// The "faces" pass: solid_faces (with the fluid links) and fluid_finish, then coarse_weights (every coarser
+/// level's weights from level 0's, one dispatch).
 Traffic faces_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), air = 4.0 * w.cut_cells * w.cell_words;
@@ -46,10 +46,10 @@ Traffic faces_traffic(const Workload& w) {
     // per cut cell) also reads both cells' air. The motion sums of moving cells are left out (at most
     // 6 x 16 B per fragment).
     t.add(13 * F + 6 * 2 * air, 4 * C + 5 * F + air);
-    // fluid_link and fluid_finish run in this scene: the ground slab, which the domain's sides cut, holds
-    // outside air below the air above it in the lowest cells. fluid_link: per cell the flags, six open
-    // counts (a word each) and about three unions (two finds of two loads each); fluid_finish: the flags and
-    // a find per cell.
+    // The fluid links and fluid_finish run in this scene: the ground slab, which the domain's sides cut,
+    // holds outside air below the air above it in the lowest cells. The links, in solid_faces: per cell the
+    // flags, six open counts (a word each) and about three unions (two finds of two loads each), counted as
+    // the separate pass they were; fluid_finish: the flags and a find per cell.
     t.add(C * (4 + 6 * 4 + 3 * 2 * 8), 8 * C + F);
     t.add(C * (4 + 2 * 4), 8 * C);
     if (w.levels.size() < 2) return t;

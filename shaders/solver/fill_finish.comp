@@ -5,7 +5,7 @@
 // part 1); a cell with none is kCellNoAir, solid for the wind. Writes the solid fraction (1 − air share),
 // and adds to each sealed region the solid its parts touch (add_contacts), so that a region moves with the
 // solid enclosing it (enclosing_motion): the air sealed inside a moving crate with the crate, the inside of
-// a static building not at all. A cell whose two parts both reach the outside turns on fluid_link.comp and
+// a static building not at all. A cell whose two parts both reach the outside turns on solid_faces.comp's link_fluid and
 // fluid_finish.comp (SolverState::fluid_dispatch), whose nodes start here.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;

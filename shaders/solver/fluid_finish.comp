@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// The end of fluid_link.comp, per wind cell: a cell with air whose node is apart from the outside is a
+// The end of solid_faces.comp's link_fluid, per wind cell: a cell with air whose node is apart from the outside is a
 // pocket of the pressure equation. It becomes kCellNoAir, solid for the wind (its solid fraction 1, the
 // open pairs of its faces 0), and counts as sealed. Its air is a few voxels cut off from the cells'
 // chosen parts, so sealing it loses no flow.

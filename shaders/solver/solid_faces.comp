@@ -5,7 +5,9 @@
 // both cells (or the sealed region a cell without air lies in), over the share of the face's closed pairs
 // that touch no static solid (moving_share); where one cell has no air, only the solid in the other's layer
 // next to the face (layer_motion). The faces of a cell whose air crossed a moving wall (air_crossed) take
-// that velocity as the air's too.
+// that velocity as the air's too. When the fill found a cell with two parts of outside air (fill_finish.comp
+// set SolverState::fluid_dispatch), also the pressure equation's own connectivity (link_fluid), which
+// fluid_finish.comp then seals.
 #include "solver_io.h"
 layout(local_size_x = kSolverGroupSize) in;
 #include "solver_common.glsl"
@@ -62,6 +64,24 @@ CellBits air_at(ivec3 c, uint flags) {
     return inside_cells(n, c) ? air_of(cell_index(n, c), flags) : bits_all(hot.voxels_per_cell);
 }
 
+/// The pressure equation's own connectivity across a face with open voxel pairs between lo and hi: a cell
+/// with two parts of outside air stands for one of them in the pressure, so cells that reach an open side
+/// only through its other part would form a pocket, a block of the equation with no open side, singular and
+/// inconsistent wherever its divergence does not sum to zero. Unites the two cells' fluid nodes, or the
+/// cell with the outside across an open domain side; fluid_finish.comp seals the cells left apart. (Open
+/// pairs mean that no cell of the face is kCellNoAir.)
+void link_fluid(ivec3 lo, ivec3 hi, uint axis) {
+    ivec3 n = hot.dims;
+    uint cells = uint(n.x * n.y * n.z);
+    bool in_lo = inside_cells(n, lo), in_hi = inside_cells(n, hi);
+    if (in_lo && in_hi)
+        uf_unite(fluid_node(uint(cell_index(n, lo)), cells), fluid_node(uint(cell_index(n, hi)), cells));
+    else if (in_hi && (hot.open_sides >> (2u * axis) & 1u) != 0u)
+        uf_unite(fluid_node(uint(cell_index(n, hi)), cells), kOutsideNode);
+    else if (in_lo && (hot.open_sides >> (2u * axis + 1u) & 1u) != 0u)
+        uf_unite(fluid_node(uint(cell_index(n, lo)), cells), kOutsideNode);
+}
+
 void main() {
     load_bindings();
     int t = thread_index();
@@ -69,6 +89,7 @@ void main() {
     int total = faces_total(n);
     if (uint(t) >= open_count_words(uint(total))) return;
     uint v = hot.voxels_per_cell;
+    bool fluid = state().s.fluid_dispatch.x != 0u;
     uint counts = 0u;
     // The face layers are loaded once, by the first face that compares voxel sets.
     CellBits faces[6];
@@ -88,6 +109,7 @@ void main() {
             open = face_open_count(air_at(lo, flags_lo), air_at(f, flags_hi), axis, v, faces);
         }
         counts |= open << (8 * k);
+        if (fluid && open != 0u) link_fluid(lo, f, axis);
         // Where one cell has air and the other none, the solid that air meets is in its own cell's layer.
         bool air_lo = (flags_lo & kCellNoAir) == 0u, air_hi = (flags_hi & kCellNoAir) == 0u;
         ivec4 m;

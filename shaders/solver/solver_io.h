@@ -148,7 +148,7 @@ GUST_INLINE uint part_node(uint cell, uint k) {
 }
 
 /// Union-find node of cell `cell` (of `cells`) in the pressure equation's own connectivity
-/// (fluid_link.comp), after the part nodes; it shares node 0 with them.
+/// (solid_faces.comp's link_fluid), after the part nodes; it shares node 0 with them.
 GUST_INLINE uint fluid_node(uint cell, uint cells) {
     return 1u + kCellParts * cells + cell;
 }

@@ -106,8 +106,12 @@ struct TreePush {
     uint frame;            ///< current frame number (>= 1)
     uint level;            ///< level the pass works on (0 = root)
     uint pinned;           ///< 1 while inserting static fragments
-    uint pad;
+    uint size_fragments;   ///< tree_begin: kSizeFragments when it also sizes the insertion's dispatches
 };
+
+/// TreePush::size_fragments of tree_begin: it also does tree_fragments' work for the bindings it gets and
+/// visits their root, so that the insertion's next level runs beside the clearing (two stages fewer a frame).
+GUST_CONST uint kSizeFragments = 1u;
 
 /// Words of one leaf layer (static or dynamic) for branching factor 2^log2_branching.
 GUST_INLINE uint mask_words(uint log2_branching) {

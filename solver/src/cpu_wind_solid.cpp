@@ -264,9 +264,9 @@ void CpuWind::Impl::solid_pass(const CpuSolid* solid, WindStats& stats) {
     seal_pockets(stats.sealed_cells);
 }
 
-// fluid_link.comp and fluid_finish.comp as a flood fill from the open sides over open faces. The GPU runs
-// them only when a cell has two parts of outside air, the only case that leaves such pockets, so running
-// it always finds the same cells.
+// solid_faces.comp's link_fluid and fluid_finish.comp as a flood fill from the open sides over open faces.
+// The GPU runs them only when a cell has two parts of outside air, the only case that leaves such pockets, so
+// running it always finds the same cells.
 void CpuWind::Impl::seal_pockets(std::uint32_t& sealed_cells) {
     using namespace shaderio;
     const glm::ivec3 n = k.dims;

@@ -27,7 +27,6 @@ namespace {
 #include "gust_shaders/fill_link_small_comp.h"
 #include "gust_shaders/finish_comp.h"
 #include "gust_shaders/fluid_finish_comp.h"
-#include "gust_shaders/fluid_link_comp.h"
 #include "gust_shaders/jacobi_comp.h"
 #include "gust_shaders/project_comp.h"
 #include "gust_shaders/sample_comp.h"
@@ -130,7 +129,6 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         {&m.fill_link, small ? words(fill_link_small_comp) : words(fill_link_comp), "gust fill_link"},
         {&m.fill_finish, small ? words(fill_finish_small_comp) : words(fill_finish_comp), "gust fill_finish"},
         {&m.solid_faces, small ? words(solid_faces_small_comp) : words(solid_faces_comp), "gust solid_faces"},
-        {&m.fluid_link, words(fluid_link_comp), "gust fluid_link"},
         {&m.fluid_finish, words(fluid_finish_comp), "gust fluid_finish"},
         {&m.coarse_weights, words(coarse_weights_comp), "gust coarse_weights"},
         {&m.diffuse, words(diffuse_comp), "gust diffuse"},

@@ -27,7 +27,7 @@ struct WindSolver::Impl : gpu::HostObject {
     std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
     bool advect_nested = false; ///< advect is specialized for a nest (kNested)
     std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
-    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_link, fluid_finish,
+    gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_finish,
         coarse_weights, diffuse, start, coarse_solve, cg, jacobi, project, finish, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
         pressure_up, rhs, scratch, cg_cells, partials, cell_solid, cell_parts, cell_static, cell_flags,

@@ -150,11 +150,9 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     m.profiler.end(cmd);
     m.profiler.begin(cmd, "faces");
     run(m.solid_faces, groups_for(shaderio::open_count_words(std::uint32_t(face_count()))));
-    for (const gpu::Pipeline* p : {&m.fluid_link, &m.fluid_finish}) {
-        p->bind(cmd, &push, sizeof(push));
-        p->dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fluid_dispatch));
-        gpu::barrier(ctx_, cmd);
-    }
+    m.fluid_finish.bind(cmd, &push, sizeof(push));
+    m.fluid_finish.dispatch_indirect(cmd, m.state.handle(), offsetof(SolverState, fluid_dispatch));
+    gpu::barrier(ctx_, cmd);
     // The coarse levels' weights run beside the advection: only the pressure solve's coarse levels read
     // them, and they read no velocity.
     if (levels > 1) {

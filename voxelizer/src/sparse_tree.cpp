@@ -209,7 +209,7 @@ void SparseTree::write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings
     gpu::update(ctx_, cmd, bindings, &b, sizeof(b));
 }
 
-void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned) {
+void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned, bool sized) {
     TreePush push{bindings.address(), frame_, 0, pinned ? 1u : 0u, 0};
     auto once = [&](const gpu::Pipeline& p) {
         p.bind(cmd, &push, sizeof(push));
@@ -221,14 +221,16 @@ void SparseTree::record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings,
         p.dispatch_indirect(cmd, state_.handle(), offset);
         gpu::barrier(ctx_, cmd);
     };
-    once(fragments_);
+    if (!sized) once(fragments_);
     // One stage a level: each fragment steps down to its node and marks it, the first to reach a node
-    // without children giving it its block.
-    for (std::uint32_t level = 0; level < levels_; ++level) {
+    // without children giving it its block. tree_begin visited the root of an insertion it sized.
+    for (std::uint32_t level = sized ? 1 : 0; level < levels_; ++level) {
         push.level = level;
         indirect(visit_, offsetof(TreeState, fragments_dispatch));
     }
-    indirect(leaf_, offsetof(TreeState, fragments_dispatch));
+    // No barrier after the leaf pass: the caller orders it before what follows.
+    leaf_.bind(cmd, &push, sizeof(push));
+    leaf_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, fragments_dispatch));
 }
 
 Status SparseTree::prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic) {
@@ -297,26 +299,35 @@ void SparseTree::record_passes(VkCommandBuffer cmd, const FragmentSource* rebuil
         vk.vkCmdFillBuffer(cmd, nodes_.handle(), 0, (1ull << (3 * log2_b_)) * sizeof(glm::uvec2), 0);
     }
     gpu::barrier(ctx_, cmd);
-    TreePush push{dynamic_bindings_.address(), frame_, 0, 0, 0};
+    // A frame that inserts only dynamic fragments has them sized and their root visited by tree_begin, so
+    // that the visit of the level below the root runs beside the clearing.
+    const bool sized = dynamic && !rebuild_static;
+    TreePush push{dynamic_bindings_.address(), frame_, 0, 0, sized ? shaderio::kSizeFragments : 0u};
     begin_.bind(cmd, &push, sizeof(push));
     begin_.dispatch(cmd, 1, 1, 1);
     gpu::barrier(ctx_, cmd);
+    push.size_fragments = 0;
     clear_.bind(cmd, &push, sizeof(push));
     clear_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, leaves_dispatch));
     // An insertion's passes up to the leaf pass (behind their barriers) touch no live leaf's words, so
-    // they run beside the clearing; only the coarsening, which frees leaves, waits for it.
+    // they run beside the clearing (the first of them with it); only the coarsening, which frees leaves,
+    // waits for it.
     if (!rebuild_static && !dynamic) gpu::barrier(ctx_, cmd);
     profiler_.end(cmd);
     if (rebuild_static) {
         profiler_.begin(cmd, "tree_static");
-        record_insert(cmd, static_bindings_, true);
+        record_insert(cmd, static_bindings_, true, false);
+        if (dynamic) gpu::barrier(ctx_, cmd);
         profiler_.end(cmd);
     }
     if (dynamic) {
         profiler_.begin(cmd, "tree_dynamic");
-        record_insert(cmd, dynamic_bindings_, false);
+        record_insert(cmd, dynamic_bindings_, false, sized);
         profiler_.end(cmd);
     }
+    // The coarsening runs beside the last leaf pass: it frees only blocks whose owners went unreached for
+    // more than the hysteresis, and the leaf pass writes only leaves reached this frame (their whole paths
+    // marked by the visits before it); the two count into different fields of the state.
     profiler_.begin(cmd, "tree_coarsen");
     coarsen_.bind(cmd, &push, sizeof(push));
     coarsen_.dispatch_indirect(cmd, state_.handle(), offsetof(TreeState, records_dispatch));

@@ -159,7 +159,10 @@ class SparseTree : public gpu::HostObject {
     TreeStats stats_of(const shaderio::TreeState& state, std::uint32_t frame) const;
     Status ensure_scratch(std::uint64_t fragments);
     void write_bindings(VkCommandBuffer cmd, const gpu::Buffer& bindings, const FragmentSource& source);
-    void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned);
+    /// Records an insertion of the fragments `bindings` names; `sized` when tree_begin sized its dispatches
+    /// and visited its root (TreePush::size_fragments), else tree_fragments and the root's visit come first.
+    /// No barrier follows its last (leaf) pass.
+    void record_insert(VkCommandBuffer cmd, const gpu::Buffer& bindings, bool pinned, bool sized);
     Status prepare(const FragmentSource* rebuild_static, const FragmentSource* dynamic);
     void record_passes(VkCommandBuffer cmd, const FragmentSource* rebuild_static,
                        const FragmentSource* dynamic);
