@@ -4,6 +4,7 @@
 // timed pass, the coarser cascades' included) a frame, and their ratio to one cascade.
 //   gust_bench_cascades [--frames N] [--cells X,Y,Z] [--cell-size M] [--write docs/results.md]
 #include "bench_common.hpp"
+#include "mesh_desc.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -18,16 +19,6 @@
 namespace {
 
 constexpr const char* kTool = "gust_bench_cascades";
-
-/// A rigid MeshDesc borrowing `mesh`'s arrays (valid while it lives unchanged).
-gust::MeshDesc desc_of(const gust::Mesh& mesh) {
-    gust::MeshDesc d;
-    d.positions = &mesh.positions[0].x;
-    d.vertex_count = std::uint32_t(mesh.positions.size());
-    d.indices = mesh.indices.data();
-    d.index_count = std::uint32_t(mesh.indices.size());
-    return d;
-}
 
 /// The finest grid of every System (default: the sample's low preset, which a CPU device gets,
 /// sample_game/quality.cpp).
@@ -68,9 +59,9 @@ gust::Outcome build(const Grid& grid, Nest& nest) {
     static const gust::Mesh crate = gust::make_box_mesh({-0.6f, -0.6f, -0.6f}, {0.6f, 0.6f, 0.6f});
     gust::MeshId g = 0, h = 0, c = 0;
     gust::InstanceId id = 0;
-    if (gust::Outcome o = s.create_mesh(desc_of(ground), g); !o) return o;
-    if (gust::Outcome o = s.create_mesh(desc_of(house), h); !o) return o;
-    if (gust::Outcome o = s.create_mesh(desc_of(crate), c); !o) return o;
+    if (gust::Outcome o = s.create_mesh(gust::bench::desc_of(ground), g); !o) return o;
+    if (gust::Outcome o = s.create_mesh(gust::bench::desc_of(house), h); !o) return o;
+    if (gust::Outcome o = s.create_mesh(gust::bench::desc_of(crate), c); !o) return o;
     if (gust::Outcome o = s.create_instance(g, gust::Mat4{}, false, id); !o) return o;
     for (float x : {-40.0f, -10.0f, 25.0f, 90.0f, 300.0f})
         if (gust::Outcome o = s.create_instance(h, translation(x, 0.0f, 0.5f * x), false, id); !o) return o;

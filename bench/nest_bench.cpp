@@ -5,6 +5,7 @@
 // free-slip potential flow, for the nest and for one grid of twice the finest cells.
 //   gust_bench_nest [--frames N] [--rows ridge,shelter,squeeze,hill] [--write docs/results.md]
 #include "bench_common.hpp"
+#include "mesh_desc.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -22,15 +23,6 @@ namespace {
 
 constexpr const char* kTool = "gust_bench_nest";
 constexpr float kWind = 6.0f;
-
-gust::MeshDesc desc_of(const gust::Mesh& mesh) {
-    gust::MeshDesc d;
-    d.positions = &mesh.positions[0].x;
-    d.vertex_count = std::uint32_t(mesh.positions.size());
-    d.indices = mesh.indices.data();
-    d.index_count = std::uint32_t(mesh.indices.size());
-    return d;
-}
 
 /// A closed cylinder of `radius` along z from -half to half, its axis at height 0 and x 0, with `sides`
 /// flat sides.
@@ -72,7 +64,7 @@ gust::Outcome make_system(const Domain& d, const std::vector<gust::Mesh>& solids
     for (const gust::Mesh& m : solids) {
         gust::MeshId mesh = 0;
         gust::InstanceId id = 0;
-        if (gust::Outcome o = system->create_mesh(desc_of(m), mesh); !o) return o;
+        if (gust::Outcome o = system->create_mesh(gust::bench::desc_of(m), mesh); !o) return o;
         if (gust::Outcome o = system->create_instance(mesh, gust::Mat4{}, false, id); !o) return o;
     }
     return system->set_ambient({kWind, 0.0f, 0.0f});
