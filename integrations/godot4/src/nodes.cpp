@@ -45,9 +45,10 @@ constexpr std::int64_t kFormatRgba16f = 96;        // RenderingDevice.DATA_FORMA
 constexpr std::int64_t kSharedUsage = 1 | 128 | 256;
 constexpr const char* kTextureParameter = "gust_wind_texture";
 constexpr const char* kTransformParameter = "gust_world_to_texture";
-// Exported copies of each cascade's wind image (SystemDesc::exported_copies): Godot keeps up to 3 frames in
-// flight (rendering/rendering_device/vsync/frame_queue_size, 2 by default, at most 3), each of which may be
-// sampling the copy published before it was drawn, and gust writes a fourth.
+// Exported copies of each cascade's wind image (SystemDesc::exported_copies): Godot's RenderingDevice keeps
+// max(3, frame_queue_size) frames (rendering/rendering_device/vsync/frame_queue_size: 2 by default, 2 to 3),
+// waiting for a frame's fence before it records that frame again, so at most 3 frames in flight each sample
+// the copy published before they were drawn, and gust writes a fourth.
 constexpr std::uint32_t kCopies = 4;
 
 // GustEmitter3D.kind, in its enum's order.
