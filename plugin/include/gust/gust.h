@@ -37,7 +37,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 9
+#define GUST_VERSION_MINOR 10
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.

@@ -34,7 +34,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 9;
+inline constexpr std::uint32_t kVersionMinor = 10;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
