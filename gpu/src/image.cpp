@@ -12,7 +12,36 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     img.ctx_ = &ctx;
     img.extent_ = desc.extent;
     img.format_ = desc.format;
+    img.usage_ = desc.usage;
+    if (desc.exportable && !ctx.external_memory())
+        return Result<Image>::failure("an exportable image needs VK_KHR_external_memory_fd on gust's device");
+    const VkExternalMemoryHandleTypeFlagBits handle = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+    if (desc.exportable) {
+        // The device must export and import such an image's memory as an opaque fd, the importer being
+        // another VkDevice on the same physical device.
+        VkPhysicalDeviceExternalImageFormatInfo external_info{
+            VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_EXTERNAL_IMAGE_FORMAT_INFO};
+        external_info.handleType = handle;
+        VkPhysicalDeviceImageFormatInfo2 format_info{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_IMAGE_FORMAT_INFO_2,
+                                                     &external_info};
+        format_info.format = desc.format;
+        format_info.type = volume ? VK_IMAGE_TYPE_3D : VK_IMAGE_TYPE_2D;
+        format_info.tiling = VK_IMAGE_TILING_OPTIMAL;
+        format_info.usage = desc.usage;
+        VkExternalImageFormatProperties external_props{VK_STRUCTURE_TYPE_EXTERNAL_IMAGE_FORMAT_PROPERTIES};
+        VkImageFormatProperties2 props{VK_STRUCTURE_TYPE_IMAGE_FORMAT_PROPERTIES_2, &external_props};
+        const VkExternalMemoryFeatureFlags both =
+            VK_EXTERNAL_MEMORY_FEATURE_EXPORTABLE_BIT | VK_EXTERNAL_MEMORY_FEATURE_IMPORTABLE_BIT;
+        if (vk.vkGetPhysicalDeviceImageFormatProperties2(ctx.physical_device(), &format_info, &props) !=
+                VK_SUCCESS ||
+            (external_props.externalMemoryProperties.externalMemoryFeatures & both) != both)
+            return Result<Image>::failure("the device cannot export and import this image's memory as an "
+                                          "opaque fd");
+    }
+    VkExternalMemoryImageCreateInfo external{VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
+    external.handleTypes = handle;
     VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.pNext = desc.exportable ? &external : nullptr;
     info.imageType = volume ? VK_IMAGE_TYPE_3D : VK_IMAGE_TYPE_2D;
     info.format = desc.format;
     info.extent = desc.extent;
@@ -34,6 +63,14 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = type;
+    // An importer must allocate as the exporter did, dedicated included: always dedicated, one rule for all.
+    VkMemoryDedicatedAllocateInfo dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO};
+    dedicated.image = img.image_;
+    VkExportMemoryAllocateInfo exported{VK_STRUCTURE_TYPE_EXPORT_MEMORY_ALLOCATE_INFO, &dedicated};
+    exported.handleTypes = handle;
+    if (desc.exportable) alloc.pNext = &exported;
+    img.allocation_size_ = req.size;
+    img.memory_type_ = type;
     if (VkResult r = vk.vkAllocateMemory(ctx.device(), &alloc, ctx.allocator(), &img.memory_);
         r != VK_SUCCESS)
         return Result<Image>::failure("cannot allocate " + std::to_string(req.size) +
@@ -51,14 +88,37 @@ Result<Image> Image::create(Context& ctx, const ImageDesc& desc) {
     return img;
 }
 
+Result<int> Image::export_fd() const {
+    if (!ctx_ || !ctx_->external_memory() || !memory_)
+        return Result<int>::failure("the image's memory is not exportable");
+    VkMemoryGetFdInfoKHR info{VK_STRUCTURE_TYPE_MEMORY_GET_FD_INFO_KHR};
+    info.memory = memory_;
+    info.handleType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+    int fd = -1;
+    if (VkResult r = ctx_->vk().vkGetMemoryFdKHR(ctx_->device(), &info, &fd); r != VK_SUCCESS)
+        return Result<int>::failure(std::string("vkGetMemoryFdKHR failed: ") + to_string(r));
+    return fd;
+}
+
 void Image::transition(VkCommandBuffer cmd, VkImageLayout layout) {
+    barrier(cmd, layout, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED);
+}
+
+void Image::release_to_external(VkCommandBuffer cmd, VkImageLayout layout) {
+    barrier(cmd, layout, ctx_->queue_family(), VK_QUEUE_FAMILY_EXTERNAL);
+}
+
+void Image::barrier(VkCommandBuffer cmd, VkImageLayout layout, std::uint32_t src_family,
+                    std::uint32_t dst_family) {
     VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
     b.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-    b.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+    // A release's destination access is the acquiring side's to state (Vulkan ignores it here).
+    b.dstAccessMask =
+        dst_family == VK_QUEUE_FAMILY_EXTERNAL ? 0 : VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
     b.oldLayout = layout_;
     b.newLayout = layout;
-    b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.srcQueueFamilyIndex = src_family;
+    b.dstQueueFamilyIndex = dst_family;
     b.image = image_;
     b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     ctx_->vk().vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
@@ -110,6 +170,9 @@ Image& Image::operator=(Image&& other) noexcept {
         view_ = std::exchange(other.view_, VK_NULL_HANDLE);
         memory_ = std::exchange(other.memory_, VK_NULL_HANDLE);
         extent_ = other.extent_;
+        usage_ = other.usage_;
+        allocation_size_ = other.allocation_size_;
+        memory_type_ = other.memory_type_;
         format_ = other.format_;
         layout_ = other.layout_;
     }

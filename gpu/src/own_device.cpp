@@ -134,11 +134,12 @@ Status Context::init(const ContextDesc& desc) {
     std::string_view override_spec = desc.device;
     if (override_spec.empty())
         if (const char* env = std::getenv("GUST_DEVICE")) override_spec = env;
-    if (Status s = pick_device(override_spec); !s) return s;
-    return create_device();
+    if (Status s = pick_device(override_spec, desc.device_uuid); !s) return s;
+    return create_device(desc.external_memory);
 }
 
-Status Context::pick_device(std::string_view override_spec) {
+Status Context::pick_device(std::string_view override_spec,
+                            const std::optional<std::array<std::uint8_t, VK_UUID_SIZE>>& uuid) {
     std::uint32_t count = 0;
     VkResult listed = vk_.vkEnumeratePhysicalDevices(instance_, &count, nullptr);
     std::pmr::vector<VkPhysicalDevice> devices(host_memory_);
@@ -166,6 +167,17 @@ Status Context::pick_device(std::string_view override_spec) {
             .append(type_name(props.deviceType))
             .append(")");
         const bool usable = props.apiVersion >= kApiVersion;
+        if (uuid) {
+            // Another VkDevice's physical device (ContextDesc::device_uuid): only it can import gust's
+            // memory.
+            VkPhysicalDeviceIDProperties id{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES};
+            VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &id};
+            vk_.vkGetPhysicalDeviceProperties2(devices[i], &p2);
+            if (usable && physical_ == VK_NULL_HANDLE &&
+                std::equal(uuid->begin(), uuid->end(), std::begin(id.deviceUUID)))
+                physical_ = devices[i];
+            continue;
+        }
         if (!override_spec.empty()) {
             // A number is an index only: "5" must not pick "llvmpipe (LLVM 15.0.6)" by its name.
             const bool numeric = override_spec.find_first_not_of("0123456789") == std::string_view::npos;
@@ -190,6 +202,9 @@ Status Context::pick_device(std::string_view override_spec) {
         std::string list;
         for (const std::pmr::string& entry : device_names_)
             list.append(list.empty() ? "" : ", ").append(entry);
+        if (uuid)
+            return Status::failure("no Vulkan " + version_string(kApiVersion) +
+                                   " device has the deviceUUID asked for; devices: " + list);
         if (!override_spec.empty())
             return Status::failure("no Vulkan device matches '" + std::string(override_spec) +
                                    "'; devices: " + list);
@@ -199,7 +214,7 @@ Status Context::pick_device(std::string_view override_spec) {
     return {};
 }
 
-Status Context::create_device() {
+Status Context::create_device(bool external_memory) {
     if (Status s = check_support(vk_, physical_, host_memory_); !s) return s;
     VkPhysicalDeviceProperties props;
     vk_.vkGetPhysicalDeviceProperties(physical_, &props);
@@ -217,6 +232,12 @@ Status Context::create_device() {
     for (const char* name : kOptionalExtensions)
         if (has_extension(exts, name)) enabled.push_back(name);
     info_.conservative_rasterization = has_extension(exts, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
+    if (external_memory) {
+        if (!has_extension(exts, VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME))
+            return Status::failure(std::string("device '") + props.deviceName +
+                                   "' lacks VK_KHR_external_memory_fd, which sharing gust's images needs");
+        enabled.push_back(VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME);
+    }
 
     FeatureChain features;
     for_each_feature(features.f2.features, features.f12,
@@ -236,7 +257,11 @@ Status Context::create_device() {
     if (VkResult r = vk_.vkCreateDevice(physical_, &info, allocator(), &device_); r != VK_SUCCESS)
         return Status::failure(std::string("vkCreateDevice failed on '") + props.deviceName +
                                "': " + to_string(r));
-    return finish_device(0);
+    if (Status s = finish_device(0); !s) return s;
+    if (external_memory)
+        if (const std::string missing = load_external_memory_functions(vk_, device_); !missing.empty())
+            return Status::failure("vkGetDeviceProcAddr returned null for " + missing);
+    return {};
 }
 
 } // namespace gust::gpu

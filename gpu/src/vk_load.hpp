@@ -53,6 +53,16 @@ inline std::string load_device_functions(Dispatch& vk, VkDevice device) {
     return missing;
 }
 
+/// Loads GUST_VK_EXTERNAL_MEMORY_FUNCTIONS (VK_KHR_external_memory_fd) through vk.vkGetDeviceProcAddr(device,
+/// ...); returns the names it got null for, as load_global_functions.
+inline std::string load_external_memory_functions(Dispatch& vk, VkDevice device) {
+    const PFN_vkGetDeviceProcAddr get = vk.vkGetDeviceProcAddr;
+    const VkDevice handle = device;
+    std::string missing;
+    GUST_VK_EXTERNAL_MEMORY_FUNCTIONS(GUST_LOAD)
+    return missing;
+}
+
 #undef GUST_LOAD
 
 } // namespace gust::gpu::detail

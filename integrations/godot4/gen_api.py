@@ -44,6 +44,7 @@ CLASS_METHODS = [
     ("RenderingDevice", "texture_create_from_extension"),
     ("RenderingDevice", "free_rid"),
     ("Texture3DRD", "set_texture_rd_rid"),
+    ("Engine", "get_frames_drawn"),
 ]
 # (builtin type, method) pairs called through variant_get_ptr_builtin_method.
 BUILTIN_METHODS = [

@@ -143,6 +143,8 @@ class Frame {
     Outcome time_dispatches(bool on);
     /// Every cascade's wind texture, finest first.
     std::span<const WindTexture> textures() const { return published_; }
+    /// Cascade k's texels as its last step wrote them (the contents of its texture once a frame completed).
+    const gpu::Buffer& texels(std::size_t k) const { return textures_[k].texels; }
     /// Frames recorded so far.
     std::uint64_t recorded() const { return recorded_; }
 

@@ -157,6 +157,27 @@ gust_result gust_system_set_dispatch_timing(gust_system system, bool on) {
                      [&](gust::System& s) { return s.set_dispatch_timing(on); });
 }
 
+gust_result gust_system_export_wind_copy(gust_system system, uint32_t cascade, uint32_t slot,
+                                         gust_exported_image* image) {
+    return on_system(system, "gust_system_export_wind_copy", [&](gust::System& s) -> gust::Outcome {
+        if (!image) return invalid("image (the output) is NULL");
+        gust::ExportedImage e;
+        if (gust::Outcome o = s.export_wind_copy(cascade, slot, e); !o) return o;
+        *image = {.fd = e.fd,
+                  .allocation_size = e.allocation_size,
+                  .memory_type_index = e.memory_type_index,
+                  .format = e.format,
+                  .extent = {e.extent[0], e.extent[1], e.extent[2]},
+                  .usage = e.usage};
+        return {};
+    });
+}
+
+gust_result gust_system_copy_wind_textures(gust_system system, uint32_t slot) {
+    return on_system(system, "gust_system_copy_wind_textures",
+                     [&](gust::System& s) { return s.copy_wind_textures(slot); });
+}
+
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin) {
     return on_system(system, "gust_system_domain_origin", [&](gust::System& s) -> gust::Outcome {
         if (!origin) return invalid("origin (the output) is NULL");

@@ -352,7 +352,7 @@ inline gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice
                                gust_hooks& hooks_in_handle) {
     gust::SystemDesc out;
     auto& [header_version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-           hooks, pipeline_cache, snapshot] = out;
+           hooks, pipeline_cache, snapshot, device_uuid, exported_copies] = out;
     header_version = c.header_version;
     host = host_device;
     validation = c.validation;
@@ -365,12 +365,14 @@ inline gust::SystemDesc to_cpp(const gust_system_desc& c, const gust::HostDevice
     hooks = to_cpp(hooks_in_handle);
     pipeline_cache = c.pipeline_cache;
     snapshot = c.snapshot;
+    device_uuid = c.device_uuid;
+    exported_copies = c.exported_copies;
     return out;
 }
 // The defaults: no host device and no hooks, whatever the C++ ones hold.
 inline gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_version) {
     const auto& [version, host, validation, device, submission, frames_in_flight, voxelize, domain, wind,
-                 hooks, pipeline_cache, snapshot] = d;
+                 hooks, pipeline_cache, snapshot, device_uuid, exported_copies] = d;
     return {.header_version = header_version,
             .host = nullptr,
             .validation = validation,
@@ -382,7 +384,9 @@ inline gust_system_desc to_c(const gust::SystemDesc& d, std::uint32_t header_ver
             .wind = to_c(wind),
             .hooks = {},
             .pipeline_cache = pipeline_cache,
-            .snapshot = snapshot};
+            .snapshot = snapshot,
+            .device_uuid = device_uuid,
+            .exported_copies = exported_copies};
 }
 
 inline gust::MeshSkin to_cpp(const gust_mesh_skin& c) {

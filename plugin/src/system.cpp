@@ -62,6 +62,11 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::mem
     own.device = desc.device ? desc.device : "";
     own.on_message = on_message;
     own.memory = memory;
+    if (desc.device_uuid) {
+        own.device_uuid.emplace();
+        std::copy_n(desc.device_uuid, VK_UUID_SIZE, own.device_uuid->begin());
+    }
+    own.external_memory = desc.exported_copies > 0;
     if (desc.pipeline_cache) own.pipeline_cache = desc.pipeline_cache;
     auto ctx = gpu::Context::create(own);
     if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
@@ -151,6 +156,11 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
         return invalid("voxelize must be Auto, Raster or Compute");
     if (desc.submission == Submission::HostCommands && !desc.host)
         return invalid("submission HostCommands needs a host device");
+    if (desc.exported_copies > 8)
+        return invalid("exported_copies must be 0..8, got " + std::to_string(desc.exported_copies));
+    if (desc.exported_copies > 0 && desc.host)
+        return invalid("exported_copies needs gust's own device (host must be null): a host device shares "
+                       "gust's images as they are");
     if (desc.submission == Submission::HostCommands &&
         (desc.frames_in_flight < 1 || desc.frames_in_flight > 8))
         return invalid("frames_in_flight must be 1..8, got " + std::to_string(desc.frames_in_flight));
@@ -242,6 +252,7 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
 
         m.frame.emplace(*m.ctx, *m.world, *m.solver, std::move(coarser), m.hooks);
         if (Outcome o = m.frame->create_textures(); !o) return o;
+        if (Outcome o = create_exported(m, desc.exported_copies); !o) return o;
         if (desc.snapshot) {
             m.snapshot.emplace(m.frame->snapshot_cells(), cascades, &m.memory);
             m.frame->enable_snapshot(*m.snapshot);

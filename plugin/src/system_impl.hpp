@@ -96,9 +96,10 @@ namespace gust {
 
 struct System::Impl {
     explicit Impl(const Hooks& h)
-        : hooks(h), memory(h), coarse_worlds(&memory), coarse_solvers(&memory), meshes(&memory),
-          instances(&memory), queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
-                                                      .ms = FrameStats::Timings(&memory)},
+        : hooks(h), memory(h), coarse_worlds(&memory), coarse_solvers(&memory), exported(&memory),
+          meshes(&memory), instances(&memory),
+          queries(&memory), stats{.nodes_per_level = FrameStats::Counts(&memory),
+                                  .ms = FrameStats::Timings(&memory)},
           slots(&memory), blocking(&memory) {}
 
     Hooks hooks;
@@ -112,6 +113,9 @@ struct System::Impl {
     std::pmr::vector<std::unique_ptr<VoxelWorld>> coarse_worlds;
     std::pmr::vector<std::unique_ptr<WindSolver>> coarse_solvers;
     std::optional<detail::Frame> frame; ///< in the System's own block: no allocation of its own
+    /// SystemDesc::exported_copies: copy s of cascade k at [k * copies + s], in exportable memory.
+    std::pmr::vector<gpu::Image> exported;
+    std::uint32_t exported_copies = 0;
 
     struct Mesh {
         GpuMesh gpu;
@@ -209,6 +213,10 @@ struct System::Impl {
         return error ? m : nullptr;
     }
 };
+
+/// SystemDesc::exported_copies: creates `copies` exportable images per cascade, the size and format of its
+/// wind texture (system_share.cpp).
+Outcome create_exported(System::Impl& m, std::uint32_t copies);
 
 /// Marks a writer call for its duration; fails (ErrorCode::Busy) when another thread is inside one.
 class WriterCall {

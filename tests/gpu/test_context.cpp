@@ -42,6 +42,47 @@ TEST(ContextCreation, overrideMatchingNoDeviceFailsListingTheDevices) {
     EXPECT_NE(ctx.message().find(gpu_context().info().name), std::string::npos);
 }
 
+// ContextDesc::device_uuid: the device another VkDevice runs on (an engine importing gust's memory).
+TEST(ContextCreation, deviceUuidSelectsThatDeviceAndAnUnknownOneFailsListingTheDevices) {
+    const gpu::Context& shared = gpu_context();
+    VkPhysicalDeviceIDProperties id{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES};
+    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &id};
+    shared.vk().vkGetPhysicalDeviceProperties2(shared.physical_device(), &p2);
+    gpu::ContextDesc desc;
+    desc.device = "no-such-gpu-xyz"; // the UUID comes first
+    desc.device_uuid.emplace();
+    std::memcpy(desc.device_uuid->data(), id.deviceUUID, VK_UUID_SIZE);
+    desc.external_memory = true;
+    auto ctx = gpu::Context::create(desc);
+    ASSERT_TRUE(ctx) << ctx.message();
+    EXPECT_EQ((*ctx)->info().name, shared.info().name);
+    EXPECT_TRUE((*ctx)->external_memory());
+    // An exportable image hands out a descriptor of its memory.
+    gpu::ImageDesc image_desc;
+    image_desc.extent = {4, 4, 4};
+    image_desc.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+    image_desc.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    image_desc.exportable = true;
+    auto image = gpu::Image::create(**ctx, image_desc);
+    ASSERT_TRUE(image) << image.message();
+    EXPECT_GE(image->allocation_size(), VkDeviceSize(4 * 4 * 4 * 8));
+    auto fd = image->export_fd();
+    ASSERT_TRUE(fd) << fd.message();
+    EXPECT_GE(*fd, 0);
+    close(*fd);
+    // Without external_memory an exportable image is refused, naming the extension.
+    EXPECT_FALSE(shared.external_memory());
+    auto refused = gpu::Image::create(gpu_context(), image_desc);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.message().find("VK_KHR_external_memory_fd"), std::string::npos);
+
+    desc.device_uuid->fill(0xee);
+    auto none = gpu::Context::create(desc);
+    ASSERT_FALSE(none);
+    EXPECT_NE(none.message().find("deviceUUID"), std::string::npos);
+    EXPECT_NE(none.message().find(shared.info().name), std::string::npos);
+}
+
 TEST(ContextCreation, validationMessagesAreCountedAndForwarded) {
     gpu::ContextDesc desc;
     desc.validation = true;

@@ -26,7 +26,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL HostVulkan::on_message(VkDebugUtilsMessageSeverit
     return VK_FALSE;
 }
 
-HostVulkan::HostVulkan() {
+HostVulkan::HostVulkan(bool external_memory) {
     loader_ = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
     if (!loader_) {
         error_ = "no libvulkan.so.1";
@@ -100,6 +100,11 @@ HostVulkan::HostVulkan() {
     device_info.pNext = &features;
     device_info.queueCreateInfoCount = 1;
     device_info.pQueueCreateInfos = &queue;
+    const char* external = VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME;
+    if (external_memory) {
+        device_info.enabledExtensionCount = 1;
+        device_info.ppEnabledExtensionNames = &external;
+    }
     if (load<PFN_vkCreateDevice>(gipa, instance, "vkCreateDevice")(host_.physical_device, &device_info,
                                                                    nullptr, &host_.device) != VK_SUCCESS) {
         error_ = "vkCreateDevice failed";
@@ -112,6 +117,10 @@ HostVulkan::HostVulkan() {
     pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT; // frame() re-records its buffers
     load_device<PFN_vkCreateCommandPool>(gipa, instance, host_.device,
                                          "vkCreateCommandPool")(host_.device, &pool, nullptr, &pool_);
+}
+
+PFN_vkVoidFunction HostVulkan::device_function(const char* name) const {
+    return load_device<PFN_vkVoidFunction>(host_.get_instance_proc_addr, host_.instance, host_.device, name);
 }
 
 bool HostVulkan::run(void (*record)(VkCommandBuffer, void*), void* user) {

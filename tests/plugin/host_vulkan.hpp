@@ -11,8 +11,9 @@ namespace gust::test {
 
 class HostVulkan {
   public:
-    /// Creates everything; ok() says whether it worked and error() why not.
-    HostVulkan();
+    /// Creates everything; ok() says whether it worked and error() why not. With `external_memory` the device
+    /// also enables VK_KHR_external_memory_fd, as an engine that imports gust's exported copies does.
+    explicit HostVulkan(bool external_memory = false);
     ~HostVulkan();
     HostVulkan(const HostVulkan&) = delete;
     HostVulkan& operator=(const HostVulkan&) = delete;
@@ -23,6 +24,8 @@ class HostVulkan {
     const HostDevice& device() const { return host_; }
     /// Validation-layer warnings and errors seen so far.
     int messages() const { return messages_.load(); }
+    /// A device function of the host's device, by name.
+    PFN_vkVoidFunction device_function(const char* name) const;
     /// Records `record` into a command buffer of the host's own pool, submits it and waits.
     bool run(void (*record)(VkCommandBuffer, void*), void* user);
     /// An engine's frame loop with `count` frames in flight (1..8): begin_frame() waits for the command

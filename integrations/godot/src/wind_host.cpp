@@ -160,7 +160,8 @@ WindSettings quality_settings(std::int32_t quality) {
     return s;
 }
 
-Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host) {
+Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host,
+                         std::uint32_t exported_copies, const std::uint8_t* device_uuid) {
     destroy();
     if (std::string message = validate(config); !message.empty()) {
         return {ErrorCode::InvalidArgument, message};
@@ -178,12 +179,28 @@ Outcome WindHost::create(const WindHostConfig& config, const Hooks& hooks, const
     desc.hooks = hooks;
     desc.host = host;
     desc.snapshot = true;
+    desc.exported_copies = exported_copies;
+    desc.device_uuid = device_uuid;
     if (Outcome o = System::create(desc, system_); !o) {
         return o;
     }
     config_ = config;
     steps_ = 0;
     return system_->set_ambient(config.ambient);
+}
+
+Outcome WindHost::export_wind_copy(std::uint32_t cascade, std::uint32_t slot, ExportedImage& out) {
+    if (!system_) {
+        return {ErrorCode::InvalidHandle, "no System"};
+    }
+    return system_->export_wind_copy(cascade, slot, out);
+}
+
+Outcome WindHost::copy_wind_textures(std::uint32_t slot) {
+    if (!system_) {
+        return {ErrorCode::InvalidHandle, "no System"};
+    }
+    return system_->copy_wind_textures(slot);
 }
 
 void WindHost::destroy() {

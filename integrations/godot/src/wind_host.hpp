@@ -80,8 +80,11 @@ Mat4 multiply(const Mat4& a, const Mat4& b);
 class WindHost {
   public:
     /// Creates the System with the snapshot on (Submission::OwnQueue): on `host`'s device when given (the
-    /// engine's own), else on a device of its own.
-    Outcome create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host = nullptr);
+    /// engine's own), else on a device of its own; there, with `exported_copies` > 0, on the physical device
+    /// `device_uuid` names (16 bytes) with that many exported copies of each cascade's wind texture
+    /// (SystemDesc::exported_copies), for an engine that imports them into its own device.
+    Outcome create(const WindHostConfig& config, const Hooks& hooks, const HostDevice* host = nullptr,
+                   std::uint32_t exported_copies = 0, const std::uint8_t* device_uuid = nullptr);
     /// Destroys the System and forgets every mesh and obstacle.
     void destroy();
     bool alive() const { return system_ != nullptr; }
@@ -125,6 +128,9 @@ class WindHost {
     Outcome read_field(WindField& field, std::uint32_t cascade = 0) const;
     /// Milliseconds the last step() took on the calling thread, wall clock.
     double last_step_ms() const { return last_step_ms_; }
+    /// System::export_wind_copy and System::copy_wind_textures (create's exported_copies).
+    Outcome export_wind_copy(std::uint32_t cascade, std::uint32_t slot, ExportedImage& out);
+    Outcome copy_wind_textures(std::uint32_t slot);
     /// Every cascade's wind image, the finest first (System::wind_textures); empty without a System.
     std::span<const WindTexture> wind_textures() const;
     /// The Vulkan device's name, or "" without a System.

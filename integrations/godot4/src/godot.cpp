@@ -285,6 +285,7 @@ void bind_methods() {
                                              hash::RenderingDevice_texture_create_from_extension};
     methods.free_rid = {"RenderingDevice", "free_rid", hash::RenderingDevice_free_rid};
     methods.set_texture_rd_rid = {"Texture3DRD", "set_texture_rd_rid", hash::Texture3DRD_set_texture_rd_rid};
+    methods.get_frames_drawn = {"Engine", "get_frames_drawn", hash::Engine_get_frames_drawn};
 }
 
 bool is_class(GDExtensionObjectPtr object, const char* class_name) {

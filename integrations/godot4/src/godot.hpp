@@ -200,7 +200,7 @@ struct Methods {
         get_bind_bone, get_bind_pose, get_physics_process_delta_time, get_surface_count, surface_get_arrays,
         reference, image_create_from_data, texture3d_create, texture3d_update, global_shader_parameter_add,
         global_shader_parameter_set, get_rendering_device, get_driver_resource, texture_create_from_extension,
-        free_rid, set_texture_rd_rid;
+        free_rid, set_texture_rd_rid, get_frames_drawn;
 };
 extern Methods methods;
 void bind_methods();

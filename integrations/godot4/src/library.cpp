@@ -14,6 +14,7 @@ void initialize(void*, GDExtensionInitializationLevel level) {
 
 void deinitialize(void*, GDExtensionInitializationLevel level) {
     if (level == GDEXTENSION_INITIALIZATION_SCENE) {
+        gust::godot4::release_godot_images();
         gust::godot4::unregister_classes();
     }
 }

@@ -14,6 +14,7 @@
 #include <mutex>
 #include <set>
 #include <shared_mutex>
+#include <unistd.h>
 
 namespace gust::godot4 {
 
@@ -37,8 +38,6 @@ constexpr std::int64_t kGlobalTransform = 23;      // RenderingServer.GLOBAL_VAR
 constexpr std::int64_t kDriverDevice = 0;          // RenderingDevice.DRIVER_RESOURCE_LOGICAL_DEVICE
 constexpr std::int64_t kDriverPhysicalDevice = 1;  // DRIVER_RESOURCE_PHYSICAL_DEVICE
 constexpr std::int64_t kDriverInstance = 2;        // DRIVER_RESOURCE_TOPMOST_OBJECT
-constexpr std::int64_t kDriverQueue = 3;           // DRIVER_RESOURCE_COMMAND_QUEUE
-constexpr std::int64_t kDriverQueueFamily = 4;     // DRIVER_RESOURCE_QUEUE_FAMILY
 constexpr std::int64_t kTextureType3D = 2;         // RenderingDevice.TEXTURE_TYPE_3D
 constexpr std::int64_t kFormatRgba16f = 96;        // RenderingDevice.DATA_FORMAT_R16G16B16A16_SFLOAT
 // TEXTURE_USAGE_SAMPLING_BIT | CAN_COPY_FROM_BIT | CAN_COPY_TO_BIT: what gust made its wind images with
@@ -46,6 +45,11 @@ constexpr std::int64_t kFormatRgba16f = 96;        // RenderingDevice.DATA_FORMA
 constexpr std::int64_t kSharedUsage = 1 | 128 | 256;
 constexpr const char* kTextureParameter = "gust_wind_texture";
 constexpr const char* kTransformParameter = "gust_world_to_texture";
+// Exported copies of each cascade's wind image (SystemDesc::exported_copies): Godot's RenderingDevice keeps
+// max(3, frame_queue_size) frames (rendering/rendering_device/vsync/frame_queue_size: 2 by default, 2 to 3),
+// waiting for a frame's fence before it records that frame again, so at most 3 frames in flight each sample
+// the copy published before they were drawn, and gust writes a fourth.
+constexpr std::uint32_t kCopies = 4;
 
 // GustEmitter3D.kind, in its enum's order.
 constexpr WindEmitterType kKinds[] = {WindEmitterType::Directional, WindEmitterType::Omni,
@@ -67,12 +71,30 @@ EmitterRegistry& emitter_registry() {
     return r;
 }
 
+// Godot's Vulkan device, as the node imports gust's exported copies into it.
+struct GodotVulkan {
+    VkDevice device = VK_NULL_HANDLE;
+    std::uint8_t uuid[VK_UUID_SIZE] = {}; // its physical device's deviceUUID, for gust's own device
+    PFN_vkCreateImage create_image = nullptr;
+    PFN_vkDestroyImage destroy_image = nullptr;
+    PFN_vkAllocateMemory allocate_memory = nullptr;
+    PFN_vkFreeMemory free_memory = nullptr;
+    PFN_vkBindImageMemory bind_image_memory = nullptr;
+    PFN_vkDeviceWaitIdle device_wait_idle = nullptr;
+};
+
+// One exported copy imported into Godot's device: gust's memory, Godot's VkImage on it, Godot's RD texture.
+struct ImportedCopy {
+    VkImage image = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    std::uint64_t rid = 0; // texture_create_from_extension
+};
+
 // One cascade's texture and where it lies.
 struct CascadeTexture {
-    Variant texture;                // ImageTexture3D, or Texture3DRD over gust's image
-    Transform3D to_texture{};       // world m to the texture's 0..1
-    VkImage image = VK_NULL_HANDLE; // shared: gust's image the RD texture wraps
-    std::uint64_t rid = 0;          // shared: the RD texture (texture_create_from_extension)
+    Variant texture;                  // ImageTexture3D, or Texture3DRD over the copy gust wrote last
+    Transform3D to_texture{};         // world m to the texture's 0..1
+    std::vector<ImportedCopy> copies; // shared: kCopies of them
 };
 
 // A skinned obstacle's gust mesh and what it was made from (a change of any uploads it again).
@@ -94,15 +116,18 @@ struct Wind final : Instance {
     Vec3 ambient{};
     bool in_tree = false;
     bool dirty = true; // the System must be (re)made from config at the next physics frame
-    // Run on Godot's device where it has one (share_godot_device): gust's submissions on Godot's queue race
-    // Godot's uploads from other threads, so a game that uploads from threads turns it off (docs/godot.md).
+    // Share the wind images with Godot's device where it has one (share_wind_image): gust runs on a device
+    // of its own and never submits on a queue of Godot's; Godot samples gust's copies (docs/godot.md).
     bool share = true;
     std::vector<CascadeTexture> textures;
     WindField field;
     std::uint64_t cpu_bytes_last_frame = 0;
-    // Godot's RenderingDevice while gust runs on Godot's own Vulkan device and shares its images (Forward+,
-    // Mobile); null on a device of gust's own (headless, Compatibility).
+    // Godot's RenderingDevice while Godot samples gust's wind images (Forward+, Mobile), and its device; null
+    // where the textures are filled through the CPU (headless, Compatibility, share_wind_image off).
     GDExtensionObjectPtr rd = nullptr;
+    GodotVulkan vk;
+    std::uint32_t slot = 0;                   // the exported copy the last step wrote
+    std::int64_t slot_frame = -1;             // Engine.get_frames_drawn() when it was chosen
     std::set<std::string> reported;           // errors already in the log, each printed once
     std::map<std::uint64_t, Skinned> skinned; // by MeshInstance3D
     // Skinned meshes are the node's own, not shared by Mesh resource: their keys have the top bit set, apart
@@ -203,10 +228,12 @@ void make_textures(Wind& w) {
     }
 }
 
-// Godot's own Vulkan instance, physical device, device and queue, when Godot renders through a
-// RenderingDevice and this is its render thread (get_driver_resource answers 0 anywhere else): gust then
-// runs there and shares its wind images. False (gust on a device of its own) otherwise.
-bool godot_device(Wind& w, HostDevice& host) {
+// Godot's Vulkan device when Godot renders through a RenderingDevice, this is its render thread
+// (get_driver_resource answers 0 anywhere else) and the device can import gust's memory (Godot 4.6 enables
+// VK_KHR_external_memory_fd where the driver has it): gust then runs on a device of its own on the same
+// physical device and Godot samples the copies it exports. False (the textures filled through the CPU)
+// otherwise, with the reason in `why` when Godot has a RenderingDevice.
+bool godot_vulkan(Wind& w, std::string& why) {
     const StringName server_name("RenderingServer");
     GDExtensionObjectPtr server = gd.global_get_singleton(server_name.ptr());
     GDExtensionObjectPtr rd = server ? methods.get_rendering_device(server).object() : nullptr;
@@ -221,56 +248,155 @@ bool godot_device(Wind& w, HostDevice& host) {
                 .as_int());
     };
     const std::uint64_t instance = resource(kDriverInstance), physical = resource(kDriverPhysicalDevice),
-                        device = resource(kDriverDevice), queue = resource(kDriverQueue);
-    if (!instance || !physical || !device || !queue) {
+                        device = resource(kDriverDevice);
+    if (!instance || !physical || !device) {
+        why = "Godot's RenderingDevice gave no Vulkan device (not its render thread?)";
         return false;
     }
     // Godot loaded Vulkan's loader already: the same one answers for its instance.
     void* loader = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_NOLOAD);
-    auto get_instance_proc_addr =
-        loader ? reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader, "vkGetInstanceProcAddr"))
-               : nullptr;
-    if (!get_instance_proc_addr) {
+    auto gipa = loader ? reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(loader, "vkGetInstanceProcAddr"))
+                       : nullptr;
+    if (!gipa) {
+        why = "no Vulkan loader in the process";
         return false;
     }
-    host.instance = reinterpret_cast<VkInstance>(instance);
-    host.physical_device = reinterpret_cast<VkPhysicalDevice>(physical);
-    host.device = reinterpret_cast<VkDevice>(device);
-    host.queue_family = std::uint32_t(resource(kDriverQueueFamily));
-    host.get_instance_proc_addr = get_instance_proc_addr;
-    // gust takes the queue by its index in the family: find Godot's.
-    auto get_device_proc_addr = reinterpret_cast<PFN_vkGetDeviceProcAddr>(
-        get_instance_proc_addr(host.instance, "vkGetDeviceProcAddr"));
-    auto get_queue =
-        reinterpret_cast<PFN_vkGetDeviceQueue>(get_device_proc_addr(host.device, "vkGetDeviceQueue"));
-    auto queue_families = reinterpret_cast<PFN_vkGetPhysicalDeviceQueueFamilyProperties>(
-        get_instance_proc_addr(host.instance, "vkGetPhysicalDeviceQueueFamilyProperties"));
-    std::uint32_t count = 0;
-    queue_families(host.physical_device, &count, nullptr);
-    std::vector<VkQueueFamilyProperties> families(count);
-    queue_families(host.physical_device, &count, families.data());
-    if (host.queue_family >= count) {
+    const auto vk_instance = reinterpret_cast<VkInstance>(instance);
+    auto gdpa = reinterpret_cast<PFN_vkGetDeviceProcAddr>(gipa(vk_instance, "vkGetDeviceProcAddr"));
+    auto properties2 = reinterpret_cast<PFN_vkGetPhysicalDeviceProperties2>(
+        gipa(vk_instance, "vkGetPhysicalDeviceProperties2"));
+    GodotVulkan vk;
+    vk.device = reinterpret_cast<VkDevice>(device);
+    // A device returns null for the commands of an extension it was created without.
+    if (!gdpa || !properties2 || !gdpa(vk.device, "vkGetMemoryFdKHR")) {
+        why = "Godot's Vulkan device lacks VK_KHR_external_memory_fd";
         return false;
     }
-    for (std::uint32_t i = 0; i < families[host.queue_family].queueCount; ++i) {
-        VkQueue q = VK_NULL_HANDLE;
-        get_queue(host.device, host.queue_family, i, &q);
-        if (reinterpret_cast<std::uint64_t>(q) == queue) {
-            host.queue_index = i;
-            w.rd = rd;
-            return true;
+    vk.create_image = reinterpret_cast<PFN_vkCreateImage>(gdpa(vk.device, "vkCreateImage"));
+    vk.destroy_image = reinterpret_cast<PFN_vkDestroyImage>(gdpa(vk.device, "vkDestroyImage"));
+    vk.allocate_memory = reinterpret_cast<PFN_vkAllocateMemory>(gdpa(vk.device, "vkAllocateMemory"));
+    vk.free_memory = reinterpret_cast<PFN_vkFreeMemory>(gdpa(vk.device, "vkFreeMemory"));
+    vk.bind_image_memory = reinterpret_cast<PFN_vkBindImageMemory>(gdpa(vk.device, "vkBindImageMemory"));
+    vk.device_wait_idle = reinterpret_cast<PFN_vkDeviceWaitIdle>(gdpa(vk.device, "vkDeviceWaitIdle"));
+    VkPhysicalDeviceIDProperties id{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES};
+    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &id};
+    properties2(reinterpret_cast<VkPhysicalDevice>(physical), &p2);
+    std::memcpy(vk.uuid, id.deviceUUID, VK_UUID_SIZE);
+    w.vk = vk;
+    w.rd = rd;
+    return true;
+}
+
+// Godot's images over gust's exported copies, kept until Godot's frames that may sample them have completed:
+// Godot destroys its views of them (free_rid) only when it reuses the frame that last used them.
+struct Retired {
+    GodotVulkan vk;
+    ImportedCopy copy;
+    std::int64_t frame = 0; // Engine.get_frames_drawn() when retired
+};
+std::vector<Retired> retired; // the main thread's
+
+std::int64_t frames_drawn() {
+    const StringName engine_name("Engine");
+    GDExtensionObjectPtr engine = gd.global_get_singleton(engine_name.ptr());
+    return engine ? methods.get_frames_drawn(engine).as_int() : 0;
+}
+
+void destroy_copy(const GodotVulkan& vk, const ImportedCopy& c) {
+    if (c.image) {
+        vk.destroy_image(vk.device, c.image, nullptr);
+    }
+    if (c.memory) {
+        vk.free_memory(vk.device, c.memory, nullptr);
+    }
+}
+
+// Destroys the retired images Godot's frames are done with: kCopies frames drawn since, more than Godot keeps
+// in flight.
+void destroy_retired() {
+    const std::int64_t now = frames_drawn();
+    std::erase_if(retired, [&](const Retired& r) {
+        if (now - r.frame < std::int64_t(kCopies)) {
+            return false;
+        }
+        destroy_copy(r.vk, r.copy);
+        return true;
+    });
+}
+
+// Imports cascade k's exported copies into Godot's device and wraps each as an RD texture. False with the
+// reason in `why`; what was imported stays in w.textures for release_shared.
+bool import_copies(Wind& w, std::size_t k, std::string& why) {
+    CascadeTexture& t = w.textures[k];
+    for (std::uint32_t s = 0; s < kCopies; ++s) {
+        ExportedImage e;
+        if (Outcome o = w.host.export_wind_copy(std::uint32_t(k), s, e); !o) {
+            why = o.message();
+            return false;
+        }
+        ImportedCopy& c = t.copies.emplace_back();
+        VkExternalMemoryImageCreateInfo external{VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
+        external.handleTypes = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+        VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, &external};
+        info.imageType = VK_IMAGE_TYPE_3D;
+        info.format = e.format;
+        info.extent = {e.extent[0], e.extent[1], e.extent[2]};
+        info.mipLevels = 1;
+        info.arrayLayers = 1;
+        info.samples = VK_SAMPLE_COUNT_1_BIT;
+        info.tiling = VK_IMAGE_TILING_OPTIMAL;
+        info.usage = e.usage;
+        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        if (VkResult r = w.vk.create_image(w.vk.device, &info, nullptr, &c.image); r != VK_SUCCESS) {
+            close(e.fd);
+            why = "vkCreateImage on Godot's device failed (" + std::to_string(int(r)) + ")";
+            return false;
+        }
+        VkMemoryDedicatedAllocateInfo dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO};
+        dedicated.image = c.image;
+        VkImportMemoryFdInfoKHR import{VK_STRUCTURE_TYPE_IMPORT_MEMORY_FD_INFO_KHR, &dedicated};
+        import.handleType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+        import.fd = e.fd;
+        VkMemoryAllocateInfo allocation{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &import};
+        allocation.allocationSize = e.allocation_size;
+        allocation.memoryTypeIndex = e.memory_type_index;
+        if (VkResult r = w.vk.allocate_memory(w.vk.device, &allocation, nullptr, &c.memory);
+            r != VK_SUCCESS) {
+            close(e.fd); // a failed import leaves the descriptor the caller's
+            why = "importing gust's memory into Godot's device failed (" + std::to_string(int(r)) + ")";
+            return false;
+        }
+        if (VkResult r = w.vk.bind_image_memory(w.vk.device, c.image, c.memory, 0); r != VK_SUCCESS) {
+            why = "vkBindImageMemory on Godot's device failed (" + std::to_string(int(r)) + ")";
+            return false;
+        }
+        const Variant rid = methods.texture_create_from_extension(
+            w.rd, {Variant::from(kTextureType3D), Variant::from(kFormatRgba16f),
+                   Variant::from(std::int64_t(0)), Variant::from(kSharedUsage),
+                   Variant::from(std::int64_t(reinterpret_cast<std::uintptr_t>(c.image))),
+                   Variant::from(std::int64_t(e.extent[0])), Variant::from(std::int64_t(e.extent[1])),
+                   Variant::from(std::int64_t(e.extent[2])), Variant::from(std::int64_t(1)),
+                   Variant::from(std::int64_t(1))});
+        rid.to(GDEXTENSION_VARIANT_TYPE_RID, &c.rid);
+        if (!c.rid) {
+            why = "texture_create_from_extension refused gust's image";
+            return false;
         }
     }
-    return false;
+    // One Texture3DRD a cascade for the node's life in the tree: materials holding it see each new copy.
+    const StringName type("Texture3DRD");
+    t.texture = Variant::from(gd.construct_object(type.ptr()));
+    return true;
 }
 
 // Whether the global shader parameters were declared in this process (publish_globals).
 bool globals_declared = false;
 
-// Frees the RD textures over gust's images (the images stay gust's) before the System goes. Materials may
-// still hold the finest one through the global shader parameter, and would draw with a freed image: the
-// parameter is first pointed at a texture of one texel of the ambient wind (Godot's placeholder for an empty
-// Texture3DRD is 2D, which a sampler3D must not read).
+// Frees the RD textures over gust's copies and retires Godot's images of them (destroy_retired) before the
+// System goes. Materials may still hold the finest one through the global shader parameter, and would draw
+// with a freed image: the parameter is first pointed at a texture of one texel of the ambient wind (Godot's
+// placeholder for an empty Texture3DRD is 2D, which a sampler3D must not read).
 void release_shared(Wind& w) {
     if (!w.rd || w.textures.empty()) {
         w.textures.clear();
@@ -288,51 +414,44 @@ void release_shared(Wind& w) {
         methods.global_shader_parameter_set(
             server, {Variant::from(StringName(kTextureParameter)), w.textures.back().texture});
     }
+    const std::int64_t frame = frames_drawn();
     for (CascadeTexture& t : w.textures) {
-        if (t.rid) {
-            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.rid)});
+        for (const ImportedCopy& c : t.copies) {
+            if (c.rid) {
+                methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &c.rid)});
+            }
+            retired.push_back({w.vk, c, frame});
         }
     }
     w.textures.clear();
 }
 
-// Wraps each cascade's wind image as a Texture3DRD (once, and again if gust replaced the image) and takes
-// its world-to-texture transform. No byte passes through the CPU.
-void share_textures(Wind& w) {
+// Points each cascade's Texture3DRD at a copy of the step just taken. gust writes a copy no frame of Godot's
+// in flight samples: the one it wrote last while no frame was drawn since, else the next of kCopies (Godot
+// keeps fewer frames in flight). gust's copy waits for its fence, so it is complete before Godot records a
+// frame that samples it; Godot's device has no semaphore of gust's to wait on, so the CPU orders the two.
+Outcome share_textures(Wind& w) {
+    const std::int64_t frame = frames_drawn();
+    if (frame != w.slot_frame) {
+        w.slot = (w.slot + 1) % kCopies;
+        w.slot_frame = frame;
+    }
+    if (Outcome o = w.host.copy_wind_textures(w.slot); !o) {
+        return o;
+    }
     const std::span<const WindTexture> images = w.host.wind_textures();
-    w.textures.resize(images.size());
-    for (std::size_t k = 0; k < images.size(); ++k) {
-        const WindTexture& image = images[k];
+    for (std::size_t k = 0; k < images.size() && k < w.textures.size(); ++k) {
         CascadeTexture& t = w.textures[k];
         for (int r = 0; r < 3; ++r) {
             for (int c = 0; c < 3; ++c) {
-                t.to_texture.rows[r][c] = image.world_to_texture.m[4 * c + r];
+                t.to_texture.rows[r][c] = images[k].world_to_texture.m[4 * c + r];
             }
-            t.to_texture.origin[r] = image.world_to_texture.m[12 + r];
+            t.to_texture.origin[r] = images[k].world_to_texture.m[12 + r];
         }
-        if (t.image == image.image) {
-            continue;
-        }
-        const std::uint64_t old = t.rid;
-        const Variant rid = methods.texture_create_from_extension(
-            w.rd, {Variant::from(kTextureType3D), Variant::from(kFormatRgba16f),
-                   Variant::from(std::int64_t(0)), Variant::from(kSharedUsage),
-                   Variant::from(std::int64_t(reinterpret_cast<std::uintptr_t>(image.image))),
-                   Variant::from(std::int64_t(image.extent[0])), Variant::from(std::int64_t(image.extent[1])),
-                   Variant::from(std::int64_t(image.extent[2])), Variant::from(std::int64_t(1)),
-                   Variant::from(std::int64_t(1))});
-        rid.to(GDEXTENSION_VARIANT_TYPE_RID, &t.rid);
-        // One Texture3DRD a cascade for the node's life in the tree: materials holding it see the new image.
-        if (t.texture.type() == GDEXTENSION_VARIANT_TYPE_NIL) {
-            const StringName type("Texture3DRD");
-            t.texture = Variant::from(gd.construct_object(type.ptr()));
-        }
-        methods.set_texture_rd_rid(t.texture.object(), {rid});
-        if (old) {
-            methods.free_rid(w.rd, {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &old)});
-        }
-        t.image = image.image;
+        methods.set_texture_rd_rid(t.texture.object(),
+                                   {Variant::from(GDEXTENSION_VARIANT_TYPE_RID, &t.copies[w.slot].rid)});
     }
+    return {};
 }
 
 // The finest cascade as global shader parameters, so any material can read it. The extension declares them
@@ -671,16 +790,27 @@ void tick(Wind& w) {
                 GUST_GODOT_ERROR(std::string(kWind) + ": " + message);
             }
         };
-        HostDevice host;
-        if (w.share && godot_device(w, host)) {
-            if (Outcome o = w.host.create(w.config, hooks, &host); !o) {
-                // Godot's device lacks what gust needs (a Vulkan 1.2 device without bufferDeviceAddress,
-                // say): gust runs on its own, the textures filled from the snapshot (docs/godot.md).
-                GUST_GODOT_WARNING(std::string(kWind) + ": gust cannot run on Godot's Vulkan device (" +
-                                   o.message() +
-                                   "): it runs on its own, the wind textures filled through the CPU");
+        std::string why;
+        if (w.share && godot_vulkan(w, why)) {
+            // gust on a device of its own on Godot's physical device, never on a queue of Godot's: Godot's
+            // transfer workers submit on its queues from other threads under a lock extensions cannot take.
+            if (Outcome o = w.host.create(w.config, hooks, nullptr, kCopies, w.vk.uuid); !o) {
+                why = o.message();
                 w.rd = nullptr;
+            } else {
+                w.textures.resize(w.config.cascades);
+                for (std::size_t k = 0; k < w.textures.size() && w.rd; ++k) {
+                    if (!import_copies(w, k, why)) {
+                        release_shared(w);
+                        w.host.destroy();
+                        w.rd = nullptr;
+                    }
+                }
             }
+        }
+        if (!w.rd && !why.empty()) {
+            GUST_GODOT_WARNING(std::string(kWind) + ": cannot share the wind images with Godot's device (" +
+                               why + "): the wind textures are filled through the CPU");
         }
         if (!w.rd) {
             if (Outcome o = w.host.create(w.config, hooks); !o) {
@@ -692,8 +822,11 @@ void tick(Wind& w) {
         w.reported.clear();
         if (!w.rd) {
             make_textures(w);
+        } else if (Outcome o = share_textures(w); !o) {
+            report_once(w, "wind texture: " + o.message());
         }
     }
+    destroy_retired();
     if (!w.host.alive()) {
         return;
     }
@@ -709,7 +842,10 @@ void tick(Wind& w) {
         return;
     }
     if (w.rd) {
-        share_textures(w);
+        if (Outcome o = share_textures(w); !o) {
+            report_once(w, "wind texture: " + o.message());
+            return;
+        }
     } else {
         for (std::uint32_t k = 0; k < w.config.cascades; ++k) {
             if (Outcome o = w.host.read_field(w.field, k); !o) {
@@ -815,7 +951,7 @@ Variant set_ambient_wind(Instance& i, const Variant* args) {
 Variant get_ambient_wind(Instance& i, const Variant*) {
     return Variant::from(wind(i).config.ambient);
 }
-Variant set_share_godot_device(Instance& i, const Variant* args) {
+Variant set_share_wind_image(Instance& i, const Variant* args) {
     Wind& w = wind(i);
     GDExtensionBool v = false;
     args[0].to(GDEXTENSION_VARIANT_TYPE_BOOL, &v);
@@ -825,7 +961,7 @@ Variant set_share_godot_device(Instance& i, const Variant* args) {
     }
     return {};
 }
-Variant get_share_godot_device(Instance& i, const Variant*) {
+Variant get_share_wind_image(Instance& i, const Variant*) {
     return Variant::from(wind(i).share);
 }
 Variant set_obstacle_group(Instance& i, const Variant* args) {
@@ -879,7 +1015,7 @@ Variant get_stats(Instance& i, const Variant*) {
     d.set("steps", Variant::from(std::int64_t(w.host.steps())));
     d.set("step_ms", Variant::from(w.host.last_step_ms()));
     d.set("texture_bytes_through_cpu", Variant::from(std::int64_t(w.cpu_bytes_last_frame)));
-    d.set("shares_godot_device", Variant::from(w.rd != nullptr));
+    d.set("shares_wind_image", Variant::from(w.rd != nullptr));
     const std::string device = w.host.device_name();
     const String name(device.c_str());
     d.set("device", Variant::from(GDEXTENSION_VARIANT_TYPE_STRING, name.ptr()));
@@ -952,6 +1088,18 @@ void property(const char* cls, Slot slot, MethodBody setter, MethodBody getter, 
 
 } // namespace
 
+void release_godot_images() {
+    // Godot's frames have ended (the extension is deinitialized after the main loop, before Godot's
+    // RenderingDevice goes), and nothing else submits now: wait for Godot's device once, then destroy.
+    if (!retired.empty()) {
+        retired.front().vk.device_wait_idle(retired.front().vk.device);
+    }
+    for (const Retired& r : retired) {
+        destroy_copy(r.vk, r.copy);
+    }
+    retired.clear();
+}
+
 void register_nodes() {
     register_class({kWind, "Node3D", []() -> Instance* { return new Wind(); }, wind_notification});
     property(kWind, {"cells", GDEXTENSION_VARIANT_TYPE_VECTOR3I}, set_cells, get_cells);
@@ -959,8 +1107,8 @@ void register_nodes() {
     property(kWind, {"cascades", GDEXTENSION_VARIANT_TYPE_INT}, set_cascades, get_cascades);
     property(kWind, {"ratio", GDEXTENSION_VARIANT_TYPE_INT}, set_ratio, get_ratio);
     property(kWind, {"ambient_wind", GDEXTENSION_VARIANT_TYPE_VECTOR3}, set_ambient_wind, get_ambient_wind);
-    property(kWind, {"share_godot_device", GDEXTENSION_VARIANT_TYPE_BOOL}, set_share_godot_device,
-             get_share_godot_device);
+    property(kWind, {"share_wind_image", GDEXTENSION_VARIANT_TYPE_BOOL}, set_share_wind_image,
+             get_share_wind_image);
     property(kWind, {"obstacle_group", GDEXTENSION_VARIANT_TYPE_STRING_NAME}, set_obstacle_group,
              get_obstacle_group);
     const Slot points{"points", GDEXTENSION_VARIANT_TYPE_PACKED_VECTOR3_ARRAY};

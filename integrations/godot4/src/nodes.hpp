@@ -6,5 +6,8 @@ namespace gust::godot4 {
 
 /// Registers GustWind3D and GustEmitter3D with ClassDB (at the scene level's initialization).
 void register_nodes();
+/// Destroys Godot's images over gust's exported wind copies that are still kept for Godot's frames in
+/// flight, after waiting for Godot's device (at the scene level's deinitialization, after the main loop).
+void release_godot_images();
 
 } // namespace gust::godot4

@@ -37,7 +37,7 @@ extern "C" {
 /// Major version of this header (gust::kVersionMajor).
 #define GUST_VERSION_MAJOR 0
 /// Minor version of this header (gust::kVersionMinor).
-#define GUST_VERSION_MINOR 9
+#define GUST_VERSION_MINOR 10
 /// Patch version of this header (gust::kVersionPatch).
 #define GUST_VERSION_PATCH 0
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it; equal to gust::kHeaderVersion.
@@ -209,7 +209,23 @@ typedef struct gust_system_desc {
     /// Publish each step's wind to CPU memory for gust_system_sample (gust::SystemDesc::snapshot: 8 bytes a
     /// cell per frame in flight plus 48 bytes a cell).
     bool snapshot;
+    /// Own device: the physical device whose deviceUUID holds these 16 bytes (gust::SystemDesc::device_uuid);
+    /// NULL: `device`, then GUST_DEVICE, then the best.
+    const uint8_t* device_uuid;
+    /// Own device, 0..8: exported copies of each cascade's wind texture for another VkDevice
+    /// (gust::SystemDesc::exported_copies; gust_system_export_wind_copy, gust_system_copy_wind_textures).
+    uint32_t exported_copies;
 } gust_system_desc;
+
+/// How another VkDevice imports one exported wind copy (gust::ExportedImage has the rules).
+typedef struct gust_exported_image {
+    int fd; ///< the caller's: a successful import takes it over, otherwise close() it
+    VkDeviceSize allocation_size;
+    uint32_t memory_type_index;
+    VkFormat format;
+    uint32_t extent[3];
+    VkImageUsageFlags usage;
+} gust_exported_image;
 
 /// Joints and weights of a skinned mesh, four influences a vertex as glTF's JOINTS_0 and WEIGHTS_0
 /// (gust::MeshSkin); the mesh's positions are its bind pose, which gust_system_set_bones' palette moves.
@@ -507,6 +523,15 @@ gust_result gust_system_stats_pass(gust_system system, uint32_t index, const cha
 /// passes (gust_system_stats_pass) are those dispatches, named after their pipelines
 /// (gust::System::set_dispatch_timing). Off by default.
 gust_result gust_system_set_dispatch_timing(gust_system system, bool on);
+
+/// A new file descriptor for the memory of cascade `cascade`'s exported wind copy `slot`, and how to import
+/// it (gust::System::export_wind_copy).
+gust_result gust_system_export_wind_copy(gust_system system, uint32_t cascade, uint32_t slot,
+                                         gust_exported_image* image);
+
+/// Copies every cascade's wind texture into its exported copy `slot` and waits, leaving the copies released
+/// to VK_QUEUE_FAMILY_EXTERNAL in SHADER_READ_ONLY_OPTIMAL (gust::System::copy_wind_textures).
+gust_result gust_system_copy_wind_textures(gust_system system, uint32_t slot);
 
 /// `*origin` receives the domain's min corner (world m) after the last step.
 gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);

@@ -34,7 +34,7 @@ namespace gust {
 
 /// The header's version, passed in SystemDesc so a library built from another version refuses to run.
 inline constexpr std::uint32_t kVersionMajor = 0;
-inline constexpr std::uint32_t kVersionMinor = 9;
+inline constexpr std::uint32_t kVersionMinor = 10;
 inline constexpr std::uint32_t kVersionPatch = 0;
 /// major << 22 | minor << 12 | patch, as VK_MAKE_API_VERSION packs it.
 inline constexpr std::uint32_t kHeaderVersion = (kVersionMajor << 22) | (kVersionMinor << 12) | kVersionPatch;
@@ -231,6 +231,32 @@ struct SystemDesc {
     /// OwnQueue, 14.7 MB at 64^3, 940 MB at 256^3. A step copies the texels (8 bytes a cell) on the GPU and
     /// converts them to floats on the CPU when the frame is collected.
     bool snapshot = false;
+    /// Own device: the physical device whose VkPhysicalDeviceIDProperties::deviceUUID holds these 16 bytes
+    /// (read during create(); null: `device`, then GUST_DEVICE, then the best). A host engine that imports
+    /// gust's exported copies (below) passes its own device's, since only the same physical device can
+    /// import them.
+    const std::uint8_t* device_uuid = nullptr;
+    /// Own device, 0..8: copies of each cascade's wind texture in memory another VkDevice on the same
+    /// physical device imports (VK_KHR_external_memory_fd, which gust's device then needs), so that a host
+    /// samples gust's wind with no copy through the CPU and gust never submits on a queue of the host's.
+    /// copy_wind_textures writes one of them, export_wind_copy hands out its memory (docs/api.md
+    /// "Sharing the wind image with another device"). 0: none.
+    std::uint32_t exported_copies = 0;
+};
+
+/// How to import one of the wind copies a System exports (System::export_wind_copy) into another VkDevice
+/// on the same physical device: a VkImage of exactly this 3D image (1 mip level, 1 layer, optimal tiling,
+/// exclusive sharing) with VkExternalMemoryImageCreateInfo{VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT},
+/// bound at offset 0 to allocation_size bytes of memory type memory_type_index allocated with
+/// VkImportMemoryFdInfoKHR{fd} and VkMemoryDedicatedAllocateInfo{that image} (gust's allocation is
+/// dedicated, and an import must match it).
+struct ExportedImage {
+    int fd = -1; ///< the caller's: a successful import takes it over, otherwise close() it
+    VkDeviceSize allocation_size = 0;
+    std::uint32_t memory_type_index = 0;
+    VkFormat format = VK_FORMAT_R16G16B16A16_SFLOAT;
+    std::uint32_t extent[3] = {};
+    VkImageUsageFlags usage = 0;
 };
 
 /// Ids of meshes and instances: 0 is never valid; a destroyed id is never reused.
@@ -527,6 +553,17 @@ class System {
     /// world_to_texture follows its grid. include/gust/gust_wind.glsl picks and blends them in a host's
     /// shaders.
     std::span<const WindTexture> wind_textures() const;
+    /// Writer call (SystemDesc::exported_copies): a new file descriptor for the memory of cascade
+    /// `cascade`'s copy `slot` (< exported_copies) and what importing it takes. The memory lives as long
+    /// as gust's System or an import of it, whichever is longer.
+    Outcome export_wind_copy(std::uint32_t cascade, std::uint32_t slot, ExportedImage& out);
+    /// Writer call (SystemDesc::exported_copies): copies every cascade's wind texture, as the last step
+    /// left it, into its copy `slot`, on gust's queue, and waits for it. The copies are left in
+    /// VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL and released to VK_QUEUE_FAMILY_EXTERNAL. Another device
+    /// has no semaphore of gust's to wait on, so the host orders the two on the CPU: it stops using copy
+    /// `slot` (its frames that read it have completed) before this call and samples it only after it
+    /// returns; gust's earlier contents of the slot are discarded (docs/api.md).
+    Outcome copy_wind_textures(std::uint32_t slot);
     /// Writer call (read_stats from other threads): the last step's statistics (HostCommands: those of the
     /// frame recorded frames_in_flight steps ago).
     const FrameStats& stats() const;

@@ -3,6 +3,7 @@
 // the host's entry points (Jolt-style tiered backends).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -12,6 +13,7 @@
 #include <memory>
 #include <memory_resource>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -45,6 +47,12 @@ struct ContextDesc {
     /// keeps the cache in memory only. Tools that run once per call (gust voxelize) create their
     /// pipelines from it instead of compiling them.
     std::string pipeline_cache;
+    /// When set, the device whose VkPhysicalDeviceIDProperties::deviceUUID equals it (before `device` and
+    /// GUST_DEVICE): the physical device of another VkDevice that is to import gust's memory.
+    std::optional<std::array<std::uint8_t, VK_UUID_SIZE>> device_uuid;
+    /// Enable VK_KHR_external_memory_fd, so images created ImageDesc::exportable can hand their memory to
+    /// another VkDevice on the same physical device (creation fails when the device lacks it).
+    bool external_memory = false;
 };
 
 /// What gust needs from a device, for a host that creates the VkDevice gust adopts. Names are static
@@ -213,6 +221,9 @@ class Context : public HostObject {
     /// Whether ContextDesc::pipeline_cache named a file that held this device's cache, given to Vulkan.
     bool pipeline_cache_loaded() const { return pipeline_cache_loaded_; }
 
+    /// Whether VK_KHR_external_memory_fd is on (ContextDesc::external_memory): exportable images work.
+    bool external_memory() const { return vk_.vkGetMemoryFdKHR != nullptr; }
+
     /// Whether VK_EXT_debug_utils is on, so that names and labels reach capture tools.
     bool debug_utils() const { return vk_.vkSetDebugUtilsObjectNameEXT != nullptr; }
     /// Names a Vulkan object of this device for capture tools (RenderDoc, Nsight): `handle` is the object
@@ -282,8 +293,9 @@ class Context : public HostObject {
     void abandon_one_time(VkCommandBuffer cmd);
     Status init(const ContextDesc& desc);
     Status init_adopted(const HostDevice& host);
-    Status pick_device(std::string_view override_spec);
-    Status create_device();
+    Status pick_device(std::string_view override_spec,
+                       const std::optional<std::array<std::uint8_t, VK_UUID_SIZE>>& uuid);
+    Status create_device(bool external_memory);
     Status finish_device(std::uint32_t queue_index);
     /// The pipeline cache, from ContextDesc::pipeline_cache when that file holds the cache of the device
     /// `props` describes.

@@ -22,6 +22,7 @@ namespace gust::gpu {
     X(vkEnumeratePhysicalDevices)                                                                            \
     X(vkGetPhysicalDeviceProperties)                                                                         \
     X(vkGetPhysicalDeviceProperties2)                                                                        \
+    X(vkGetPhysicalDeviceImageFormatProperties2)                                                             \
     X(vkGetPhysicalDeviceFeatures2)                                                                          \
     X(vkGetPhysicalDeviceQueueFamilyProperties)                                                              \
     X(vkGetPhysicalDeviceMemoryProperties)                                                                   \
@@ -36,6 +37,9 @@ namespace gust::gpu {
     X(vkSetDebugUtilsObjectNameEXT)                                                                          \
     X(vkCmdBeginDebugUtilsLabelEXT)                                                                          \
     X(vkCmdEndDebugUtilsLabelEXT)
+
+// Optional device entry points (VK_KHR_external_memory_fd, ContextDesc::external_memory); null when off.
+#define GUST_VK_EXTERNAL_MEMORY_FUNCTIONS(X) X(vkGetMemoryFdKHR)
 
 // Entry points loaded from vkGetDeviceProcAddr(device, ...).
 #define GUST_VK_DEVICE_FUNCTIONS(X)                                                                          \
@@ -115,6 +119,7 @@ struct Dispatch {
     GUST_VK_INSTANCE_FUNCTIONS(GUST_VK_DECLARE)
     GUST_VK_DEBUG_FUNCTIONS(GUST_VK_DECLARE)
     GUST_VK_DEVICE_FUNCTIONS(GUST_VK_DECLARE)
+    GUST_VK_EXTERNAL_MEMORY_FUNCTIONS(GUST_VK_DECLARE)
 };
 
 #undef GUST_VK_DECLARE
