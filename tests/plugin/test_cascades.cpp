@@ -1,7 +1,8 @@
 // A System of nested cascades (WindDomain::cascades, docs/solver.md "Cascades"): bad nests are refused, a
 // query outside the finest cascade answers from a coarser one, the snapshot, the textures and the OpenVDB
 // file hold every cascade, a ridge beyond the finest cascade shelters the player as one fine grid covering
-// both does, and a wall in any cascade of any nest shelters the player as one grid of its cascade's cells does.
+// both does, and a wall in any cascade of any nest shelters the player as one grid of its cascade's cells
+// does.
 #include "host_vulkan.hpp"
 #include "system_test_support.hpp"
 
@@ -682,6 +683,21 @@ float mean_wind_x(const WindDomain& domain, const std::vector<Box>& walls, float
     return float(sum / double(samples));
 }
 
+/// A nest of `cascades` of `ratio` whose finest cascade has 32x16x16 cells of `cell_size` m (2 voxels a cell
+/// along each axis), centred on `focus`: the nests of the shelter tests below.
+WindDomain shelter_nest(float cell_size, Vec3 focus, std::uint32_t cascades, std::uint32_t ratio) {
+    WindDomain d;
+    d.cells[0] = 32;
+    d.cells[1] = 16;
+    d.cells[2] = 16;
+    d.cell_size = cell_size;
+    d.voxels_per_cell = 2;
+    d.focus = focus;
+    d.cascades = cascades;
+    d.ratio = ratio;
+    return d;
+}
+
 /// The mean wind along x over a 16x16 m patch 8 m above the ground around the player, over the second half of
 /// `frames` frames (every eighth) of an 8 m/s wind, with a 32 m ridge 100 m upwind when `ridge` is set.
 float wind_at_player(const WindDomain& domain, bool ridge, int frames) {
@@ -697,15 +713,7 @@ float wind_at_player(const WindDomain& domain, bool ridge, int frames) {
 TEST(Cascades, aRidgeBeyondTheFinestCascadeSheltersThePlayerAsOneFineGridDoes) {
     // The nest: 32x16x16 cells of 4 m (128 m along the wind) in one of 8 m (256 m), so the ridge, 100 m
     // upwind, lies in the coarser cascade only. The reference: one grid of 4 m cells holding both.
-    WindDomain nest;
-    nest.cells[0] = 32;
-    nest.cells[1] = 16;
-    nest.cells[2] = 16;
-    nest.cell_size = 4.0f;
-    nest.voxels_per_cell = 2;
-    nest.focus = {0.0f, 24.0f, 0.0f};
-    nest.cascades = 2;
-    nest.ratio = 2;
+    const WindDomain nest = shelter_nest(4.0f, {0.0f, 24.0f, 0.0f}, 2, 2);
     WindDomain fine = nest;
     fine.cascades = 1;
     fine.cells[0] = 56;
@@ -753,15 +761,7 @@ class ShelterAcrossScales : public ::testing::TestWithParam<Placement> {};
 // coarse"). Covers a wall in the finest, a middle and the coarsest cascade, ratio 2 and 4, 2 to 4 cascades.
 TEST_P(ShelterAcrossScales, theNestsWindAtThePlayerIsWithinAFifthOfOneGridOfTheWallsCascade) {
     const Placement p = GetParam();
-    WindDomain nest;
-    nest.cells[0] = 32;
-    nest.cells[1] = 16;
-    nest.cells[2] = 16;
-    nest.cell_size = 1.0f;
-    nest.voxels_per_cell = 2;
-    nest.focus = {0.0f, 7.0f, 0.0f};
-    nest.cascades = p.cascades;
-    nest.ratio = p.ratio;
+    const WindDomain nest = shelter_nest(1.0f, {0.0f, 7.0f, 0.0f}, p.cascades, p.ratio);
     const float h = std::pow(float(p.ratio), float(p.obstacle));
     WindDomain alone = nest;
     alone.cascades = 1;
