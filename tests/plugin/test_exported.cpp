@@ -86,17 +86,8 @@ TEST(ExportedCopies, anotherDeviceReadsTheWindGustComputed) {
 
     // The engine imports the copy: an image of the same parameters bound to the imported memory.
     VkDevice device = hd.device;
-    VkExternalMemoryImageCreateInfo external{VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
-    external.handleTypes = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
-    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, &external};
-    info.imageType = VK_IMAGE_TYPE_3D;
-    info.format = e.format;
-    info.extent = {e.extent[0], e.extent[1], e.extent[2]};
-    info.mipLevels = 1;
-    info.arrayLayers = 1;
-    info.samples = VK_SAMPLE_COUNT_1_BIT;
-    info.tiling = VK_IMAGE_TILING_OPTIMAL;
-    info.usage = e.usage;
+    VkExternalMemoryImageCreateInfo external;
+    const VkImageCreateInfo info = import_image_info(e, external);
     VkImage image = VK_NULL_HANDLE;
     ASSERT_EQ(fn<PFN_vkCreateImage>(host, "vkCreateImage")(device, &info, nullptr, &image), VK_SUCCESS);
     VkMemoryDedicatedAllocateInfo dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO};

@@ -335,19 +335,8 @@ bool import_copies(Wind& w, std::size_t k, std::string& why) {
             return false;
         }
         ImportedCopy& c = t.copies.emplace_back();
-        VkExternalMemoryImageCreateInfo external{VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
-        external.handleTypes = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
-        VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, &external};
-        info.imageType = VK_IMAGE_TYPE_3D;
-        info.format = e.format;
-        info.extent = {e.extent[0], e.extent[1], e.extent[2]};
-        info.mipLevels = 1;
-        info.arrayLayers = 1;
-        info.samples = VK_SAMPLE_COUNT_1_BIT;
-        info.tiling = VK_IMAGE_TILING_OPTIMAL;
-        info.usage = e.usage;
-        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        VkExternalMemoryImageCreateInfo external;
+        const VkImageCreateInfo info = gust::import_image_info(e, external);
         if (VkResult r = w.vk.create_image(w.vk.device, &info, nullptr, &c.image); r != VK_SUCCESS) {
             close(e.fd);
             why = "vkCreateImage on Godot's device failed (" + std::to_string(int(r)) + ")";

@@ -259,6 +259,26 @@ struct ExportedImage {
     VkImageUsageFlags usage = 0;
 };
 
+/// The VkImageCreateInfo of the image that imports `image` into another device, as ExportedImage describes
+/// it, chained to `external` (filled here: opaque file descriptors), which must live until vkCreateImage.
+inline VkImageCreateInfo import_image_info(const ExportedImage& image,
+                                           VkExternalMemoryImageCreateInfo& external) {
+    external = {VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
+    external.handleTypes = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, &external};
+    info.imageType = VK_IMAGE_TYPE_3D;
+    info.format = image.format;
+    info.extent = {image.extent[0], image.extent[1], image.extent[2]};
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = image.usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    return info;
+}
+
 /// Ids of meshes and instances: 0 is never valid; a destroyed id is never reused.
 using MeshId = std::uint64_t;
 using InstanceId = std::uint64_t;
