@@ -93,8 +93,9 @@ Traffic advect_traffic(const Workload& w) {
     return t;
 }
 
-/// The "pressure" pass with the default MGPCG (wind_solver.cpp, record_step): start.comp, then per
-/// iteration smooth.comp's first pass at level 0 (the iterate, its residual and the check, then smoothing),
+/// The "pressure" pass with the default MGPCG (wind_solver.cpp, record_step): the warm start's q (start.comp,
+/// beside the advection, which sums b·q), then per iteration smooth.comp's first pass at level 0 (the first
+/// iteration's also makes b) (the iterate, its residual and the check, then smoothing),
 /// the downward smoothing per level above the coarse solve (each restricting its right-hand side from the
 /// finer level first), coarse_solve.comp (every coarser level in one workgroup, restricting its first), the
 /// upward smoothing per level (at level 0 with the sums for beta), and cg.comp (the new direction and the sum
@@ -102,10 +103,12 @@ Traffic advect_traffic(const Workload& w) {
 Traffic pressure_traffic(const Workload& w) {
     Traffic t;
     const double F = w.faces(0), C = w.cells(0), W = Workload::weight(0) * F;
-    // start: the operator's six weights and neighbours' φ, six face fluxes (3 loads each), b and r stored;
-    // warm, also q = Lφ (six weights, seven φ) stored.
-    t.add(C * (12 + 18 + 2) * 4, W + 8 * F + 12 * C);
-    if (w.warm_start) t.add(C * (13 + 1) * 4, 4 * C, 0);
+    // b, in the solve's first pass (no dispatch of its own): six face fluxes (3 loads each), b and r_old
+    // stored.
+    t.add(C * (18 + 2) * 4, 8 * F + 8 * C, 0);
+    // warm: q = Lφ (six weights, seven φ) stored in a dispatch of its own, and per face in the advection's
+    // last pass q below and above and the solid's velocity for b·q.
+    if (w.warm_start) t.add(C * (13 + 1) * 4 + F * 3 * 4, W + 8 * C + 4 * F);
     const std::size_t coarse = w.coarse_level(), last = w.levels.size() - 1;
     // A tile of kTileSide^3 cells loads its halo too: (side + 2)^3 values per side^3 cells.
     const double side = gust::shaderio::kTileSide,

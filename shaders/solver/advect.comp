@@ -7,6 +7,8 @@
 // backward pass, the clamped correction and the same forces into kFieldTmp (maccormack_face: a face's
 // backward value serves only its own correction, so it needs no pass of its own). kAdvectForces: no
 // advection, the forces alone.
+// kAdvectCorrect with pc.iterations 1 also sums the warm start's b·q over the faces it writes (start.comp's
+// kStartQ left q and q·q), and the workgroup that finishes last makes the scale.
 // The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not. Constant 1 (kNested) does the same for
 // the cascades' code.
@@ -19,14 +21,40 @@ layout(constant_id = 1) const bool kNested = true;
 #define GUST_NESTED_CONSTANT
 #include "solver_common.glsl"
 
+/// Face i's share of b·q, where b is the divergence the face's final value u gives the cells beside it: the
+/// flux leaves the cell below and enters the one above, so Σ_cells b·q = Σ_faces flux·(q_below − q_above)/h
+/// (q = 0 beyond the grid, and in cells without open faces, whose b is 0).
+float warm_face_product(int i, uint axis, ivec3 f, float u) {
+    ivec3 n = grid_dims();
+    ivec3 below = f - axis_unit(axis);
+    float q_below = inside_cells(n, below) ? load_cell(kCellScratch, cell_index(n, below)) : 0.0;
+    float q_above = inside_cells(n, f) ? load_cell(kCellScratch, cell_index(n, f)) : 0.0;
+    return face_flux_of(i, u) * (q_below - q_above) / grid_h();
+}
+
 void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = hot.dims;
-    if (i >= faces_total(n)) return;
-    uint axis;
-    ivec3 f = face_from_index(n, i, axis);
+    bool face = i < faces_total(n);
+    uint axis = 0u;
+    ivec3 f = face ? face_from_index(n, i, axis) : ivec3(0);
     float epsilon = sb().b.vorticity_strength;
+    if (kMode == kAdvectCorrect) {
+        float product = 0.0;
+        if (face) {
+            float u = forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon);
+            store_face(kFieldTmp, i, u);
+            if (pc.iterations != 0u) product = warm_face_product(i, axis, f, u);
+        }
+        // Uniform across the dispatch, so every thread reaches the sum's barriers.
+        if (pc.iterations == 0u) return;
+        vec2 total;
+        if (sum_dispatch(vec2(product, 0.0), total) && gl_LocalInvocationIndex == 0u)
+            state().s.warm_scale = warm_scale(total.x, state().s.warm_qq);
+        return;
+    }
+    if (!face) return;
     if (kMode == kAdvectSemiLagrangian)
         store_face(
             kFieldTmp, i,
@@ -36,9 +64,7 @@ void main() {
         store_face(kFieldScratch, i, advect_face_range(axis, f, pc.dt, range));
         store_face(kFieldLow, i, range.x);
         store_face(kFieldHigh, i, range.y);
-    } else if (kMode == kAdvectForces)
+    } else
         store_face(kFieldTmp, i,
                    forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
-    else
-        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
 }

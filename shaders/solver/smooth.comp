@@ -4,6 +4,8 @@
 // loads it with a one-cell halo, and runs SolverBindings::smoothing red-black Gauss–Seidel sweeps on the
 // tile with the halo held at its loaded values (block Gauss–Seidel: exact inside a tile, Jacobi-like
 // across tiles), so a level's smoothing costs one dispatch, not one per half-sweep. pc.mode:
+//   kSmoothStart (level 0, the solve's first pass, k = 0): the right-hand side b, the divergence
+//     (kCellTarget), its maximum and the fluid cells, then as kSmoothFirst.
 //   kSmoothFirst, kSmoothFirstPlain (level 0, first pass of an iteration): the iterate
 //     x_k = x_{k-1} + α p_{k-1} (k = pc.iterations; x_0 = s φ, the warm start; kSmoothFirstPlain is plain
 //     multigrid, where p is last iteration's z and α = 1), written to the other iterate, and its residual
@@ -28,6 +30,8 @@ layout(constant_id = 0) const uint kMode = 0u;
 const int kSide = int(kTileSide);
 const int kSpan = kSide + 2;
 shared float tile[kSpan * kSpan * kSpan];
+shared uint group_b_max;
+shared uint group_fluid;
 
 int slot_of(ivec3 local) { return (local.x + 1) + kSpan * ((local.y + 1) + kSpan * (local.z + 1)); }
 
@@ -56,7 +60,8 @@ void main() {
     bool mine = all(greaterThanEqual(c, ivec3(0))) && all(lessThan(c, level.dims));
     int i = mine ? int(level.cells) + cell_index(level.dims, c) : 0;
     uint open = grid_open_sides();
-    bool first = mode == kSmoothFirst || mode == kSmoothFirstPlain;
+    bool start = mode == kSmoothStart;
+    bool first = start || mode == kSmoothFirst || mode == kSmoothFirstPlain;
 
     // The cell's six couplings (cell_operator's faces): weight, and where the neighbour's value lives.
     float w[6];
@@ -75,9 +80,20 @@ void main() {
     // The right-hand side the tile smooths against.
     float rhs = 0.0;
     if (first) {
+        if (start && gl_LocalInvocationIndex == 0u) {
+            group_b_max = 0u;
+            group_fluid = 0u;
+        }
         group_max_begin();
         if (mine) {
             bool plain = mode == kSmoothFirstPlain;
+            float b = 0.0;
+            if (start) {
+                b = diag > 0.0 ? cell_divergence(c) : 0.0;
+                store_cell(kCellTarget, i, b);
+                atomicMax(group_b_max, floatBitsToUint(abs(b)));
+                if (diag > 0.0) atomicAdd(group_fluid, 1u);
+            }
             float x = iterate(c, plain);
             float lap = 0.0;
             for (uint a = 0u; a < 3u; ++a)
@@ -87,14 +103,24 @@ void main() {
                     ivec3 n = c + (s == 0u ? -1 : 1) * axis_unit(a);
                     lap += wf * ((nb_slot[2u * a + s] >= 0 ? iterate(n, plain) : 0.0) - x);
                 }
-            rhs = diag > 0.0 ? load_cell(kCellTarget, i) - lap : 0.0;
+            if (!start) b = load_cell(kCellTarget, i);
+            rhs = diag > 0.0 ? b - lap : 0.0;
             store_cell(kCellSolutionB, i, x);
-            store_cell(kCellOldResidual, i, load_cell(kCellRhs, i));
+            store_cell(kCellOldResidual, i, start ? b : load_cell(kCellRhs, i));
             store_cell(kCellRhs, i, rhs);
             group_max_add(rhs);
         }
         uint bits;
-        if (group_max_end(bits) && bits > state().s.residual_scratch) atomicMax(state().s.residual_scratch, bits);
+        if (group_max_end(bits)) {
+            StateRef st = state();
+            if (bits > st.s.residual_scratch) atomicMax(st.s.residual_scratch, bits);
+            if (start) {
+                // Before last_group() below, so the convergence check sees every group's maximum of b.
+                if (group_b_max > st.s.divergence_before) atomicMax(st.s.divergence_before, group_b_max);
+                if (group_fluid > 0u) atomicAdd(st.s.fluid_cells, group_fluid);
+                if (gl_WorkGroupID == uvec3(0)) st.s.recorded = sb().b.cycles_recorded;
+            }
+        }
         // The iterate just written is x_k; in absolute terms kCellSolutionB is buffer B on even iterations.
         if (last_group() && gl_LocalInvocationIndex == 0u) convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
     } else if (mine && mode == kSmoothDown) {

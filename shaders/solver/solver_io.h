@@ -112,7 +112,8 @@ struct SolverState {
     uint p_slot;                      ///< which of the two search directions holds p
     uint reduce_count;                ///< workgroups done with the current reduction (last_group())
     LevelDispatch fluid_dispatch;     ///< over the cells when a cell has two parts of outside air, else none
-    uint pad[2];
+    float warm_qq;                    ///< q·q of the warm start, from start.comp's kStartQ
+    uint pad;
 };
 
 /// Slots of the dispatch buffer: per multigrid level the level's cells (restriction into it) and its
@@ -268,7 +269,9 @@ struct SolverPush {
     float dt;              ///< seconds
     uint level;            ///< multigrid level the pass works on
     uint mode;             ///< the pass's job (the k<Pass>* modes below; diffuse.comp: the field it reads)
-    uint iterations;       ///< smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level
+    /// smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level; advect.comp
+    /// kAdvectCorrect: 1 when it also sums the warm start's b·q and makes its scale (after kStartQ).
+    uint iterations;
     float param;           ///< pass-specific value
     /// Bit 0: kFieldVelocity is velocity_tmp and kFieldTmp velocity; bit 1: the conjugate-gradient
     /// iteration's parity (x and p read from their B buffers).
@@ -300,7 +303,10 @@ GUST_CONST uint kSmoothDown = 1u;       ///< a level between, downward: from zer
 GUST_CONST uint kSmoothUp = 2u;         ///< upward: the downward values plus the coarser level's correction
 GUST_CONST uint kSmoothUpBeta = 3u;     ///< level 0 upward, conjugate gradients: kSmoothUp, then β's sums
 GUST_CONST uint kSmoothFirstPlain = 4u; ///< kSmoothFirst of plain multigrid (α = 1, p the last z)
-GUST_CONST uint kSmoothModes = 5u;
+/// The solve's first pass (k = 0, either method): kSmoothFirst that also makes the right-hand side b, the
+/// divergence (kCellTarget), with its maximum and the fluid cells, which the start used to.
+GUST_CONST uint kSmoothStart = 5u;
+GUST_CONST uint kSmoothModes = 6u;
 
 /// coarse_solve.comp: the levels from SolverPush::level down in one workgroup.
 GUST_CONST uint kCoarseCorrection = 0u; ///< the finer level's correction (level 0: plain multigrid's V-cycle)
@@ -310,9 +316,12 @@ GUST_CONST uint kCoarseBeta = 1u;       ///< level 0, conjugate gradients: the w
 GUST_CONST uint kSolidChanged = 0u; ///< those a moving surface reaches now or reached at the last step
 GUST_CONST uint kSolidAll = 1u;     ///< every cell (the static solids or the grid changed)
 
-/// start.comp: the pressure solve's start.
-GUST_CONST uint kStartCold = 0u; ///< from zero
-GUST_CONST uint kStartWarm = 1u; ///< also the warm start's q = Lφ and its scale (warm_scale)
+/// start.comp: the pressure solve's start (docs/solver.md, "The solve's start").
+GUST_CONST uint kStartRhs = 0u;   ///< the Jacobi baseline's b (kCellTarget, kCellRhs), its maximum, fluid cells
+GUST_CONST uint kStartScale = 1u; ///< the warm start's q = Lφ and its scale (warm_scale), in a stage of its own
+/// q and q·q only (SolverState::warm_qq), beside the advection's first pass; its last pass sums b·q by faces
+/// (warm_face_product) and makes the scale.
+GUST_CONST uint kStartQ = 2u;
 
 /// jacobi.comp: the Jacobi baseline.
 GUST_CONST uint kJacobiSweep = 0u; ///< one damped sweep

@@ -368,12 +368,17 @@ GUST_INLINE float diffuse_face(uint field, uint axis, ivec3 f, float alpha) {
 
 // ---- Projection with face weights (Batty, Bertails and Bridson 2007) -------------------------------------
 
-/// Volume flux per unit area through face f: the open part carries the air, the closed part moves
-/// with the solid (free slip: only normal velocities meet).
+/// Volume flux per unit area through face i when the air there moves at u: the open part carries the air,
+/// the closed part moves with the solid (free slip: only normal velocities meet).
+GUST_INLINE float face_flux_of(int i, float u) {
+    float open = load_weight(i);
+    return open * u + (1.0f - open) * load_face(kFieldSolid, i);
+}
+
+/// face_flux_of the velocity field's value at face f.
 GUST_INLINE float face_flux(uint axis, ivec3 f) {
     int i = face_index(grid_dims(), axis, f);
-    float open = load_weight(i);
-    return open * load_face(kFieldVelocity, i) + (1.0f - open) * load_face(kFieldSolid, i);
+    return face_flux_of(i, load_face(kFieldVelocity, i));
 }
 
 /// The solver's divergence of cell c (1/s): net outward flux over the cell's volume.

@@ -153,10 +153,11 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         if (!pipeline) return pipeline.status();
         *stage.pipeline = std::move(*pipeline);
     }
-    static constexpr std::uint32_t kPcgModes[] = {shaderio::kSmoothFirst, shaderio::kSmoothDown,
-                                                  shaderio::kSmoothUp, shaderio::kSmoothUpBeta},
-                                   kMultigridModes[] = {shaderio::kSmoothDown, shaderio::kSmoothUp,
-                                                        shaderio::kSmoothFirstPlain};
+    static constexpr std::uint32_t kPcgModes[] = {shaderio::kSmoothStart, shaderio::kSmoothFirst,
+                                                  shaderio::kSmoothDown, shaderio::kSmoothUp,
+                                                  shaderio::kSmoothUpBeta},
+                                   kMultigridModes[] = {shaderio::kSmoothStart, shaderio::kSmoothDown,
+                                                        shaderio::kSmoothUp, shaderio::kSmoothFirstPlain};
     const std::span<const std::uint32_t> smooth_modes =
         desc.pressure == PressureSolver::MultigridPCG ? std::span<const std::uint32_t>(kPcgModes)
         : desc.pressure == PressureSolver::Multigrid  ? std::span<const std::uint32_t>(kMultigridModes)
@@ -175,10 +176,11 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     const std::uint64_t words_per_cell = detail::cell_words(desc.voxels_per_cell);
     const std::uint64_t open_words = shaderio::open_count_words(std::uint32_t(faces));
     const std::uint64_t nodes = 1 + shaderio::kCellParts * cells; // the fill's; fluid_node() adds one a cell
-    // Partial sums: one per workgroup of the widest reducing pass (level-0 cells or level-0 tiles).
-    const LevelDispatch level0_groups = groups_for(cells), level0_tiles = tiles_for(m.levels[0].dims);
+    // Partial sums: one per workgroup of the widest reducing pass (level-0 faces: the advection's correction
+    // with the warm start's b·q; level-0 cells; level-0 tiles).
+    const LevelDispatch face_groups = groups_for(faces), level0_tiles = tiles_for(m.levels[0].dims);
     const std::uint64_t partials =
-        std::max<std::uint64_t>(std::uint64_t(level0_groups.x) * level0_groups.y,
+        std::max<std::uint64_t>(std::uint64_t(face_groups.x) * face_groups.y,
                                 std::uint64_t(level0_tiles.x) * level0_tiles.y * level0_tiles.z);
     struct Want {
         gpu::Buffer* buffer;

@@ -165,15 +165,28 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     // A change of the ambient wind since the last step (unless record_ambient_change took it already).
     record_ambient_change(cmd);
 
+    // The solve's start (docs/solver.md, "The solve's start"): its first pass makes b. The warm start's scale
+    // needs b·q, which MacCormack's correction sums over the faces it writes, with q made beside its forward
+    // pass; otherwise (or with viscosity, which changes the faces after advection) a start pass makes it.
+    const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
+    const bool scale_in_advection =
+        warm && !jacobi && desc_.advection == Advection::MacCormack && desc_.viscosity <= 0.0f;
+
     // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
     // then holds the velocity.
     m.profiler.begin(cmd, "advect");
     push.param = detail::emitter_rate(dt, desc_.emitter_response);
     if (desc_.advection == Advection::MacCormack) {
-        for (std::uint32_t mode : {shaderio::kAdvectForward, shaderio::kAdvectCorrect}) {
-            push.mode = mode;
-            run(m.advect[mode], face_groups);
+        if (scale_in_advection) {
+            push.mode = shaderio::kStartQ;
+            run_beside(m.start, cell_groups);
         }
+        push.mode = shaderio::kAdvectForward;
+        run(m.advect[push.mode], face_groups);
+        push.mode = shaderio::kAdvectCorrect;
+        push.iterations = scale_in_advection ? 1u : 0u;
+        run(m.advect[push.mode], face_groups);
+        push.iterations = 0;
     } else {
         push.mode = desc_.advection == Advection::SemiLagrangian ? shaderio::kAdvectSemiLagrangian
                                                                  : shaderio::kAdvectForces;
@@ -201,12 +214,16 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     }
 
     m.profiler.begin(cmd, "pressure");
-    push.mode = warm ? shaderio::kStartWarm : shaderio::kStartCold;
     push.level = 0;
-    run(m.start, cell_groups);
     const bool cg = desc_.pressure == PressureSolver::MultigridPCG;
-    if (desc_.pressure == PressureSolver::Jacobi) {
+    if (warm && !jacobi && !scale_in_advection) {
+        push.mode = shaderio::kStartScale;
+        run(m.start, cell_groups);
+    }
+    if (jacobi) {
         // The baseline starts from zero (no warm start) and relaxes in blocks, each followed by a check.
+        push.mode = shaderio::kStartRhs;
+        run(m.start, cell_groups);
         vk.vkCmdFillBuffer(cmd, m.cg_cells.handle(), 0, 2 * cell_count() * sizeof(float), 0);
         gpu::barrier(ctx_, cmd);
         for (std::uint32_t block = 0; block < recorded; ++block) {
@@ -225,7 +242,9 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.swap = (k & 1u) << 1;
             push.iterations = k;
             push.level = 0;
-            push.mode = cg ? shaderio::kSmoothFirst : shaderio::kSmoothFirstPlain;
+            push.mode = k == 0 ? shaderio::kSmoothStart
+                        : cg   ? shaderio::kSmoothFirst
+                               : shaderio::kSmoothFirstPlain;
             run_slot(m.smooth[push.mode], shaderio::kTileSlot);
             // Each level below restricts its right-hand side from the finer level's residual in its own
             // smoothing (or in the coarse solve), so going down costs one dispatch a level.
