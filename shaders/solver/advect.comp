@@ -7,8 +7,9 @@
 // backward pass, the clamped correction and the same forces into kFieldTmp (maccormack_face: a face's
 // backward value serves only its own correction, so it needs no pass of its own). kAdvectForces: no
 // advection, the forces alone.
-// kAdvectCorrect with pc.iterations 1 also sums the warm start's b·q over the faces it writes (start.comp's
-// kStartQ left q and q·q), and the workgroup that finishes last makes the scale.
+// kAdvectCorrectScale: kAdvectCorrect that also sums the warm start's b·q over the faces it writes (start.comp's
+// kStartQ left q and q·q), and the workgroup that finishes last makes the scale. Only this mode's pipeline
+// holds the sum's barriers: in a pass this large they cost a CPU device a tenth of the pass, even untaken.
 // The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not. Constant 1 (kNested) does the same for
 // the cascades' code.
@@ -36,25 +37,26 @@ void main() {
     load_bindings();
     int i = thread_index();
     ivec3 n = hot.dims;
-    bool face = i < faces_total(n);
-    uint axis = 0u;
-    ivec3 f = face ? face_from_index(n, i, axis) : ivec3(0);
-    float epsilon = sb().b.vorticity_strength;
-    if (kMode == kAdvectCorrect) {
+    if (kMode == kAdvectCorrectScale) {
+        // Every thread reaches the sum's barriers.
         float product = 0.0;
-        if (face) {
-            float u = forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon);
+        if (i < faces_total(n)) {
+            uint axis;
+            ivec3 f = face_from_index(n, i, axis);
+            float u = forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt,
+                                  sb().b.vorticity_strength);
             store_face(kFieldTmp, i, u);
-            if (pc.iterations != 0u) product = warm_face_product(i, axis, f, u);
+            product = warm_face_product(i, axis, f, u);
         }
-        // Uniform across the dispatch, so every thread reaches the sum's barriers.
-        if (pc.iterations == 0u) return;
         vec2 total;
         if (sum_dispatch(vec2(product, 0.0), total) && gl_LocalInvocationIndex == 0u)
             state().s.warm_scale = warm_scale(total.x, state().s.warm_qq);
         return;
     }
-    if (!face) return;
+    if (i >= faces_total(n)) return;
+    uint axis;
+    ivec3 f = face_from_index(n, i, axis);
+    float epsilon = sb().b.vorticity_strength;
     if (kMode == kAdvectSemiLagrangian)
         store_face(
             kFieldTmp, i,
@@ -64,7 +66,9 @@ void main() {
         store_face(kFieldScratch, i, advect_face_range(axis, f, pc.dt, range));
         store_face(kFieldLow, i, range.x);
         store_face(kFieldHigh, i, range.y);
-    } else
+    } else if (kMode == kAdvectForces)
         store_face(kFieldTmp, i,
                    forced_face(load_face(kFieldVelocity, i), axis, f, pc.param, pc.dt, epsilon));
+    else
+        store_face(kFieldTmp, i, forced_face(maccormack_face(axis, f, pc.dt), axis, f, pc.param, pc.dt, epsilon));
 }

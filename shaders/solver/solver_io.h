@@ -269,9 +269,7 @@ struct SolverPush {
     float dt;              ///< seconds
     uint level;            ///< multigrid level the pass works on
     uint mode;             ///< the pass's job (the k<Pass>* modes below; diffuse.comp: the field it reads)
-    /// smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level; advect.comp
-    /// kAdvectCorrect: 1 when it also sums the warm start's b·q and makes its scale (after kStartQ).
-    uint iterations;
+    uint iterations;       ///< smooth.comp: the iteration k; coarse_solve.comp: sweeps on the coarsest level
     float param;           ///< pass-specific value
     /// Bit 0: kFieldVelocity is velocity_tmp and kFieldTmp velocity; bit 1: the conjugate-gradient
     /// iteration's parity (x and p read from their B buffers).
@@ -295,7 +293,10 @@ GUST_CONST uint kAdvectSemiLagrangian = 0u; ///< semi-Lagrangian advection, then
 GUST_CONST uint kAdvectForward = 1u;        ///< MacCormack's forward pass into kFieldScratch, and its range
 GUST_CONST uint kAdvectCorrect = 2u;        ///< MacCormack's backward pass and clamped correction, the forces
 GUST_CONST uint kAdvectForces = 3u;         ///< no advection: the forces alone
-GUST_CONST uint kAdvectModes = 4u;
+/// kAdvectCorrect that also sums the warm start's b·q over the faces it writes and makes the scale
+/// (PassLayout::FewerStages, after start.comp's kStartQ).
+GUST_CONST uint kAdvectCorrectScale = 4u;
+GUST_CONST uint kAdvectModes = 5u;
 
 /// smooth.comp: one level's smoothing in shared-memory tiles.
 GUST_CONST uint kSmoothFirst = 0u;      ///< level 0, a conjugate-gradient iteration's first pass: x_k and r
@@ -319,8 +320,8 @@ GUST_CONST uint kSolidAll = 1u;     ///< every cell (the static solids or the gr
 /// start.comp: the pressure solve's start (docs/solver.md, "The solve's start").
 GUST_CONST uint kStartRhs = 0u;   ///< the Jacobi baseline's b (kCellTarget, kCellRhs), its maximum, fluid cells
 GUST_CONST uint kStartScale = 1u; ///< the warm start's q = Lφ and its scale (warm_scale), in a stage of its own
-/// q and q·q only (SolverState::warm_qq), beside the advection's first pass; its last pass sums b·q by faces
-/// (warm_face_product) and makes the scale.
+/// q and q·q only (SolverState::warm_qq), beside the advection's first pass; its last pass
+/// (kAdvectCorrectScale) sums b·q by faces and makes the scale.
 GUST_CONST uint kStartQ = 2u;
 
 /// jacobi.comp: the Jacobi baseline.

@@ -84,10 +84,16 @@ Status create_modes(gpu::Context& ctx, std::span<gpu::Pipeline> out, std::span<c
 Status create_advect(gpu::Context& ctx, const SolverDesc& desc, bool nested,
                      std::array<gpu::Pipeline, shaderio::kAdvectModes>& out) {
     static constexpr std::uint32_t kMacCormackModes[] = {shaderio::kAdvectForward, shaderio::kAdvectCorrect},
+                                   kMacCormackScaleModes[] = {shaderio::kAdvectForward,
+                                                              shaderio::kAdvectCorrect,
+                                                              shaderio::kAdvectCorrectScale},
                                    kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
                                    kForcesMode[] = {shaderio::kAdvectForces};
+    const bool scale = desc.layout == PassLayout::FewerStages && desc.warm_start;
     const std::span<const std::uint32_t> modes =
-        desc.advection == Advection::MacCormack       ? std::span<const std::uint32_t>(kMacCormackModes)
+        desc.advection == Advection::MacCormack
+            ? (scale ? std::span<const std::uint32_t>(kMacCormackScaleModes)
+                     : std::span<const std::uint32_t>(kMacCormackModes))
         : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
                                                       : std::span<const std::uint32_t>(kForcesMode);
     return create_modes(ctx, out, words(advect_comp), "gust advect", modes, nested ? 1u : 0u);
@@ -109,6 +115,8 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     if (Status s = validate(desc); !s) return s;
     std::unique_ptr<WindSolver> solver(new (ctx.memory()) WindSolver(ctx));
     solver->desc_ = desc;
+    if (desc.layout == PassLayout::Auto)
+        solver->desc_.layout = ctx.info().type == "cpu" ? PassLayout::LessWork : PassLayout::FewerStages;
     solver->origin_ = desc.origin;
     solver->impl_.reset(new (ctx.memory()) Impl(ctx.memory()));
     Impl& m = *solver->impl_;
@@ -162,7 +170,7 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
         desc.pressure == PressureSolver::MultigridPCG ? std::span<const std::uint32_t>(kPcgModes)
         : desc.pressure == PressureSolver::Multigrid  ? std::span<const std::uint32_t>(kMultigridModes)
                                                       : std::span<const std::uint32_t>();
-    if (Status s = create_advect(ctx, desc, desc.nested, m.advect); !s) return s;
+    if (Status s = create_advect(ctx, solver->desc_, desc.nested, m.advect); !s) return s;
     m.advect_nested = desc.nested;
     if (Status s = create_modes(ctx, m.smooth, words(smooth_comp), "gust smooth", smooth_modes); !s) return s;
     m.coarse_level = solver->levels_ - 1;

@@ -166,11 +166,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     record_ambient_change(cmd);
 
     // The solve's start (docs/solver.md, "The solve's start"): its first pass makes b. The warm start's scale
-    // needs b·q, which MacCormack's correction sums over the faces it writes, with q made beside its forward
-    // pass; otherwise (or with viscosity, which changes the faces after advection) a start pass makes it.
+    // needs b·q: with PassLayout::FewerStages MacCormack's correction sums it over the faces it writes, with
+    // q made beside its forward pass; otherwise (or with viscosity, which changes the faces after advection)
+    // a start pass makes it.
     const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
-    const bool scale_in_advection =
-        warm && !jacobi && desc_.advection == Advection::MacCormack && desc_.viscosity <= 0.0f;
+    const bool scale_in_advection = warm && !jacobi && desc_.layout == PassLayout::FewerStages &&
+                                    desc_.advection == Advection::MacCormack && desc_.viscosity <= 0.0f;
 
     // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
     // then holds the velocity.
@@ -183,10 +184,8 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         }
         push.mode = shaderio::kAdvectForward;
         run(m.advect[push.mode], face_groups);
-        push.mode = shaderio::kAdvectCorrect;
-        push.iterations = scale_in_advection ? 1u : 0u;
+        push.mode = scale_in_advection ? shaderio::kAdvectCorrectScale : shaderio::kAdvectCorrect;
         run(m.advect[push.mode], face_groups);
-        push.iterations = 0;
     } else {
         push.mode = desc_.advection == Advection::SemiLagrangian ? shaderio::kAdvectSemiLagrangian
                                                                  : shaderio::kAdvectForces;

@@ -587,6 +587,59 @@ TEST_F(WindSolverTest, warmStartCutsTheCyclesOfLaterStepsOnAnUnchangedSceneAndSt
     EXPECT_LT(later[1], later[0]);
 }
 
+// PassLayout::FewerStages sums the warm start's b·q in MacCormack's correction instead of a start pass of its
+// own (docs/solver.md, "The solve's start"): every warm step records exactly one stage fewer, and the wind is
+// that of PassLayout::LessWork but for the sums' rounding, with conjugate gradients and plain multigrid
+// alike. lavapipe resolves Auto to LessWork, so this is where FewerStages, a GPU's layout, runs on CI.
+TEST_F(WindSolverTest, fewerStagesGivesTheWindOfLessWorkWithAStageFewerEveryWarmStep) {
+    constexpr int kSteps = 4;
+    for (PressureSolver pressure : {PressureSolver::MultigridPCG, PressureSolver::Multigrid}) {
+        std::vector<float> wind[2];
+        std::uint64_t stages[2][kSteps] = {};
+        std::uint32_t cycles[2][kSteps] = {};
+        for (int fewer = 0; fewer < 2; ++fewer) {
+            SolverDesc desc;
+            desc.cells = {24, 16, 16};
+            desc.pressure = pressure;
+            desc.layout = fewer == 1 ? PassLayout::FewerStages : PassLayout::LessWork;
+            auto solver = make(ctx(), desc);
+            ASSERT_TRUE(solver);
+            EXPECT_EQ(solver->desc().layout, desc.layout);
+            SolidWorld solids(ctx(), desc);
+            solids.update({{box({7.3f, 3.2f, 5.1f}, {11.6f, 10.4f, 9.2f}), glm::mat4(1.0f), std::nullopt}},
+                          0.05f);
+            ASSERT_TRUE(solver->set_ambient({3.0f, 0.0f, 1.0f}));
+            const SolidSource source = solids.source();
+            for (int step = 0; step < kSteps; ++step) {
+                const std::uint64_t before = ctx().work().stages;
+                auto stats = solver->step(0.05f, &source);
+                ASSERT_TRUE(stats) << stats.message();
+                EXPECT_TRUE(stats->converged) << "step " << step;
+                stages[fewer][step] = ctx().work().stages - before;
+                cycles[fewer][step] = stats->cycles;
+            }
+            auto u = solver->read_velocity();
+            ASSERT_TRUE(u) << u.message();
+            wind[fewer] = std::move(*u);
+        }
+        const char* name = pressure == PressureSolver::MultigridPCG ? "MGPCG" : "multigrid";
+        EXPECT_EQ(stages[0][0], stages[1][0])
+            << name << ": the first step starts from zero, with no start pass";
+        for (int step = 1; step < kSteps; ++step) {
+            EXPECT_EQ(stages[0][step], stages[1][step] + 1) << name << " step " << step;
+            EXPECT_EQ(cycles[0][step], cycles[1][step]) << name << " step " << step;
+        }
+        ASSERT_EQ(wind[0].size(), wind[1].size());
+        float largest = 0.0f, apart = 0.0f;
+        for (std::size_t i = 0; i < wind[0].size(); ++i) {
+            largest = std::max(largest, std::abs(wind[0][i]));
+            apart = std::max(apart, std::abs(wind[0][i] - wind[1][i]));
+        }
+        EXPECT_GT(largest, 2.0f) << name;
+        EXPECT_LT(apart, 1e-3f * largest) << name;
+    }
+}
+
 // A step records the V-cycles the last one suggests (docs/solver.md, "Cycles recorded"): the first all
 // max_cycles, a later one half again what the last ran (at least 8 more), and after a step that ran out
 // unconverged twice what that one recorded. Still air with no solid converges at once, so a box, a thin

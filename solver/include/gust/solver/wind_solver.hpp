@@ -27,6 +27,16 @@ enum class Advection {
     MacCormack      ///< second order, clamped to the interpolated values (Selle et al. 2008)
 };
 
+/// How a step's work is laid out in passes (docs/solver.md, "Stages on a GPU and on a CPU device"). A GPU
+/// pays for each stage (a dispatch after a barrier) with a drain; a CPU device pays for every instruction a
+/// pass carries, and for a barrier inside a large pass, so work that rides along in a neighbouring pass to
+/// save a stage costs it more than the stage.
+enum class PassLayout {
+    Auto,        ///< FewerStages on a GPU, LessWork on a CPU device (resolved at creation)
+    FewerStages, ///< the warm start's scale summed in the advection's correction: one stage fewer a step
+    LessWork     ///< the warm start's scale in a pass of its own
+};
+
 /// How the pressure equation is solved.
 enum class PressureSolver {
     MultigridPCG, ///< conjugate gradients preconditioned by one V-cycle each (McAdams et al. 2010)
@@ -119,6 +129,8 @@ struct SolverDesc {
     /// Start each pressure solve from the last step's pressure, scaled to fit (docs/solver.md); false:
     /// from zero every step.
     bool warm_start = true;
+    /// Auto is resolved at creation: desc() reports the layout the device got.
+    PassLayout layout = PassLayout::Auto;
     /// The solver will have a neighbouring cascade (couple): its advection is built for the nest at
     /// creation, so that couple need not build it again. couple rebuilds it when the nesting differs.
     bool nested = false;
