@@ -22,10 +22,25 @@
 //     which the workgroup that finishes last turns into β.
 // The mode is the pipeline's specialization constant 0 (pc.mode holds it too), so a compiler keeps only
 // that mode's code: a CPU device executes every branch, taken or not.
+// Built with GUST_THEN_COARSE (PassLayout::FewerStages; the pass just above the coarse solve's levels:
+// kSmoothStart, kSmoothFirst or kSmoothFirstPlain when that is level 1, else kSmoothDown), the workgroup that
+// finishes last then runs the coarse solve (coarse_levels.glsl), whose restriction needs this level smoothed
+// everywhere: a V-cycle's dispatch and stage fewer. The first pass's convergence check moves there too, so a
+// solve that converged skips the coarse solve as its emptied dispatch did.
 #include "solver_io.h"
+#ifdef GUST_THEN_COARSE
+#define GUST_COHERENT_CELLS 1
+#include "coarse_shared.glsl"
+const bool kThenCoarse = true;
+#else
+const bool kThenCoarse = false;
+#endif
 layout(local_size_x = kTileSide, local_size_y = kTileSide, local_size_z = kTileSide) in;
 layout(constant_id = 0) const uint kMode = 0u;
 #include "solver_common.glsl"
+#ifdef GUST_THEN_COARSE
+#include "coarse_levels.glsl"
+#endif
 
 const int kSide = int(kTileSide);
 const int kSpan = kSide + 2;
@@ -34,6 +49,26 @@ shared uint group_b_max;
 shared uint group_fluid;
 
 int slot_of(ivec3 local) { return (local.x + 1) + kSpan * ((local.y + 1) + kSpan * (local.z + 1)); }
+
+#ifdef GUST_THEN_COARSE
+shared bool group_converged;
+
+/// In the workgroup that finishes last: the first pass's convergence check, then, unless the solve is done,
+/// the coarse solve from the level below this one.
+void then_coarse(bool first) {
+    if (!last_group()) return;
+    if (first) {
+        if (gl_LocalInvocationIndex == 0u) {
+            // The iterate this pass wrote is x_k; in absolute terms kCellSolutionB is buffer B on even iterations.
+            convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
+            group_converged = state().s.done != 0u;
+        }
+        barrier();
+        if (group_converged) return;
+    }
+    coarse_solve(sb().b.coarse_level, kCoarseSweeps, kCoarseCorrection);
+}
+#endif
 
 /// Value of level-0 cell c of the iterate x_k.
 float iterate(ivec3 c, bool plain) {
@@ -122,7 +157,8 @@ void main() {
             }
         }
         // The iterate just written is x_k; in absolute terms kCellSolutionB is buffer B on even iterations.
-        if (last_group() && gl_LocalInvocationIndex == 0u) convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
+        if (!kThenCoarse && last_group() && gl_LocalInvocationIndex == 0u)
+            convergence_check((pc.swap & 2u) != 0u ? 0u : 1u);
     } else if (mine && mode == kSmoothDown) {
         rhs = restrict_cell(load_level(l - 1u), c);
         store_cell(kCellRhs, i, rhs);
@@ -162,6 +198,10 @@ void main() {
     }
     float z = mine && diag > 0.0 ? tile[self] : 0.0;
     if (mine) store_cell(up ? kCellPressureUp : kCellPressure, i, z);
+#ifdef GUST_THEN_COARSE
+    then_coarse(first);
+    return;
+#endif
 
     if (mode == kSmoothUp && l == 0u && gl_WorkGroupID == uvec3(0) && gl_LocalInvocationIndex == 0u) {
         // Plain multigrid: the next iterate adds this z whole.

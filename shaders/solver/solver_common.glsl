@@ -19,6 +19,13 @@ layout(buffer_reference, scalar) readonly buffer NodesRef { uvec2 v[]; };
 layout(buffer_reference, scalar) readonly buffer EmittersRef { GpuEmitter v[]; };
 layout(buffer_reference, scalar) buffer StateRef { SolverState s; };
 layout(buffer_reference, scalar) buffer DispatchRef { LevelDispatch v[]; };
+// The cell fields (load_cell, store_cell). A pass whose last workgroup reads cells that the others wrote in
+// the same dispatch (smooth.comp built with GUST_THEN_COARSE) defines GUST_COHERENT_CELLS.
+#ifdef GUST_COHERENT_CELLS
+layout(buffer_reference, scalar) coherent buffer CellsRef { float v[]; };
+#else
+layout(buffer_reference, scalar) buffer CellsRef { float v[]; };
+#endif
 
 layout(push_constant, scalar) uniform Push { SolverPush pc; };
 
@@ -271,10 +278,10 @@ float load_cell(uint field, int index) {
     int at = index - int(coarse_base);
     if (at >= 0 && (field == kCellPressure || field == kCellPressureUp)) return coarse_phi[at];
     if (at >= int(coarse_rhs_from) && field == kCellRhs) return coarse_rhs[at - int(coarse_rhs_from)];
-    return FloatsRef(cell_field(field)).v[index];
+    return CellsRef(cell_field(field)).v[index];
 }
 #else
-float load_cell(uint field, int index) { return FloatsRef(cell_field(field)).v[index]; }
+float load_cell(uint field, int index) { return CellsRef(cell_field(field)).v[index]; }
 #endif
 vec4 load_vorticity(int index) { return Vec4Ref(hot.vorticity).v[index]; }
 vec4 load_confinement(int index) { return Vec4Ref(hot.confinement).v[index]; }
@@ -292,7 +299,7 @@ float load_phi(int index) {
 }
 
 void store_face(uint field, int index, float value) { FloatsRef(face_field(field)).v[index] = value; }
-void store_cell(uint field, int index, float value) { FloatsRef(cell_field(field)).v[index] = value; }
+void store_cell(uint field, int index, float value) { CellsRef(cell_field(field)).v[index] = value; }
 
 // Workgroup maximum of |value|s, folded into a global counter by one thread per group (non-negative
 // floats order like their bits). Every thread of the group must call begin and end.

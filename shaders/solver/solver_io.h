@@ -17,6 +17,8 @@ GUST_CONST uint kTileSide = 8;
 /// Levels of at most this many cells are solved together by one workgroup in shared memory
 /// (coarse_solve.comp), so none of them costs a dispatch of its own.
 GUST_CONST uint kCoarseCells = 4096;
+/// Red-black sweeps of the coarsest level in the coarse solve.
+GUST_CONST uint kCoarseSweeps = 32;
 /// Multigrid levels at most (the finest included).
 GUST_CONST uint kMaxGridLevels = 10;
 /// Words of a cell's voxel set: voxels_per_cell^3 bits, up to 8^3 (the layout of the voxel-set arrays).

@@ -26,7 +26,7 @@ float emitter_rate(float dt, float response);
 /// Jacobi iterations between convergence checks.
 inline constexpr std::uint32_t kJacobiBlock = 8;
 /// Red-black sweeps of the coarsest solve.
-inline constexpr std::uint32_t kCoarseSweeps = 32;
+inline constexpr std::uint32_t kCoarseSweeps = shaderio::kCoarseSweeps;
 
 /// V-cycles the steps after one with `last` record: half as many again as it ran (at least 8 more),
 /// or twice what it recorded when it used them all without converging; never above `max_cycles`.

@@ -31,6 +31,7 @@ namespace {
 #include "gust_shaders/project_comp.h"
 #include "gust_shaders/sample_comp.h"
 #include "gust_shaders/scroll_comp.h"
+#include "gust_shaders/smooth_coarse_comp.h"
 #include "gust_shaders/smooth_comp.h"
 #include "gust_shaders/solid_cells_comp.h"
 #include "gust_shaders/solid_cells_small_comp.h"
@@ -176,6 +177,22 @@ Result<std::unique_ptr<WindSolver>> WindSolver::create(gpu::Context& ctx, const 
     m.coarse_level = solver->levels_ - 1;
     while (m.coarse_level > 0 && cells_of(m.levels[m.coarse_level - 1].dims) <= shaderio::kCoarseCells)
         --m.coarse_level;
+    // PassLayout::FewerStages: the pass just above the coarse solve's levels runs it in its last workgroup:
+    // level 0's first passes, or the downward smoothing of the level between. A CPU device pays for that
+    // pass's size in every workgroup (docs/solver.md, "Stages on a GPU and on a CPU device").
+    if (solver->desc_.layout == PassLayout::FewerStages && m.coarse_level > 0 &&
+        desc.pressure != PressureSolver::Jacobi) {
+        const std::uint32_t first_modes[] = {shaderio::kSmoothStart,
+                                             desc.pressure == PressureSolver::MultigridPCG
+                                                 ? shaderio::kSmoothFirst
+                                                 : shaderio::kSmoothFirstPlain},
+                            down_mode[] = {shaderio::kSmoothDown};
+        if (Status s = create_modes(ctx, m.smooth_coarse, words(smooth_coarse_comp), "gust smooth_coarse",
+                                    m.coarse_level == 1 ? std::span<const std::uint32_t>(first_modes)
+                                                        : std::span<const std::uint32_t>(down_mode));
+            !s)
+            return s;
+    }
 
     const GridLevel& last = m.levels.back();
     const std::uint64_t all_cells = last.cells + std::uint64_t(last.dims.x) * last.dims.y * last.dims.z;

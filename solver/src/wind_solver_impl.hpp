@@ -27,6 +27,9 @@ struct WindSolver::Impl : gpu::HostObject {
     std::array<gpu::Pipeline, shaderio::kAdvectModes> advect;
     bool advect_nested = false; ///< advect is specialized for a nest (kNested)
     std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth;
+    /// smooth.comp built with GUST_THEN_COARSE, for the pass just above the coarse solve's levels (when it
+    /// does not hold level 0), whose last workgroup runs the coarse solve.
+    std::array<gpu::Pipeline, shaderio::kSmoothModes> smooth_coarse;
     gpu::Pipeline solid_cells, solid_motion, fill_link, fill_finish, solid_faces, fluid_finish,
         coarse_weights, diffuse, start, coarse_solve, cg, jacobi, project, finish, scroll, sample;
     gpu::Buffer velocity, velocity_tmp, velocity_back, open_counts, weights, solid_velocity, pressure,
@@ -38,7 +41,7 @@ struct WindSolver::Impl : gpu::HostObject {
     gpu::Buffer previous;
     gpu::Profiler profiler;
     std::pmr::vector<shaderio::GridLevel> levels;
-    /// The first level the coarse solve takes (coarse_solve.comp): at most kCoarseCells cells.
+    /// The first level the coarse solve takes (coarse_levels.glsl): at most kCoarseCells cells.
     std::uint32_t coarse_level = 0;
     std::uint32_t emitter_count = 0;
     std::uint32_t omni_count = 0; ///< the first emitter_data are omni (omni_first)

@@ -237,6 +237,12 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
         }
     } else {
         const std::uint32_t coarse = m.coarse_level;
+        // PassLayout::FewerStages: the smoothing just above the coarse solve's levels runs the coarse solve
+        // in its last workgroup.
+        const bool coarse_fused = desc_.layout == PassLayout::FewerStages && coarse > 0;
+        auto smoothing = [&](std::uint32_t level, std::uint32_t mode) -> const gpu::Pipeline& {
+            return coarse_fused && level + 1 == coarse ? m.smooth_coarse[mode] : m.smooth[mode];
+        };
         for (std::uint32_t k = 0; k < recorded; ++k) {
             push.swap = (k & 1u) << 1;
             push.iterations = k;
@@ -244,18 +250,20 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
             push.mode = k == 0 ? shaderio::kSmoothStart
                         : cg   ? shaderio::kSmoothFirst
                                : shaderio::kSmoothFirstPlain;
-            run_slot(m.smooth[push.mode], shaderio::kTileSlot);
+            run_slot(smoothing(0, push.mode), shaderio::kTileSlot);
             // Each level below restricts its right-hand side from the finer level's residual in its own
             // smoothing (or in the coarse solve), so going down costs one dispatch a level.
             for (std::uint32_t l = 1; l < coarse; ++l) {
                 push.level = l;
                 push.mode = shaderio::kSmoothDown;
-                run_slot(m.smooth[push.mode], shaderio::kTileSlot + l);
+                run_slot(smoothing(l, push.mode), shaderio::kTileSlot + l);
             }
-            push.level = coarse;
-            push.mode = coarse == 0 && cg ? shaderio::kCoarseBeta : shaderio::kCoarseCorrection;
-            push.iterations = detail::kCoarseSweeps;
-            run_slot(m.coarse_solve, shaderio::kCoarseSlot);
+            if (!coarse_fused) {
+                push.level = coarse;
+                push.mode = coarse == 0 && cg ? shaderio::kCoarseBeta : shaderio::kCoarseCorrection;
+                push.iterations = detail::kCoarseSweeps;
+                run_slot(m.coarse_solve, shaderio::kCoarseSlot);
+            }
             for (std::uint32_t l = coarse; l-- > 0;) {
                 push.level = l;
                 push.mode = l == 0 && cg ? shaderio::kSmoothUpBeta : shaderio::kSmoothUp;
