@@ -125,6 +125,28 @@ TEST(VoxelizeWork, ofANonFiniteModelIsOnlyTheTriangles) {
 
 using VoxelizeCostTest = GpuTest;
 
+// On a GPU no measured row had the raster path faster (docs/cli.md, "How auto picks"), so auto takes the
+// compute path even for a small mesh whose fixed costs the GPU fit puts in the raster path's favour; on a
+// CPU device the model still sends few large triangles to the raster path.
+TEST(CostModel, aGpuTakesTheComputePathWhereTheFitAloneWouldPickRaster) {
+    gpu::DeviceInfo gpu_device, cpu_device;
+    gpu_device.type = "discrete";
+    cpu_device.type = "cpu";
+    VoxelizeWork small;
+    small.triangles = 12;
+    small.pixels = 2000;
+    small.columns = 2000;
+    const PathCosts predicted = cost_model(gpu_device).predict(small);
+    ASSERT_LT(predicted.raster_ms, predicted.compute_ms) << "the case the fit alone gets wrong";
+    EXPECT_FALSE(cost_model(gpu_device).picks_raster(small));
+    VoxelizeWork large_triangles;
+    large_triangles.triangles = 12;
+    large_triangles.pixels = 1e5;
+    large_triangles.columns = 1e6;
+    EXPECT_TRUE(cost_model(cpu_device).picks_raster(large_triangles));
+    EXPECT_FALSE(cost_model(gpu_device).picks_raster(large_triangles));
+}
+
 TEST_F(VoxelizeCostTest, expectedFragmentsAreWithinFivePercentOfTheGpusCount) {
     struct Named {
         std::string name;
@@ -171,10 +193,10 @@ TEST_F(VoxelizeCostTest, autoRunsOnePassOfThePathItPicksAndNothingElse) {
         ASSERT_TRUE(chosen) << chosen.message();
         const gpu::WorkCounts after_auto = ctx().work();
         ASSERT_NE(chosen->method, VoxelizeMethod::Auto);
-        const PathCosts costs =
-            cost_model(ctx().info()).predict(voxelize_work(mesh->sizes(), inst.model, grid));
         EXPECT_EQ(chosen->method,
-                  costs.raster_ms < costs.compute_ms ? VoxelizeMethod::Raster : VoxelizeMethod::Compute);
+                  cost_model(ctx().info()).picks_raster(voxelize_work(mesh->sizes(), inst.model, grid))
+                      ? VoxelizeMethod::Raster
+                      : VoxelizeMethod::Compute);
         auto named = (*voxelizer)->voxelize({&inst, 1}, grid, chosen->method);
         ASSERT_TRUE(named) << named.message();
         const gpu::WorkCounts after_named = ctx().work();

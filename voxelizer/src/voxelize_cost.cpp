@@ -12,8 +12,9 @@ namespace {
 constexpr CostModel kCpuModel{{0.22, 6.6e-4, 3.8e-5}, {0.36, 6.6e-5, 1.9e-5}};
 
 /// Fitted the same way to the ten H100 rows of docs/results.md's voxelize-gpu block (2026-11-22), with the
-/// work of the same meshes and grids: there the compute path was the faster in every row.
-constexpr CostModel kGpuModel{{0.43, 2.2e-6, 5.9e-6}, {0.53, 0.0, 7.0e-8}};
+/// work of the same meshes and grids: there the compute path was the faster in every row, as in both rows
+/// of the H200 check (2026-11-27), so `auto` does not weigh the raster path on GPUs.
+constexpr CostModel kGpuModel{{0.43, 2.2e-6, 5.9e-6}, {0.53, 0.0, 7.0e-8}, false};
 
 bool finite(const glm::vec3& p) {
     return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
@@ -113,6 +114,12 @@ PathCosts CostModel::predict(const VoxelizeWork& work) const {
     costs.compute_ms =
         compute.fixed_ms + compute.per_triangle_ms * work.triangles + compute.per_item_ms * work.columns;
     return costs;
+}
+
+bool CostModel::picks_raster(const VoxelizeWork& work) const {
+    if (!raster_measured_faster) return false;
+    const PathCosts costs = predict(work);
+    return costs.raster_ms < costs.compute_ms;
 }
 
 const CostModel& cost_model(const gpu::DeviceInfo& device) {

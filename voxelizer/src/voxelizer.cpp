@@ -514,9 +514,9 @@ Result<std::pmr::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuI
             methods.push_back(method);
             continue;
         }
-        const PathCosts costs = model.predict(voxelize_work(inst.mesh->sizes_, inst.model, grid));
-        methods.push_back(costs.raster_ms < costs.compute_ms ? VoxelizeMethod::Raster
-                                                             : VoxelizeMethod::Compute);
+        methods.push_back(model.picks_raster(voxelize_work(inst.mesh->sizes_, inst.model, grid))
+                              ? VoxelizeMethod::Raster
+                              : VoxelizeMethod::Compute);
     }
     return methods;
 }

@@ -61,8 +61,14 @@ struct PathCoefficients {
 struct CostModel {
     PathCoefficients raster;
     PathCoefficients compute;
+    /// Whether any run on such a device measured the raster path faster. False on GPUs: there `auto` takes
+    /// the compute path whatever the coefficients predict (docs/cli.md, "How auto picks").
+    bool raster_measured_faster = true;
     /// Costs of `work` with these coefficients.
     PathCosts predict(const VoxelizeWork& work) const;
+    /// Whether `auto` takes the raster path for `work`: where it was measured faster on such a device and is
+    /// predicted faster here (else the compute path).
+    bool picks_raster(const VoxelizeWork& work) const;
 };
 
 /// The model gust uses on `device` (by DeviceInfo::type).
