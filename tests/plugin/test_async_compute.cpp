@@ -39,9 +39,10 @@ template <class Step> void run_scene(System& system, Step&& step) {
     }
 }
 
-/// The host's side of an async compute frame: its own command pool on gust's queue family, per frame in
-/// flight three command buffers (its work before gust's, gust's, its work after), two binary semaphores
-/// between them and a fence, and a host-visible buffer its last submission copies the wind texture into.
+/// The host's side of an async compute frame: its own command pools on its graphics family and on gust's
+/// (compute) family, per frame in flight three command buffers (its work before gust's, gust's, its work
+/// after), three binary semaphores and a fence, and a host-visible buffer its last submission copies the
+/// wind texture into. Where the device has no compute-only family both are one family and one queue.
 class AsyncHost {
   public:
     explicit AsyncHost(HostVulkan& host) : host_(host), device_(host.device().device) {
@@ -74,26 +75,31 @@ class AsyncHost {
             destroy_fence_(device_, f, nullptr);
         for (VkSemaphore s : semaphores_)
             destroy_semaphore_(device_, s, nullptr);
-        if (pool_) destroy_pool_(device_, pool_, nullptr);
+        for (VkCommandPool pool : pools_)
+            if (pool) destroy_pool_(device_, pool, nullptr);
         if (buffer_) destroy_buffer_(device_, buffer_, nullptr);
         if (memory_) free_memory_(device_, memory_, nullptr);
     }
 
-    /// Creates everything for `family` (gust's queue family, HostDevice::queue_family) and a readback of
-    /// `bytes` for each frame in flight.
-    void create(std::uint32_t family, VkDeviceSize bytes) {
-        family_ = family;
+    /// Creates everything for the host's `graphics` family and gust's `compute` family (its
+    /// HostDevice::queue_family; queue 0 of each), and a readback of `bytes` for each frame in flight.
+    void create(std::uint32_t graphics, std::uint32_t compute, VkDeviceSize bytes) {
+        families_[0] = graphics;
+        families_[1] = compute;
         bytes_ = bytes;
-        get_queue_(device_, family, 0, &queue_);
-        VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-        pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-        pool.queueFamilyIndex = family;
-        ASSERT_EQ(create_pool_(device_, &pool, nullptr, &pool_), VK_SUCCESS);
-        VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-        alloc.commandPool = pool_;
-        alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-        alloc.commandBufferCount = 3 * kInFlight;
-        ASSERT_EQ(allocate_(device_, &alloc, commands_), VK_SUCCESS);
+        for (int q = 0; q < 2; ++q) {
+            get_queue_(device_, families_[q], 0, &queues_[q]);
+            VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+            pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+            pool.queueFamilyIndex = families_[q];
+            ASSERT_EQ(create_pool_(device_, &pool, nullptr, &pools_[q]), VK_SUCCESS);
+            VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+            alloc.commandPool = pools_[q];
+            alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+            alloc.commandBufferCount = q == 0 ? 2 * kInFlight : kInFlight;
+            ASSERT_EQ(allocate_(device_, &alloc, q == 0 ? graphics_commands_ : compute_commands_),
+                      VK_SUCCESS);
+        }
         const VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
         for (VkSemaphore& s : semaphores_)
             ASSERT_EQ(create_semaphore_(device_, &semaphore, nullptr, &s), VK_SUCCESS);
@@ -126,18 +132,21 @@ class AsyncHost {
         ASSERT_EQ(map_(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), VK_SUCCESS);
     }
 
-    /// One frame: the host's work signals `before`; gust's frame (recorded by `record` into the compute
-    /// command buffer, followed by the wind texture's release to the graphics family) waits for it and
-    /// signals `after`; the host's last submission waits for that, acquires the texture and copies it out.
-    /// `graphics_family` is where the host samples the wind (here gust's family: lavapipe has one).
-    template <class Record> void frame(std::uint64_t f, std::uint32_t graphics_family, Record&& record) {
-        const std::size_t slot = f % kInFlight;
+    /// One frame: the host's work on its graphics queue signals `gust_may_start`; gust's frame (recorded by
+    /// `record` into the compute command buffer, followed by the wind texture's release to the graphics
+    /// family) waits for it and for the last frame's read of the texture, and signals `wind_written`; the
+    /// host's last submission, on its graphics queue, waits for that, acquires the texture, copies it out and
+    /// signals `texture_read`.
+    template <class Record> void frame(std::uint64_t f, Record&& record) {
+        const std::size_t slot = f % kInFlight, last = (f + kInFlight - 1) % kInFlight;
         // The frame contract's completion: frame f - kInFlight completed before frame f is recorded.
         ASSERT_EQ(wait_fences_(device_, 1, &fences_[slot], VK_TRUE, UINT64_MAX), VK_SUCCESS);
         ASSERT_EQ(reset_fences_(device_, 1, &fences_[slot]), VK_SUCCESS);
-        VkCommandBuffer before = commands_[3 * slot], compute = commands_[3 * slot + 1],
-                        after = commands_[3 * slot + 2];
-        VkSemaphore gust_may_start = semaphores_[2 * slot], wind_written = semaphores_[2 * slot + 1];
+        VkCommandBuffer before = graphics_commands_[2 * slot], compute = compute_commands_[slot],
+                        after = graphics_commands_[2 * slot + 1];
+        VkSemaphore gust_may_start = semaphores_[3 * slot], wind_written = semaphores_[3 * slot + 1],
+                    texture_read = semaphores_[3 * slot + 2];
+        const std::uint32_t graphics_family = families_[0], compute_family = families_[1];
         VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
         begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
 
@@ -149,27 +158,31 @@ class AsyncHost {
         first.pCommandBuffers = &before;
         first.signalSemaphoreCount = 1;
         first.pSignalSemaphores = &gust_may_start;
-        ASSERT_EQ(submit_(queue_, 1, &first, VK_NULL_HANDLE), VK_SUCCESS);
+        ASSERT_EQ(submit_(queues_[0], 1, &first, VK_NULL_HANDLE), VK_SUCCESS);
 
         ASSERT_EQ(begin_(compute, &begin), VK_SUCCESS);
         record(compute);
-        texture_barrier(compute, family_, graphics_family, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+        texture_barrier(compute, compute_family, graphics_family, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                         VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_ACCESS_TRANSFER_WRITE_BIT, 0,
                         VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
         ASSERT_EQ(end_(compute), VK_SUCCESS);
-        const VkPipelineStageFlags all = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+        // gust's first barrier orders it after earlier work on its own queue only: the last frame's read of
+        // the texture, on the graphics queue, is waited for here.
+        const VkSemaphore waits[] = {gust_may_start, semaphores_[3 * last + 2]};
+        const VkPipelineStageFlags all[] = {VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                                            VK_PIPELINE_STAGE_ALL_COMMANDS_BIT};
         VkSubmitInfo second{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-        second.waitSemaphoreCount = 1;
-        second.pWaitSemaphores = &gust_may_start;
-        second.pWaitDstStageMask = &all;
+        second.waitSemaphoreCount = f == 0 ? 1 : 2;
+        second.pWaitSemaphores = waits;
+        second.pWaitDstStageMask = all;
         second.commandBufferCount = 1;
         second.pCommandBuffers = &compute;
         second.signalSemaphoreCount = 1;
         second.pSignalSemaphores = &wind_written;
-        ASSERT_EQ(submit_(queue_, 1, &second, VK_NULL_HANDLE), VK_SUCCESS);
+        ASSERT_EQ(submit_(queues_[1], 1, &second, VK_NULL_HANDLE), VK_SUCCESS);
 
         ASSERT_EQ(begin_(after, &begin), VK_SUCCESS);
-        texture_barrier(after, family_, graphics_family, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+        texture_barrier(after, compute_family, graphics_family, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                         VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, 0, VK_ACCESS_TRANSFER_READ_BIT,
                         VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
         texture_barrier(after, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
@@ -193,7 +206,9 @@ class AsyncHost {
         third.pWaitDstStageMask = &copy_stage;
         third.commandBufferCount = 1;
         third.pCommandBuffers = &after;
-        ASSERT_EQ(submit_(queue_, 1, &third, fences_[slot]), VK_SUCCESS);
+        third.signalSemaphoreCount = 1;
+        third.pSignalSemaphores = &texture_read;
+        ASSERT_EQ(submit_(queues_[0], 1, &third, fences_[slot]), VK_SUCCESS);
     }
 
     void finish() { ASSERT_EQ(wait_fences_(device_, kInFlight, fences_, VK_TRUE, UINT64_MAX), VK_SUCCESS); }
@@ -227,12 +242,13 @@ class AsyncHost {
 
     HostVulkan& host_;
     VkDevice device_;
-    std::uint32_t family_ = 0;
+    std::uint32_t families_[2] = {}; ///< graphics, compute
     VkDeviceSize bytes_ = 0;
-    VkQueue queue_ = VK_NULL_HANDLE;
-    VkCommandPool pool_ = VK_NULL_HANDLE;
-    VkCommandBuffer commands_[3 * kInFlight] = {};
-    VkSemaphore semaphores_[2 * kInFlight] = {};
+    VkQueue queues_[2] = {};
+    VkCommandPool pools_[2] = {};
+    VkCommandBuffer graphics_commands_[2 * kInFlight] = {};
+    VkCommandBuffer compute_commands_[kInFlight] = {};
+    VkSemaphore semaphores_[3 * kInFlight] = {};
     VkFence fences_[kInFlight] = {};
     VkBuffer buffer_ = VK_NULL_HANDLE;
     VkDeviceMemory memory_ = VK_NULL_HANDLE;
@@ -264,9 +280,11 @@ class AsyncHost {
 };
 
 // The host submits its own work signalling a semaphore, then the command buffer gust's step recorded into
-// (waiting on that semaphore, signalling another), then work that waits on the second and copies the wind
-// texture out, two frames in flight. The wind is OwnQueue's for the same scene and steps, exactly (the solve
-// is deterministic: fixed-point atomics, reductions in a fixed order), and the layer reports nothing.
+// (waiting on that semaphore, signalling another) on its async compute queue, then work that waits on the
+// second and copies the wind texture out, two frames in flight. On a device with a compute-only family the
+// texture changes family each frame (release, acquire); lavapipe has one family and one queue for both. The
+// wind is OwnQueue's for the same scene and steps, exactly (the solve is deterministic: fixed-point atomics,
+// reductions in a fixed order), and the layer reports nothing.
 TEST(AsyncCompute, aFrameBetweenTheHostsSemaphoresGivesTheWindOfAnOwnQueueStep) {
     Vec3 points[kPoints];
     for (std::size_t i = 0; i < kPoints; ++i)
@@ -285,12 +303,14 @@ TEST(AsyncCompute, aFrameBetweenTheHostsSemaphoresGivesTheWindOfAnOwnQueueStep) 
         EXPECT_EQ(watch.errors, 0) << watch.last;
     }
 
-    HostVulkan host;
+    HostVulkan host(false, true);
     ASSERT_TRUE(host.ok()) << host.error();
+    HostDevice compute_queue = host.device();
+    compute_queue.queue_family = host.compute_family();
     Watch watch;
     SystemDesc desc = small_desc(watch);
     desc.voxelize = VoxelizePath::Compute;
-    desc.host = &host.device();
+    desc.host = &compute_queue;
     desc.submission = Submission::HostCommands;
     desc.frames_in_flight = kInFlight;
     std::unique_ptr<System> system;
@@ -299,7 +319,7 @@ TEST(AsyncCompute, aFrameBetweenTheHostsSemaphoresGivesTheWindOfAnOwnQueueStep) 
 
     // What the System reports of its queue, against the family's own flags.
     const QueueInfo queue = system->queue_info();
-    EXPECT_EQ(queue.family, host.device().queue_family);
+    EXPECT_EQ(queue.family, host.compute_family());
     std::uint32_t count = 0;
     const auto families =
         reinterpret_cast<PFN_vkGetPhysicalDeviceQueueFamilyProperties>(host.device().get_instance_proc_addr(
@@ -314,11 +334,11 @@ TEST(AsyncCompute, aFrameBetweenTheHostsSemaphoresGivesTheWindOfAnOwnQueueStep) 
     const WindTexture& texture = system->wind_texture();
     const VkDeviceSize texel_bytes =
         VkDeviceSize(texture.extent[0]) * texture.extent[1] * texture.extent[2] * 8;
-    async.create(queue.family, texel_bytes);
+    async.create(host.device().queue_family, queue.family, texel_bytes);
     async.set_texture(texture);
     std::uint64_t f = 0;
     run_scene(*system, [&] {
-        async.frame(f++, host.device().queue_family, [&](VkCommandBuffer cmd) {
+        async.frame(f++, [&](VkCommandBuffer cmd) {
             const Outcome stepped = system->step(kDt, cmd);
             ASSERT_TRUE(stepped) << stepped.message();
         });
