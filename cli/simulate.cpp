@@ -114,8 +114,8 @@ MeshDesc mesh_desc(const Mesh& mesh, const std::vector<glm::vec3>& positions, bo
     return desc;
 }
 
-/// One line of stats.jsonl from a step's FrameStats (docs/cli.md lists the keys).
-nlohmann::ordered_json stats_line(const FrameStats& st, double t) {
+/// One line of stats.jsonl from a step's FrameStats and the System's queue (docs/cli.md lists the keys).
+nlohmann::ordered_json stats_line(const FrameStats& st, const QueueInfo& queue, double t) {
     nlohmann::ordered_json line;
     line["frame"] = st.frame;
     line["time"] = t;
@@ -135,6 +135,8 @@ nlohmann::ordered_json stats_line(const FrameStats& st, double t) {
     line["stages"] = st.stages;
     line["submissions"] = st.submissions;
     line["waits"] = st.waits;
+    line["queue_family"] = queue.family;
+    line["async_compute"] = queue.async_compute;
     line["divergence_before"] = st.divergence_before;
     line["divergence_after"] = st.divergence_after;
     line["residual"] = st.residual;
@@ -247,7 +249,7 @@ int run_simulate(const SimulateArgs& args) {
         if (Outcome o = system->set_emitters(emitters); !o) return fail(args.scene + ": " + o.message());
         if (Outcome o = system->step(float(dt)); !o)
             return fail("frame " + std::to_string(frame) + ": " + o.message());
-        stats_file << stats_line(system->stats(), t).dump() << "\n";
+        stats_file << stats_line(system->stats(), system->queue_info(), t).dump() << "\n";
 
         if (frame == 0 || (args.every > 0 && frame % args.every == 0)) {
             const fs::path file = fs::path(args.out) / frame_file(frame);

@@ -54,10 +54,9 @@ Status Context::init_adopted(const HostDevice& host) {
         return Status::failure("HostDevice::queue_index " + std::to_string(host.queue_index) +
                                " out of range (queue family " + std::to_string(host.queue_family) + " has " +
                                std::to_string(family.queueCount) + " queues)");
-    if (!graphics_and_compute(family))
+    if (!(family.queueFlags & VK_QUEUE_COMPUTE_BIT))
         return Status::failure("HostDevice::queue_family " + std::to_string(host.queue_family) +
-                               " of device '" + std::string(device) +
-                               "' does not support both graphics and compute");
+                               " of device '" + std::string(device) + "' does not support compute");
     queue_family_ = host.queue_family;
 
     const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_, host_memory_);

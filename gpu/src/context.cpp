@@ -132,6 +132,7 @@ Status Context::finish_device(std::uint32_t queue_index) {
     info_.api_version = props.apiVersion;
     info_.vendor_id = props.vendorID;
     info_.driver.assign(p12.driverName).append(" ").append(p12.driverInfo);
+    info_.graphics_queue = (families[queue_family_].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0;
     info_.timestamp_period_ns =
         (families[queue_family_].timestampValidBits > 0 && props.limits.timestampComputeAndGraphics)
             ? props.limits.timestampPeriod

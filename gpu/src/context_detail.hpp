@@ -61,8 +61,6 @@ std::pmr::vector<VkExtensionProperties> device_extensions(const Dispatch& vk, Vk
 bool has_extension(std::span<const VkExtensionProperties> exts, const char* name);
 std::pmr::vector<VkQueueFamilyProperties> queue_families(const Dispatch& vk, VkPhysicalDevice physical,
                                                          std::pmr::memory_resource* memory);
-/// The family supports both graphics and compute.
-bool graphics_and_compute(const VkQueueFamilyProperties& family);
 
 /// Loads the instance-level table through vk.vkGetInstanceProcAddr; fails naming what it did not return.
 Status load_instance_table(Dispatch& vk, VkInstance instance);

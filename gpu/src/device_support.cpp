@@ -58,11 +58,6 @@ std::pmr::vector<VkQueueFamilyProperties> queue_families(const Dispatch& vk, VkP
     return families;
 }
 
-bool graphics_and_compute(const VkQueueFamilyProperties& family) {
-    const VkQueueFlags want = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
-    return (family.queueFlags & want) == want;
-}
-
 Status load_instance_table(Dispatch& vk, VkInstance instance) {
     if (const std::string missing = load_instance_functions(vk, instance); !missing.empty())
         return Status::failure("vkGetInstanceProcAddr returned null for " + missing +
@@ -132,6 +127,25 @@ Status check_device_support(PFN_vkGetInstanceProcAddr get_instance_proc_addr, Vk
     vk.vkGetInstanceProcAddr = get_instance_proc_addr;
     if (Status s = load_instance_table(vk, instance); !s) return s;
     return check_support(vk, physical_device, std::pmr::new_delete_resource());
+}
+
+std::optional<std::uint32_t> pick_queue_family(std::span<const VkQueueFamilyProperties> families,
+                                               bool needs_graphics) {
+    const auto first = [&](VkQueueFlags graphics) -> std::optional<std::uint32_t> {
+        for (std::uint32_t i = 0; i < families.size(); ++i) {
+            const VkQueueFlags flags = families[i].queueFlags;
+            if (families[i].queueCount > 0 && (flags & VK_QUEUE_COMPUTE_BIT) &&
+                (flags & VK_QUEUE_GRAPHICS_BIT) == graphics)
+                return i;
+        }
+        return std::nullopt;
+    };
+    // A compute-only family is a second hardware queue beside the game's graphics one (AMD's async
+    // compute engines, NVIDIA's compute family), so gust's step overlaps the game's rendering instead of
+    // waiting for a gap in it.
+    if (!needs_graphics)
+        if (std::optional<std::uint32_t> async = first(0)) return async;
+    return first(VK_QUEUE_GRAPHICS_BIT);
 }
 
 } // namespace gust::gpu

@@ -135,7 +135,7 @@ Status Context::init(const ContextDesc& desc) {
     if (override_spec.empty())
         if (const char* env = std::getenv("GUST_DEVICE")) override_spec = env;
     if (Status s = pick_device(override_spec, desc.device_uuid); !s) return s;
-    return create_device(desc.external_memory);
+    return create_device(desc.external_memory, desc.needs_graphics);
 }
 
 Status Context::pick_device(std::string_view override_spec,
@@ -214,17 +214,17 @@ Status Context::pick_device(std::string_view override_spec,
     return {};
 }
 
-Status Context::create_device(bool external_memory) {
+Status Context::create_device(bool external_memory, bool needs_graphics) {
     if (Status s = check_support(vk_, physical_, host_memory_); !s) return s;
     VkPhysicalDeviceProperties props;
     vk_.vkGetPhysicalDeviceProperties(physical_, &props);
 
     const std::pmr::vector<VkQueueFamilyProperties> families = queue_families(vk_, physical_, host_memory_);
-    const auto family = std::find_if(families.begin(), families.end(), graphics_and_compute);
-    if (family == families.end())
-        return Status::failure(std::string("device '") + props.deviceName +
-                               "' has no graphics+compute queue");
-    queue_family_ = std::uint32_t(family - families.begin());
+    const std::optional<std::uint32_t> family = pick_queue_family(families, needs_graphics);
+    if (!family)
+        return Status::failure(std::string("device '") + props.deviceName + "' has no " +
+                               (needs_graphics ? "graphics+compute" : "compute") + " queue");
+    queue_family_ = *family;
 
     const std::pmr::vector<VkExtensionProperties> exts = device_extensions(vk_, physical_, host_memory_);
     std::pmr::vector<const char*> enabled(kRequiredExtensions.begin(), kRequiredExtensions.end(),

@@ -376,6 +376,9 @@ void Frame::log(LogLevel level, const std::string& message) const {
 
 void Frame::record_texture_copy(VkCommandBuffer cmd, std::size_t k) {
     gpu::Image& image = textures_[k].image;
+    // The copy writes every texel, so the old ones are discarded: a host that moved the image to its
+    // graphics queue family to sample it need not give it back (docs/api.md "Async compute").
+    image.discard();
     image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
     image.copy_from(cmd, textures_[k].texels);
     image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);

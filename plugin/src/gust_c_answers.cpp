@@ -194,6 +194,15 @@ gust_result gust_system_device_name(gust_system system, const char** name) {
     });
 }
 
+gust_result gust_system_queue_info(gust_system system, gust_queue_info* info) {
+    return on_system(system, "gust_system_queue_info", [&](gust::System& s) -> gust::Outcome {
+        if (!info) return invalid("info (the output) is NULL");
+        const gust::QueueInfo queue = s.queue_info();
+        *info = {queue.family, queue.async_compute};
+        return {};
+    });
+}
+
 gust_result gust_system_debug_voxel_grid(gust_system system, gust_voxel_grid_info* info) {
     return on_system(system, "gust_system_debug_voxel_grid", [&](gust::System& s) -> gust::Outcome {
         if (!info) return invalid("info (the output) is NULL");

@@ -67,6 +67,9 @@ Outcome create_context(const SystemDesc& desc, const Hooks& hooks, std::pmr::mem
         std::copy_n(desc.device_uuid, VK_UUID_SIZE, own.device_uuid->begin());
     }
     own.external_memory = desc.exported_copies > 0;
+    // Only the raster voxelizer draws: without it gust takes an async compute queue where the device has
+    // one, and its steps overlap the game's rendering (docs/api.md "Devices").
+    own.needs_graphics = desc.voxelize == VoxelizePath::Raster;
     if (desc.pipeline_cache) own.pipeline_cache = desc.pipeline_cache;
     auto ctx = gpu::Context::create(own);
     if (!ctx) return Outcome(ErrorCode::DeviceUnsupported, ctx.message());
@@ -203,6 +206,9 @@ Outcome System::create(const SystemDesc& desc, std::unique_ptr<System>& out) {
 
         auto grid = voxel_grid(solver_desc, b);
         if (!grid) return invalid(grid.message());
+        if (desc.voxelize == VoxelizePath::Raster)
+            if (Status s = check_method(VoxelizeMethod::Raster, m.ctx->info()); !s)
+                return invalid("voxelize Raster: " + s.message());
         WorldDesc world_desc;
         world_desc.grid = *grid;
         world_desc.tree.branching = b;

@@ -163,6 +163,9 @@ Vec3 System::domain_origin() const {
 const char* System::device_name() const {
     return impl_->ctx->info().name.c_str();
 }
+QueueInfo System::queue_info() const {
+    return {.family = impl_->ctx->queue_family(), .async_compute = !impl_->ctx->info().graphics_queue};
+}
 
 Outcome System::debug_voxel_grid(VoxelGridInfo& info) const {
     const GridDesc& grid = impl_->world->grid();

@@ -811,6 +811,8 @@ TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
                                 "stages",
                                 "submissions",
                                 "waits",
+                                "queue_family",
+                                "async_compute",
                                 "divergence_before",
                                 "divergence_after",
                                 "residual",
@@ -830,6 +832,7 @@ TEST(CliSimulate, everyFrameIsOneSubmissionAndOneWaitAndHoldsEveryStatsKey) {
             EXPECT_TRUE(j.contains(key)) << key << " in " << line;
         EXPECT_EQ(j["submissions"], 1) << line;
         EXPECT_EQ(j["waits"], 1) << line;
+        EXPECT_TRUE(j["queue_family"].is_number_unsigned() && j["async_compute"].is_boolean()) << line;
         EXPECT_GT(j["dispatches"].get<int>(), 10) << line;
         // Barriers separate most passes, but not all: two dispatches may share a stage.
         EXPECT_GT(j["stages"].get<int>(), 5) << line;

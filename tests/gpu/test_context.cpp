@@ -25,6 +25,75 @@ TEST_F(ContextTest, picksAVulkan12DeviceWithAGraphicsComputeQueue) {
     EXPECT_FALSE(ctx().device_names().empty());
 }
 
+VkQueueFamilyProperties family(VkQueueFlags flags, std::uint32_t queues = 1) {
+    VkQueueFamilyProperties f{};
+    f.queueFlags = flags;
+    f.queueCount = queues;
+    return f;
+}
+constexpr VkQueueFlags kG = VK_QUEUE_GRAPHICS_BIT, kC = VK_QUEUE_COMPUTE_BIT, kT = VK_QUEUE_TRANSFER_BIT;
+
+// Issue 41: gust takes a compute-only family when it does not need the raster voxelizer.
+TEST(QueueFamily, anAsyncComputeFamilyIsPickedUnlessGraphicsIsNeeded) {
+    // NVIDIA's list: graphics+compute+transfer, transfer only, compute+transfer.
+    const VkQueueFamilyProperties nvidia[] = {family(kG | kC | kT, 16), family(kT, 2), family(kC | kT, 8)};
+    EXPECT_EQ(gpu::pick_queue_family(nvidia, false), 2u);
+    EXPECT_EQ(gpu::pick_queue_family(nvidia, true), 0u);
+    // AMD's: the async compute family comes second, before a transfer (DMA) family.
+    const VkQueueFamilyProperties amd[] = {family(kG | kC | kT), family(kC | kT, 4), family(kT, 2)};
+    EXPECT_EQ(gpu::pick_queue_family(amd, false), 1u);
+    EXPECT_EQ(gpu::pick_queue_family(amd, true), 0u);
+}
+
+TEST(QueueFamily, aSingleGraphicsAndComputeFamilyServesBoth) {
+    const VkQueueFamilyProperties lavapipe[] = {family(kG | kC | kT)};
+    EXPECT_EQ(gpu::pick_queue_family(lavapipe, false), 0u);
+    EXPECT_EQ(gpu::pick_queue_family(lavapipe, true), 0u);
+}
+
+TEST(QueueFamily, familiesWithoutComputeOrQueuesNeverFit) {
+    const VkQueueFamilyProperties transfer_only[] = {family(kT)};
+    EXPECT_FALSE(gpu::pick_queue_family(transfer_only, false));
+    EXPECT_FALSE(gpu::pick_queue_family(transfer_only, true));
+    EXPECT_FALSE(gpu::pick_queue_family({}, false));
+    // A compute accelerator: no graphics anywhere, so only a caller without the raster path fits.
+    const VkQueueFamilyProperties accelerator[] = {family(kT), family(kC | kT)};
+    EXPECT_EQ(gpu::pick_queue_family(accelerator, false), 1u);
+    EXPECT_FALSE(gpu::pick_queue_family(accelerator, true));
+    // Graphics without compute does not fit; nor does a family that lists no queues.
+    const VkQueueFamilyProperties odd[] = {family(kG), family(kC, 0), family(kG | kC)};
+    EXPECT_EQ(gpu::pick_queue_family(odd, false), 2u);
+    EXPECT_EQ(gpu::pick_queue_family(odd, true), 2u);
+}
+
+// On the test's device: without graphics needed, the first compute-only family if it has one, else the first
+// graphics+compute one (lavapipe's only family); info() says which kind it is.
+TEST(ContextCreation, withoutGraphicsNeededRunsOnTheDevicesAsyncComputeFamilyIfAny) {
+    gpu::ContextDesc desc;
+    desc.validation = true;
+    desc.device = gpu_context().info().name;
+    desc.needs_graphics = false;
+    auto created = gpu::Context::create(desc);
+    ASSERT_TRUE(created) << created.message();
+    gpu::Context& ctx = **created;
+    std::uint32_t count = 0;
+    ctx.vk().vkGetPhysicalDeviceQueueFamilyProperties(ctx.physical_device(), &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    ctx.vk().vkGetPhysicalDeviceQueueFamilyProperties(ctx.physical_device(), &count, families.data());
+    const auto first = [&](VkQueueFlags flags) {
+        for (std::uint32_t i = 0; i < count; ++i)
+            if ((families[i].queueFlags & (kG | kC)) == flags && families[i].queueCount > 0) return i;
+        return count;
+    };
+    std::uint32_t expected = first(kC);
+    if (expected == count) expected = first(kG | kC);
+    ASSERT_LT(expected, count);
+    EXPECT_EQ(ctx.queue_family(), expected);
+    EXPECT_EQ(ctx.info().graphics_queue, (families[expected].queueFlags & kG) != 0);
+    EXPECT_TRUE(gpu_context().info().graphics_queue) << "the default Context keeps graphics";
+    EXPECT_EQ(ctx.validation_messages(), 0u) << ctx.last_validation_message();
+}
+
 TEST(ContextCreation, overrideByNameSelectsThatDevice) {
     gpu::ContextDesc desc;
     desc.device = gpu_context().info().name.substr(0, 4);

@@ -26,7 +26,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL HostVulkan::on_message(VkDebugUtilsMessageSeverit
     return VK_FALSE;
 }
 
-HostVulkan::HostVulkan(bool external_memory) {
+HostVulkan::HostVulkan(bool external_memory, bool async_compute) {
     loader_ = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
     if (!loader_) {
         error_ = "no libvulkan.so.1";
@@ -75,7 +75,13 @@ HostVulkan::HostVulkan(bool external_memory) {
                 host_.physical_device = device;
                 host_.queue_family = i;
             }
-        if (host_.physical_device) break;
+        if (!host_.physical_device) continue;
+        compute_family_ = host_.queue_family;
+        for (std::uint32_t i = count; async_compute && i-- > 0;)
+            if ((props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) &&
+                !(props[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && props[i].queueCount > 0)
+                compute_family_ = i;
+        break;
     }
     if (!host_.physical_device) {
         error_ = "no device with a graphics and compute queue";
@@ -92,14 +98,18 @@ HostVulkan::HostVulkan(bool external_memory) {
         return;
     }
     const float priority = 1.0f;
-    VkDeviceQueueCreateInfo queue{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-    queue.queueFamilyIndex = host_.queue_family;
-    queue.queueCount = 1;
-    queue.pQueuePriorities = &priority;
+    VkDeviceQueueCreateInfo queues[2] = {{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO},
+                                         {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO}};
+    queues[0].queueFamilyIndex = host_.queue_family;
+    queues[1].queueFamilyIndex = compute_family_;
+    for (VkDeviceQueueCreateInfo& queue : queues) {
+        queue.queueCount = 1;
+        queue.pQueuePriorities = &priority;
+    }
     VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
     device_info.pNext = &features;
-    device_info.queueCreateInfoCount = 1;
-    device_info.pQueueCreateInfos = &queue;
+    device_info.queueCreateInfoCount = compute_family_ == host_.queue_family ? 1 : 2;
+    device_info.pQueueCreateInfos = queues;
     const char* external = VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME;
     if (external_memory) {
         device_info.enabledExtensionCount = 1;

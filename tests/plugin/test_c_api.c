@@ -520,6 +520,7 @@ static void rejects_bad_queries(gust_system system) {
     CHECK_RESULT(system, gust_system_stats_pass_count(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_domain_origin(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_device_name(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
+    CHECK_RESULT(system, gust_system_queue_info(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
     CHECK_RESULT(system, gust_system_export_vdb(system, NULL), GUST_ERROR_INVALID_ARGUMENT);
 
     gust_voxel_coord voxels[2];
@@ -1071,6 +1072,10 @@ static void runs_on_a_host_device_with_host_commands(void) {
     gust_system system = NULL;
     CHECK_FREE_RESULT(gust_system_create(&desc, &system), GUST_OK);
     if (system) {
+        /* gust submits to the host's family, which has graphics (the test's host picked such a family). */
+        gust_queue_info queue = {UINT32_MAX, true};
+        CHECK_RESULT(system, gust_system_queue_info(system, &queue), GUST_OK);
+        CHECK(queue.family == host.queue_family && !queue.async_compute);
         /* A skinned mesh posed as the 2 m box, then as a 4 m box from the host's vertex buffer: the voxels
          * show the buffer was copied. */
         gust_mesh_desc mesh_desc = box_desc();

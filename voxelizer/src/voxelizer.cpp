@@ -135,6 +135,14 @@ bool parse_method(const std::string& text, VoxelizeMethod& out) {
     return false;
 }
 
+Status check_method(VoxelizeMethod method, const gpu::DeviceInfo& device) {
+    if (method == VoxelizeMethod::Raster && !device.graphics_queue)
+        return Status::failure("the raster voxelizer needs a queue with graphics, and gust runs on a "
+                               "compute-only (async compute) queue of '" +
+                               std::string(device.name) + "': voxelize with the compute or auto path");
+    return {};
+}
+
 Status validate_grid(const GridDesc& grid) {
     if (grid.res < kMinRes || grid.res > kMaxRes)
         return Status::failure("grid resolution " + std::to_string(grid.res) + " is outside [" +
@@ -506,6 +514,7 @@ Result<std::pmr::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuI
     inv_dt_ = dt > 0.0f ? 1.0f / dt : 0.0f;
     for (const GpuInstance& inst : instances)
         if (!inst.mesh) return Methods::failure("an instance has no mesh");
+    if (Status s = check_method(method, ctx_.info()); !s) return s;
     std::pmr::vector<VoxelizeMethod> methods(ctx_.memory());
     methods.reserve(instances.size());
     const CostModel& model = cost_model(ctx_.info());
@@ -514,7 +523,8 @@ Result<std::pmr::vector<VoxelizeMethod>> Voxelizer::prepare(std::span<const GpuI
             methods.push_back(method);
             continue;
         }
-        methods.push_back(model.picks_raster(voxelize_work(inst.mesh->sizes_, inst.model, grid))
+        methods.push_back(ctx_.info().graphics_queue &&
+                                  model.picks_raster(voxelize_work(inst.mesh->sizes_, inst.model, grid))
                               ? VoxelizeMethod::Raster
                               : VoxelizeMethod::Compute);
     }

@@ -108,7 +108,7 @@ typedef struct gust_host_device {
     VkInstance instance;                              ///< the host's instance (apiVersion >= 1.2)
     VkPhysicalDevice physical_device;                 ///< the device's physical device
     VkDevice device;                                  ///< created with gust_add_required_features
-    uint32_t queue_family;                            ///< a family with graphics and compute
+    uint32_t queue_family;                            ///< a family with compute (graphics: raster too)
     uint32_t queue_index;                             ///< gust submits to this queue of the family
     PFN_vkGetInstanceProcAddr get_instance_proc_addr; ///< required
     PFN_vkGetDeviceProcAddr get_device_proc_addr;     ///< NULL: loaded through get_instance_proc_addr
@@ -285,6 +285,12 @@ typedef struct gust_wind_texture {
     VkImageLayout layout;       ///< VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL after each step
     uint64_t frame;             ///< steps taken when written (0 before any): its step's stats frame + 1
 } gust_wind_texture;
+
+/// The queue family a system submits to (gust::QueueInfo).
+typedef struct gust_queue_info {
+    uint32_t family;    ///< queue family index on the system's device
+    bool async_compute; ///< compute without graphics: beside the host's graphics queue; no raster voxelizer
+} gust_queue_info;
 
 /// What one step did; per-pass GPU milliseconds via gust_system_stats_pass.
 typedef struct gust_frame_stats {
@@ -539,6 +545,10 @@ gust_result gust_system_domain_origin(gust_system system, gust_vec3* origin);
 /// `*name` receives the name of the Vulkan device the system runs on (owned by the system, valid until
 /// gust_system_destroy).
 gust_result gust_system_device_name(gust_system system, const char** name);
+
+/// `*info` receives the queue family the system submits to and whether it is an async compute one
+/// (gust::System::queue_info).
+gust_result gust_system_queue_info(gust_system system, gust_queue_info* info);
 
 /// Writes the current frame as OpenVDB to `path` (occupancy, solid, velocity, pressure; docs/design.md
 /// layout); GUST_ERROR_UNSUPPORTED when built without OpenVDB (GUST_WITH_OPENVDB=OFF).

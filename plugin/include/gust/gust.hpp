@@ -106,7 +106,7 @@ struct HostDevice {
     VkInstance instance = VK_NULL_HANDLE;
     VkPhysicalDevice physical_device = VK_NULL_HANDLE;
     VkDevice device = VK_NULL_HANDLE;
-    std::uint32_t queue_family = 0; ///< a family with graphics and compute
+    std::uint32_t queue_family = 0; ///< a family with compute (graphics too for VoxelizePath::Raster)
     std::uint32_t queue_index = 0;  ///< gust submits to this queue (see docs/api.md "Submission")
     PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr; ///< required
     PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;     ///< null: loaded through the above
@@ -332,6 +332,15 @@ struct WindSample {
     /// Short-term variation, m/s: |velocity − its mean over the neighbouring cells| (what a gust
     /// parameter of a foliage or cloth wind source wants).
     float gust = 0.0f;
+};
+
+/// The queue family a System submits to: the host's HostDevice::queue_family, or the one gust chose on its
+/// own device (docs/api.md "Devices").
+struct QueueInfo {
+    std::uint32_t family = 0; ///< queue family index on the System's device
+    /// The family has compute without graphics (an async compute queue): gust's work overlaps the host's
+    /// rendering on its graphics queue, and the raster voxelizer does not run.
+    bool async_compute = false;
 };
 
 /// The velocity field as a sampled 3D image for the host's shaders (docs/api.md "Wind texture").
@@ -597,6 +606,8 @@ class System {
     Vec3 domain_origin() const;
     /// The Vulkan device the System runs on (VkPhysicalDeviceProperties::deviceName), valid while it lives.
     const char* device_name() const;
+    /// The queue family the System submits to and whether it is an async compute one.
+    QueueInfo queue_info() const;
     /// Writes the current frame as OpenVDB (occupancy, solid, velocity, pressure, and each coarser cascade's
     /// velocity_cascadeK, solid_cascadeK and pressure_cascadeK; docs/design.md layout);
     /// Unsupported when the library was built without OpenVDB (GUST_WITH_OPENVDB=OFF).

@@ -53,7 +53,18 @@ struct ContextDesc {
     /// Enable VK_KHR_external_memory_fd, so images created ImageDesc::exportable can hand their memory to
     /// another VkDevice on the same physical device (creation fails when the device lacks it).
     bool external_memory = false;
+    /// The queue must support graphics, which only the raster voxelizer needs. False runs gust on a
+    /// compute-only queue family where the device has one (async compute: gust's work overlaps a game's
+    /// rendering on its graphics queue), else on a graphics and compute family (pick_queue_family).
+    bool needs_graphics = true;
 };
+
+/// The queue family gust runs on among `families` (vkGetPhysicalDeviceQueueFamilyProperties' list): with
+/// `needs_graphics`, the first with graphics and compute; without, the first with compute but no graphics
+/// (an async compute family), else the first with graphics and compute. Families without queues never
+/// count. Empty when none fits.
+std::optional<std::uint32_t> pick_queue_family(std::span<const VkQueueFamilyProperties> families,
+                                               bool needs_graphics);
 
 /// What gust needs from a device, for a host that creates the VkDevice gust adopts. Names are static
 /// strings. Context::create() enables the required items and the optional extensions the device has;
@@ -92,7 +103,8 @@ struct HostDevice {
     VkInstance instance = VK_NULL_HANDLE;              ///< the host's instance (required)
     VkPhysicalDevice physical_device = VK_NULL_HANDLE; ///< the device's physical device (required)
     VkDevice device = VK_NULL_HANDLE;                  ///< the host's device (required)
-    /// Family of the queue gust submits to; it must support graphics and compute.
+    /// Family of the queue gust submits to; it must support compute. Without graphics (an async compute
+    /// family) the raster voxelizer cannot run there.
     std::uint32_t queue_family = 0;
     /// Index of that queue within its family; the host must have created it (queueCount > queue_index).
     std::uint32_t queue_index = 0;
@@ -127,7 +139,10 @@ struct DeviceInfo {
     std::uint32_t vendor_id = 0;
     std::pmr::string driver;                 ///< driver name and info
     bool conservative_rasterization = false; ///< VK_EXT_conservative_rasterization enabled
-    float timestamp_period_ns = 0.0f;        ///< 0 when the queue has no timestamps
+    /// gust's queue family supports graphics, so the raster voxelizer can run; false on an async compute
+    /// family (compute without graphics).
+    bool graphics_queue = false;
+    float timestamp_period_ns = 0.0f; ///< 0 when the queue has no timestamps
     std::uint64_t max_storage_buffer_range = 0;
     std::uint64_t max_allocation_size = 0;
     std::uint32_t subgroup_size = 0;
@@ -147,7 +162,8 @@ struct WorkCounts {
     std::uint64_t stages = 0;
 };
 
-/// One device and one queue that supports graphics and compute. Not copyable; thread-compatible
+/// One device and one queue that supports compute, and graphics unless it is an async compute queue
+/// (DeviceInfo::graphics_queue). Not copyable; thread-compatible
 /// (one thread records and submits at a time). With an adopted device, gust submits to the host's
 /// queue, which Vulkan requires to be externally synchronized: the host must not submit to that queue
 /// from another thread while a gust call runs, unless it passes HostDevice::queue_mutex.
@@ -295,7 +311,7 @@ class Context : public HostObject {
     Status init_adopted(const HostDevice& host);
     Status pick_device(std::string_view override_spec,
                        const std::optional<std::array<std::uint8_t, VK_UUID_SIZE>>& uuid);
-    Status create_device(bool external_memory);
+    Status create_device(bool external_memory, bool needs_graphics);
     Status finish_device(std::uint32_t queue_index);
     /// The pipeline cache, from ContextDesc::pipeline_cache when that file holds the cache of the device
     /// `props` describes.

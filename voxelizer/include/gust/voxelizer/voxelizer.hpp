@@ -26,13 +26,18 @@ struct VoxelizeCounters;
 enum class VoxelizeMethod {
     Raster,  ///< hardware rasterizer: dominant-axis projection, dilation, exact per-voxel test
     Compute, ///< a thread per triangle (a workgroup per large triangle), exact per-voxel test
-    Auto     ///< per instance, the path the cost model predicts faster on this device (voxelize_cost.hpp)
+    Auto     ///< per instance, the path the cost model predicts faster on this device and queue
+             ///< (voxelize_cost.hpp)
 };
 
 /// "raster", "compute" or "auto".
 const char* to_string(VoxelizeMethod method);
 /// Parses "raster", "compute" or "auto"; false for anything else.
 bool parse_method(const std::string& text, VoxelizeMethod& out);
+/// Whether `method` can run on the queue `device` describes: Raster needs a queue with graphics, and on
+/// an async compute queue (DeviceInfo::graphics_queue false) it fails naming the queue and the paths
+/// that run there; Auto then picks Compute for every instance.
+Status check_method(VoxelizeMethod method, const gpu::DeviceInfo& device);
 
 /// Joints and weights of a skinned mesh, four influences a vertex as glTF's JOINTS_0 and WEIGHTS_0, for
 /// Voxelizer::upload. The mesh's positions are its bind pose, which the palette's matrices move.
