@@ -23,6 +23,14 @@ shaderio::GpuEmitter to_gpu(const Emitter& e);
 std::uint32_t omni_first(std::span<const Emitter> emitters, std::span<shaderio::GpuEmitter> out);
 /// Share of an emitter's gap closed in dt seconds.
 float emitter_rate(float dt, float response);
+/// Whether a warm step of `desc` sums the warm start's b·q in MacCormack's correction (kAdvectCorrectScale)
+/// rather than in a start pass (docs/solver.md, "The solve's start"): PassLayout::FewerStages, MacCormack,
+/// no viscosity (which changes the faces after advection), a multigrid solve.
+inline bool scale_in_advection(const SolverDesc& desc) {
+    return desc.warm_start && desc.layout == PassLayout::FewerStages &&
+           desc.advection == Advection::MacCormack && desc.viscosity <= 0.0f &&
+           desc.pressure != PressureSolver::Jacobi;
+}
 /// Jacobi iterations between convergence checks.
 inline constexpr std::uint32_t kJacobiBlock = 8;
 /// Red-black sweeps of the coarsest solve.

@@ -90,11 +90,10 @@ Status create_advect(gpu::Context& ctx, const SolverDesc& desc, bool nested,
                                                               shaderio::kAdvectCorrectScale},
                                    kSemiLagrangianMode[] = {shaderio::kAdvectSemiLagrangian},
                                    kForcesMode[] = {shaderio::kAdvectForces};
-    const bool scale = desc.layout == PassLayout::FewerStages && desc.warm_start;
     const std::span<const std::uint32_t> modes =
         desc.advection == Advection::MacCormack
-            ? (scale ? std::span<const std::uint32_t>(kMacCormackScaleModes)
-                     : std::span<const std::uint32_t>(kMacCormackModes))
+            ? (detail::scale_in_advection(desc) ? std::span<const std::uint32_t>(kMacCormackScaleModes)
+                                                : std::span<const std::uint32_t>(kMacCormackModes))
         : desc.advection == Advection::SemiLagrangian ? std::span<const std::uint32_t>(kSemiLagrangianMode)
                                                       : std::span<const std::uint32_t>(kForcesMode);
     return create_modes(ctx, out, words(advect_comp), "gust advect", modes, nested ? 1u : 0u);

@@ -166,12 +166,10 @@ void WindSolver::record_passes(VkCommandBuffer cmd, float dt, const SolidSource*
     record_ambient_change(cmd);
 
     // The solve's start (docs/solver.md, "The solve's start"): its first pass makes b. The warm start's scale
-    // needs b·q: with PassLayout::FewerStages MacCormack's correction sums it over the faces it writes, with
-    // q made beside its forward pass; otherwise (or with viscosity, which changes the faces after advection)
-    // a start pass makes it.
+    // needs b·q, which MacCormack's correction sums over the faces it writes (q made beside its forward pass)
+    // where detail::scale_in_advection holds, else a start pass.
     const bool jacobi = desc_.pressure == PressureSolver::Jacobi;
-    const bool scale_in_advection = warm && !jacobi && desc_.layout == PassLayout::FewerStages &&
-                                    desc_.advection == Advection::MacCormack && desc_.viscosity <= 0.0f;
+    const bool scale_in_advection = warm && detail::scale_in_advection(desc_);
 
     // Advection, the emitters, the ambient wind and vorticity confinement into the other buffer, which
     // then holds the velocity.
